@@ -1,0 +1,44 @@
+"""The `bellows` command (DESIGN.md): one entry point, one module per subcommand.
+
+Each subcommand module has `add_arguments(parser)` and `run(args) -> int`. A `BellowsError` (a user
+mistake: bad file, bad parameter, absent device) becomes one line on stderr and exit status 2.
+"""
+import argparse
+import importlib
+import sys
+
+from bellows_ros.errors import BellowsError
+
+SUBCOMMANDS = {
+    'simulate': 'run the model or the plant over an input file',
+    'identify': 'fit model parameters to measured data',
+    'diagnose': 'find what the simulation gets wrong, name the cause, extend the model',
+    'bench': 'benchmarks: medians and ratios against a reference measured in the same run',
+    'record': 'record the bellows topics to a rosbag2 (MCAP) without ROS',
+}
+
+
+def build_parser():
+    parser = argparse.ArgumentParser(prog='bellows', description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest='command', required=True, metavar='COMMAND')
+    for name, help_text in SUBCOMMANDS.items():
+        module = importlib.import_module(f'bellows_ros.cli.{name}')
+        module.add_arguments(sub.add_parser(name, help=help_text, description=help_text))
+    return parser
+
+
+def main(argv=None):
+    args = build_parser().parse_args(argv)
+    module = importlib.import_module(f'bellows_ros.cli.{args.command}')
+    try:
+        return module.run(args) or 0
+    except BellowsError as exc:
+        print(f'bellows {args.command}: error: {exc}', file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f'bellows {args.command}: interrupted', file=sys.stderr)
+        return 130
+
+
+if __name__ == '__main__':
+    sys.exit(main())

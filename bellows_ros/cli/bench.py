@@ -1,0 +1,46 @@
+"""`bellows bench [--json]`: run every benchmark module in `bellows_ros.bench`."""
+import importlib
+import json
+import pkgutil
+import sys
+
+import bellows_ros.bench as bench_package
+
+
+def add_arguments(parser):
+    parser.add_argument('--json', action='store_true', help='print results as JSON')
+    parser.add_argument('--only', metavar='TEXT', help='run only benchmark modules whose name contains TEXT')
+    parser.add_argument('--quick', action='store_true', help='fewer calls (a smoke run, less precise)')
+
+
+def run(args):
+    results = []
+    for info in sorted(pkgutil.iter_modules(bench_package.__path__), key=lambda m: m.name):
+        if args.only and args.only not in info.name:
+            continue
+        print(f'bench: {info.name} ...', file=sys.stderr)
+        module = importlib.import_module(f'bellows_ros.bench.{info.name}')
+        results.extend(module.run(quick=args.quick))
+    if args.json:
+        print(json.dumps([r.as_dict() for r in results], indent=2))
+    else:
+        print(format_table(results))
+    return 0
+
+
+def _show(value, unit):
+    if unit == 's':
+        return f'{value * 1e6:10.2f} µs' if value < 1e-2 else f'{value:10.3f} s '
+    return f'{value:10.4g} {unit}'
+
+
+def format_table(results):
+    lines = [f"{'benchmark':<48} {'median':>13} {'ratio':>8}  {'target':>13}  reference"]
+    for r in results:
+        ratio = f'{r.ratio:8.2f}' if r.ratio is not None else ' ' * 8
+        target = _show(r.target, r.unit) if r.target is not None else ' ' * 13
+        lines.append(f'{r.name:<48} {_show(r.value, r.unit)} {ratio}  {target}  {r.reference or ""}')
+        for key, value in r.extra.items():
+            shown = _show(value, r.unit) if isinstance(value, float) else value
+            lines.append(f'    {key}: {shown}')
+    return '\n'.join(lines)

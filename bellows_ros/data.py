@@ -1,0 +1,166 @@
+"""Measured and simulated data files (DESIGN.md "Data files").
+
+CSV with a header row, SI units, one row per sample. Every problem is reported as a `DataError`
+naming the file, the line (header = line 1) and the column. Extra columns are carried along
+untouched so that `bellows simulate` can write "the input plus outputs".
+
+A directory is read as a rosbag2 recording (see `bellows_ros.bag`).
+"""
+import csv
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from bellows_ros.errors import DataError
+
+# Required and optional columns of each system's files.
+COLUMNS = {
+    'segment': (('t', 'psi', 'p1', 'p2', 'tau_ext'), ('psi_dot', 'tau_motion')),
+    'actuator': (('t', 'x_c', 'x_s', 'p', 'f'), ()),
+}
+
+
+@dataclass
+class Table:
+    """Columns of one data file.
+
+    `values` holds float arrays for the columns the caller asked for (required and present optional);
+    `extras` holds every other column as text, in file order, so it can be written back unchanged.
+    `lines` gives the file line of each row, for error messages (None for non-CSV sources).
+    """
+    path: str
+    names: list
+    values: dict
+    extras: dict = field(default_factory=dict)
+    lines: list = None
+
+    def line(self, row):
+        """File line of data row `row` (0-based); None where rows have no lines (rosbag2)."""
+        return None if self.lines is None else self.lines[row]
+
+    def __len__(self):
+        return len(next(iter(self.values.values())))
+
+    def __getitem__(self, name):
+        return self.values[name]
+
+    def __contains__(self, name):
+        return name in self.values
+
+
+def read_csv(path, required, optional=()):
+    """Read a CSV file, checking that `required` columns exist and hold finite numbers.
+
+    Returns a `Table`. Raises `DataError` on a missing file, a missing column, a short row, a
+    non-number, NaN or infinity.
+    """
+    path = Path(path)
+    try:
+        stream = open(path, newline='')
+    except OSError as exc:
+        raise DataError(path, f'cannot read file ({exc.strerror})') from None
+    with stream:
+        reader = csv.reader(stream)
+        header = next(reader, None)
+        if not header:
+            raise DataError(path, 'empty file: expected a header row', line=1)
+        header = [name.strip() for name in header]
+        for name in required:
+            if name not in header:
+                raise DataError(path, f"missing column '{name}' (header has: {', '.join(header)})",
+                                line=1)
+        rows, lines = [], []
+        for row in reader:
+            if not row or all(not cell.strip() for cell in row):
+                continue
+            if len(row) != len(header):
+                raise DataError(path, f'expected {len(header)} fields, found {len(row)}',
+                                line=reader.line_num)
+            rows.append(row)
+            lines.append(reader.line_num)
+    if not rows:
+        raise DataError(path, 'no data rows after the header')
+    wanted = [name for name in header if name in required or name in optional]
+    values, extras = {}, {}
+    for index, name in enumerate(header):
+        cells = [row[index] for row in rows]
+        if name in wanted:
+            values[name] = _parse_column(path, name, cells, lines)
+        else:
+            extras[name] = cells
+    return Table(str(path), header, values, extras, lines)
+
+
+def _parse_column(path, name, cells, lines):
+    try:
+        column = np.array(cells, dtype=float)
+    except ValueError:
+        for cell, line in zip(cells, lines):
+            try:
+                float(cell)
+            except ValueError:
+                raise DataError(path, f'not a number: {cell.strip()!r}', line, name) from None
+        raise
+    bad = ~np.isfinite(column)
+    if bad.any():
+        first = int(np.argmax(bad))
+        raise DataError(path, f'{column[first]} is not a finite number', lines[first], name)
+    return column
+
+
+def check_increasing(table, name='t'):
+    """Time (or any column) must strictly increase."""
+    column = table[name]
+    bad = np.flatnonzero(np.diff(column) <= 0)
+    if bad.size:
+        i = int(bad[0]) + 1
+        raise DataError(table.path, f'not increasing ({column[i]:g} after {column[i - 1]:g})',
+                        table.line(i), name)
+
+
+def check_range(table, name, low, high, unit=''):
+    """Every value of column `name` must lie in [low, high]."""
+    column = table[name]
+    bad = np.flatnonzero((column < low) | (column > high))
+    if bad.size:
+        i = int(bad[0])
+        raise DataError(table.path,
+                        f'{column[i]:g} {unit} is outside [{low:g}, {high:g}] {unit}'.replace('  ', ' '),
+                        table.line(i), name)
+
+
+def read_table(path, system):
+    """Read a `system` ('segment' or 'actuator') file: CSV, or a rosbag2 directory."""
+    required, optional = COLUMNS[system]
+    if Path(path).is_dir():
+        from bellows_ros.bag import read_bag_table
+        return read_bag_table(path, system)
+    table = read_csv(path, required, optional)
+    check_increasing(table, 't')
+    return table
+
+
+def write_csv(path, table, outputs):
+    """Write the input `table` (all its columns, in order) followed by `outputs` (name -> array)."""
+    names = list(table.names) + [name for name in outputs if name not in table.names]
+    columns = []
+    for name in names:
+        if name in outputs:
+            columns.append([_format(v) for v in outputs[name]])
+        elif name in table.values:
+            columns.append([_format(v) for v in table.values[name]])
+        else:
+            columns.append(table.extras[name])
+    try:
+        with open(path, 'w', newline='') as stream:
+            writer = csv.writer(stream)
+            writer.writerow(names)
+            writer.writerows(zip(*columns))
+    except OSError as exc:
+        raise DataError(path, f'cannot write file ({exc.strerror})') from None
+
+
+def _format(value):
+    return repr(float(value)) if math.isfinite(value) else 'nan'

@@ -1,0 +1,183 @@
+"""Parameters: the YAML files in `config/` are the one source of truth.
+
+Files use the ROS 2 parameter format, so the very same file feeds `--ros-args --params-file`::
+
+    /**:
+      ros__parameters:
+        segment:
+          ogden: {mu: [.., ..], gamma: [.., ..]}
+
+Nested maps flatten to dotted names (`segment.ogden.mu`), exactly as ROS 2 does. A file given by the
+user (`--params P.yaml`, the output of `bellows identify`) is laid over the defaults; a name that the
+defaults do not have is an error, never silently ignored.
+"""
+import dataclasses
+import math
+import os
+import sys
+from pathlib import Path
+
+import yaml
+
+from bellows_ros.errors import ParameterError
+
+WILDCARD = '/**'
+
+
+def config_dir():
+    """Directory holding the default YAML files.
+
+    Looked up in order: ``$BELLOWS_CONFIG_DIR``; the source tree (editable installs, a checkout);
+    ``<prefix>/share/bellows_ros/config`` (pip install); the ament index (colcon install).
+    """
+    candidates = []
+    if os.environ.get('BELLOWS_CONFIG_DIR'):
+        candidates.append(Path(os.environ['BELLOWS_CONFIG_DIR']))
+    candidates.append(Path(__file__).resolve().parent.parent / 'config')
+    candidates.append(Path(sys.prefix) / 'share' / 'bellows_ros' / 'config')
+    try:
+        from ament_index_python.packages import get_package_share_directory
+        candidates.append(Path(get_package_share_directory('bellows_ros')) / 'config')
+    except Exception:  # ament_index is absent without ROS, or the package is not in the index
+        pass
+    for directory in candidates:
+        if directory.is_dir():
+            return directory
+    raise ParameterError('cannot find the bellows_ros config directory; set BELLOWS_CONFIG_DIR')
+
+
+def default_file(name):
+    """Path of `config/<name>.yaml`."""
+    return config_dir() / f'{name}.yaml'
+
+
+def flatten(tree, prefix=''):
+    """Flatten nested dicts into ROS 2 dotted parameter names."""
+    flat = {}
+    for key, value in tree.items():
+        name = f'{prefix}{key}'
+        if isinstance(value, dict):
+            flat.update(flatten(value, name + '.'))
+        else:
+            flat[name] = value
+    return flat
+
+
+def unflatten(flat):
+    """Inverse of `flatten`."""
+    tree = {}
+    for name, value in flat.items():
+        node = tree
+        *parents, leaf = name.split('.')
+        for part in parents:
+            node = node.setdefault(part, {})
+        node[leaf] = value
+    return tree
+
+
+def read_file(path, node_name=None):
+    """Read a ROS 2 parameter file into a flat dict of dotted names.
+
+    Sections for ``/**`` apply to every node; a section named `node_name` (with or without a leading
+    slash) is laid on top of them. Other nodes' sections are skipped.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise ParameterError(f'{path}: cannot read parameter file ({exc.strerror})') from None
+    try:
+        document = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, 'problem_mark', None)
+        where = f'{path}:{mark.line + 1}' if mark else str(path)
+        problem = getattr(exc, 'problem', None) or 'invalid YAML'
+        raise ParameterError(f'{where}: {problem}') from None
+    if not isinstance(document, dict):
+        raise ParameterError(f"{path}: expected a map of node names to 'ros__parameters'")
+    flat = {}
+    sections = [WILDCARD] + ([node_name, '/' + node_name.lstrip('/')] if node_name else [])
+    matched = False
+    for section in sections:
+        body = document.get(section)
+        if body is None:
+            continue
+        if not isinstance(body, dict) or not isinstance(body.get('ros__parameters'), dict):
+            raise ParameterError(f"{path}: section '{section}' has no 'ros__parameters' map")
+        matched = True
+        flat.update(flatten(body['ros__parameters']))
+    if not matched and node_name is None:
+        raise ParameterError(f"{path}: no '/**' section with 'ros__parameters'")
+    for name, value in flat.items():
+        _check_value(path, name, value)
+    return flat
+
+
+def _check_value(path, name, value):
+    values = value if isinstance(value, list) else [value]
+    for item in values:
+        if isinstance(item, float) and not math.isfinite(item):
+            raise ParameterError(f"{path}: parameter '{name}' is not finite ({item})")
+        if not isinstance(item, (bool, int, float, str)):
+            raise ParameterError(f"{path}: parameter '{name}' has an unsupported value {item!r}")
+
+
+def overlay(defaults, overrides, source):
+    """Lay `overrides` over `defaults`; a name the defaults lack raises ParameterError."""
+    unknown = sorted(set(overrides) - set(defaults))
+    if unknown:
+        raise ParameterError(f"{source}: unknown parameter '{unknown[0]}'"
+                             + (f' (and {len(unknown) - 1} more)' if len(unknown) > 1 else ''))
+    merged = dict(defaults)
+    merged.update(overrides)
+    return merged
+
+
+def load(name, params_path=None):
+    """Defaults of `config/<name>.yaml`, with the user's file (if any) laid over them."""
+    flat = read_file(default_file(name))
+    if params_path is not None:
+        flat = overlay(flat, read_file(params_path), params_path)
+    return flat
+
+
+def section(flat, prefix):
+    """The parameters under `prefix.`, with the prefix stripped."""
+    start = prefix + '.'
+    return {name[len(start):]: value for name, value in flat.items() if name.startswith(start)}
+
+
+def build(cls, values, source):
+    """Construct dataclass `cls` from a flat mapping; unknown or missing names raise ParameterError.
+
+    Lists become tuples of float so the dataclass stays hashable and immutable.
+    """
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    unknown = sorted(set(values) - set(fields))
+    if unknown:
+        raise ParameterError(f"{source}: unknown parameter '{unknown[0]}'")
+    kwargs = {}
+    for name, field in fields.items():
+        if name in values:
+            value = values[name]
+            kwargs[name] = tuple(float(v) for v in value) if isinstance(value, list) else value
+        elif field.default is dataclasses.MISSING and field.default_factory is dataclasses.MISSING:
+            raise ParameterError(f"{source}: missing parameter '{name}'")
+    return cls(**kwargs)
+
+
+def write_file(path, flat, header=None):
+    """Write a flat parameter dict as a ROS 2 parameter file (section ``/**``)."""
+    def plain(value):
+        if isinstance(value, (list, tuple)):
+            return [plain(v) for v in value]
+        if hasattr(value, 'item'):  # NumPy scalar
+            return value.item()
+        return value
+    tree = unflatten({name: plain(value) for name, value in flat.items()})
+    text = yaml.safe_dump({WILDCARD: {'ros__parameters': tree}}, sort_keys=False,
+                          default_flow_style=None)
+    with open(path, 'w') as stream:
+        if header:
+            stream.write(''.join(f'# {line}\n' for line in header.splitlines()))
+        stream.write(text)

@@ -1,0 +1,50 @@
+"""ament_python package that also installs with plain `pip install .` (no ROS needed)."""
+from glob import glob
+
+from setuptools import find_packages, setup
+
+package_name = 'bellows_ros'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    package_data={package_name: ['py.typed']},
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+        ('share/' + package_name + '/config', glob('config/*')),
+        ('share/' + package_name + '/scripts', glob('scripts/*.sh')),
+    ],
+    python_requires='>=3.10',
+    install_requires=[
+        'numpy>=1.24',
+        'scipy>=1.10',
+        'PyYAML>=6',
+        'matplotlib>=3.7',
+        'tqdm>=4.60',
+        'pyserial>=3.5',
+        'python-can>=4.3',
+        'cantools>=39',
+        'cobs>=1.2',
+        'rosbags>=0.10',
+        # The DDS runtime used when rclpy is not importable; 11.x ships the C library in the wheel.
+        'cyclonedds==11.0.1',
+    ],
+    extras_require={'test': ['pytest>=7', 'hypothesis>=6', 'pytest-timeout>=2']},
+    zip_safe=True,
+    maintainer='bellows_ros maintainers',
+    maintainer_email='maintainers@bellows-ros.invalid',
+    description='Pneumatic bellows models, identification, model doctor and ROS 2 nodes',
+    license='Apache-2.0',
+    entry_points={
+        'console_scripts': [
+            'bellows = bellows_ros.cli:main',
+            'driver_node = bellows_ros.nodes.driver_node:main',
+            'model_node = bellows_ros.nodes.model_node:main',
+            'stiffness_controller_node = bellows_ros.nodes.stiffness_controller_node:main',
+            'sim_arm_node = bellows_ros.nodes.sim_arm_node:main',
+            'sim_actuator_node = bellows_ros.nodes.sim_actuator_node:main',
+        ],
+    },
+)
