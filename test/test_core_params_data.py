@@ -1,0 +1,84 @@
+"""The shared parameter and data-file layers: the errors a user sees, and that nothing is lost."""
+import numpy as np
+import pytest
+
+from bellows_ros import data, params
+from bellows_ros.cli import main as bellows
+from bellows_ros.errors import DataError, ParameterError
+
+
+def write(path, text):
+    path.write_text(text)
+    return path
+
+
+def test_ros2_parameter_file_flattens_and_overlays(tmp_path):
+    defaults = write(tmp_path / 'd.yaml', '/**:\n  ros__parameters:\n    a:\n      b: 1.0\n      c: [1.0, 2.0]\n')
+    user = write(tmp_path / 'u.yaml', '/**:\n  ros__parameters:\n    a: {b: 5.0}\n')
+    merged = params.overlay(params.read_file(defaults), params.read_file(user), user)
+    assert merged == {'a.b': 5.0, 'a.c': [1.0, 2.0]}
+
+
+def test_node_section_lies_over_wildcard(tmp_path):
+    path = write(tmp_path / 'p.yaml', '/**:\n  ros__parameters: {x: 1, y: 2}\n'
+                                      'model_node:\n  ros__parameters: {x: 3}\n'
+                                      'other:\n  ros__parameters: {y: 9}\n')
+    assert params.read_file(path, 'model_node') == {'x': 3, 'y': 2}
+
+
+def test_unknown_parameter_is_named(tmp_path):
+    user = write(tmp_path / 'u.yaml', '/**:\n  ros__parameters:\n    a: {bogus: 1.0}\n')
+    with pytest.raises(ParameterError, match=r"u\.yaml: unknown parameter 'a\.bogus'"):
+        params.overlay({'a.b': 1.0}, params.read_file(user), user)
+
+
+def test_yaml_syntax_error_names_line(tmp_path):
+    bad = write(tmp_path / 'bad.yaml', '/**:\n  ros__parameters:\n    a: [1, 2\n')
+    with pytest.raises(ParameterError, match=r'bad\.yaml:\d+: '):
+        params.read_file(bad)
+
+
+def test_non_finite_parameter_rejected(tmp_path):
+    bad = write(tmp_path / 'nan.yaml', '/**:\n  ros__parameters:\n    a: .nan\n')
+    with pytest.raises(ParameterError, match="'a' is not finite"):
+        params.read_file(bad)
+
+
+def test_write_then_read_round_trip(tmp_path):
+    flat = {'s.mu': [1.5, np.float64(2.5)], 's.n': 4, 's.name': 'x'}
+    params.write_file(tmp_path / 'o.yaml', flat, header='fitted')
+    assert params.read_file(tmp_path / 'o.yaml') == {'s.mu': [1.5, 2.5], 's.n': 4, 's.name': 'x'}
+
+
+def test_csv_errors_name_file_line_and_column(tmp_path):
+    path = write(tmp_path / 'in.csv', 't,a\n0,1\n0.1,nan\n')
+    with pytest.raises(DataError, match=r"in\.csv:3: column 'a': nan is not a finite number"):
+        data.read_csv(path, ('t', 'a'))
+    path = write(tmp_path / 'in.csv', 't,a\n0,1\n\n0.1,x1\n')
+    with pytest.raises(DataError, match=r"in\.csv:4: column 'a': not a number: 'x1'"):
+        data.read_csv(path, ('t', 'a'))
+    path = write(tmp_path / 'in.csv', 't,b\n0,1\n')
+    with pytest.raises(DataError, match=r"in\.csv:1: missing column 'a'"):
+        data.read_csv(path, ('t', 'a'))
+
+
+def test_time_must_increase_and_ranges_checked(tmp_path):
+    table = data.read_csv(write(tmp_path / 'in.csv', 't,a\n0,1\n1,2\n\n1,3\n'), ('t', 'a'))
+    with pytest.raises(DataError, match=r"in\.csv:5: column 't': not increasing"):
+        data.check_increasing(table)
+    with pytest.raises(DataError, match=r"in\.csv:3: column 'a': 2 Pa is outside \[0, 1.5\] Pa"):
+        data.check_range(table, 'a', 0.0, 1.5, 'Pa')
+
+
+def test_write_keeps_every_input_column(tmp_path):
+    table = data.read_csv(write(tmp_path / 'in.csv', 't,label,a\n0,x,1\n1,y,2\n'), ('t', 'a'))
+    data.write_csv(tmp_path / 'out.csv', table, {'b': np.array([3.0, 4.0])})
+    assert (tmp_path / 'out.csv').read_text().splitlines() == ['t,label,a,b', '0.0,x,1.0,3.0', '1.0,y,2.0,4.0']
+
+
+def test_cli_turns_user_error_into_one_line_and_status_2(tmp_path, capsys):
+    status = bellows(['simulate', 'segment', '--input', str(tmp_path / 'missing.csv'),
+                      '--output', str(tmp_path / 'o.csv'), '--effect', 'x:k=notanumber'])
+    err = capsys.readouterr().err
+    assert status == 2
+    assert err.count('\n') == 1 and 'Traceback' not in err
