@@ -25,6 +25,7 @@ setup(
         'tqdm>=4.60',
         'pyserial>=3.5',
         'python-can>=4.3',
+        'msgpack>=1.0',  # python-can's udp_multicast interface needs it
         'cantools>=39',
         'cobs>=1.2',
         'rosbags>=0.10',
@@ -45,6 +46,7 @@ setup(
             'stiffness_controller_node = bellows_ros.nodes.stiffness_controller_node:main',
             'sim_arm_node = bellows_ros.nodes.sim_arm_node:main',
             'sim_actuator_node = bellows_ros.nodes.sim_actuator_node:main',
+            'scenario_node = bellows_ros.nodes.scenario_node:main',
         ],
     },
 )

@@ -1,10 +1,27 @@
-"""`bellows record` (owned by the node-graph work)."""
+"""`bellows record --output DIR [--topics T ...] [--duration S]` — rosbag2 (MCAP) without ROS."""
+from bellows_ros.errors import BellowsError
+
+
+def _positive(text):
+    try:
+        value = float(text)
+    except ValueError:
+        raise BellowsError(f'--duration: not a number: {text!r}') from None
+    if not value > 0:
+        raise BellowsError(f'--duration: must be positive, got {text}')
+    return value
 
 
 def add_arguments(parser):
     parser.add_argument('--output', required=True, metavar='DIR', help='rosbag2 directory to create (MCAP)')
+    parser.add_argument('--topics', nargs='+', metavar='TOPIC',
+                        help='topics to record (default: every topic of the contract)')
+    parser.add_argument('--duration', type=str, metavar='S',
+                        help='stop after S seconds (default: record until Ctrl-C)')
 
 
 def run(args):
     from bellows_ros.runtime.record import record_command
+    if args.duration is not None:
+        args.duration = _positive(args.duration)
     return record_command(args)

@@ -1,0 +1,119 @@
+"""rosbag2 recordings (sqlite3 or MCAP) as data tables (DESIGN.md "Data files").
+
+The rows are the `/joint_states` samples of the wanted device group; pressures (`/bellows/chambers`)
+and the force/torque sensor (`/bellows/wrench`) are aligned onto them by stamp, zero-order hold:
+each row takes the latest message stamped at or before it (the first message for rows before any).
+`t` is the sample stamp in seconds from the first row.
+
+Columns (see `bellows_ros.runtime.topics` for the wrench axes):
+- segment (`segment_1`): psi, psi_dot = position, velocity of joint `segment_1`;
+  p1, p2 = effort of chambers `segment_1/chain_1`, `segment_1/chain_2`;
+  tau_ext = `wrench.torque.z` of the wrench with frame_id `segment_1`.
+- actuator: x_c, x_s = positions of `air_chamber`, `spring`; p = effort of chamber `actuator`;
+  f = `wrench.force.z` of the wrench with frame_id `actuator`.
+"""
+from pathlib import Path
+
+import numpy as np
+from rosbags.rosbag2 import Reader
+from rosbags.typesys import Stores, get_typestore
+
+from bellows_ros.data import COLUMNS, Table, check_increasing
+from bellows_ros.errors import DataError
+
+SEGMENT = 'segment_1'
+
+
+def _stamp(msg):
+    return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+
+
+def _messages(reader, typestore, topic):
+    connections = [c for c in reader.connections if c.topic == topic]
+    if not connections:
+        return  # rosbags reads every topic when given no connection
+    for connection, _, raw in reader.messages(connections=connections):
+        yield typestore.deserialize_cdr(raw, connection.msgtype)
+
+
+def _joint_rows(path, reader, typestore, topic, names, field_names):
+    """Stamps and values of `names` (each field of field_names) from messages that contain them."""
+    stamps, rows = [], []
+    for msg in _messages(reader, typestore, topic):
+        index = {name: i for i, name in enumerate(msg.name)}
+        if not all(name in index for name in names):
+            continue
+        row = []
+        for name in names:
+            for field_name in field_names:
+                values = getattr(msg, field_name)
+                if len(values) <= index[name]:
+                    raise DataError(path, f"{topic}: joint '{name}' has no {field_name} "
+                                          f'(stamp {_stamp(msg)} ns)')
+                row.append(float(values[index[name]]))
+        stamps.append(_stamp(msg))
+        rows.append(row)
+    if not stamps:
+        raise DataError(path, f"no messages on {topic} with joint(s) {', '.join(names)}")
+    return np.array(stamps, dtype=np.int64), np.array(rows, dtype=float)
+
+
+def _wrench_rows(path, reader, typestore, frame, axis):
+    stamps, values = [], []
+    for msg in _messages(reader, typestore, '/bellows/wrench'):
+        if msg.header.frame_id in (frame, ''):
+            kind, component = axis
+            stamps.append(_stamp(msg))
+            values.append(float(getattr(getattr(msg.wrench, kind), component)))
+    if not stamps:
+        raise DataError(path, f"no messages on /bellows/wrench with frame_id '{frame}'")
+    return np.array(stamps, dtype=np.int64), np.array(values, dtype=float)[:, None]
+
+
+def _hold(sample_stamps, stamps, values):
+    """Zero-order hold of (stamps, values) onto sample_stamps (first value before the first stamp)."""
+    order = np.argsort(stamps, kind='stable')
+    stamps, values = stamps[order], values[order]
+    index = np.searchsorted(stamps, sample_stamps, side='right') - 1
+    return values[np.clip(index, 0, len(stamps) - 1)]
+
+
+def read_bag_table(path, system):
+    """Read a rosbag2 directory into a `Table` with the DESIGN.md columns of `system`."""
+    path = Path(path)
+    typestore = get_typestore(Stores.ROS2_JAZZY)
+    try:
+        reader = Reader(path)
+    except Exception as exc:  # rosbags raises its own errors for a directory that is not a bag
+        raise DataError(path, f'not a rosbag2 directory ({exc})') from None
+    with reader:
+        if system == 'segment':
+            stamps, joints = _joint_rows(path, reader, typestore, '/joint_states', [SEGMENT],
+                                         ('position', 'velocity'))
+            chamber_stamps, chambers = _joint_rows(
+                path, reader, typestore, '/bellows/chambers',
+                [f'{SEGMENT}/chain_1', f'{SEGMENT}/chain_2'], ('effort',))
+            wrench_stamps, torque = _wrench_rows(path, reader, typestore, SEGMENT, ('torque', 'z'))
+            pressures = _hold(stamps, chamber_stamps, chambers)
+            columns = {'psi': joints[:, 0], 'psi_dot': joints[:, 1], 'p1': pressures[:, 0],
+                       'p2': pressures[:, 1],
+                       'tau_ext': _hold(stamps, wrench_stamps, torque)[:, 0]}
+        elif system == 'actuator':
+            stamps, joints = _joint_rows(path, reader, typestore, '/joint_states',
+                                         ['air_chamber', 'spring'], ('position',))
+            chamber_stamps, pressure = _joint_rows(path, reader, typestore, '/bellows/chambers',
+                                                   ['actuator'], ('effort',))
+            wrench_stamps, force = _wrench_rows(path, reader, typestore, 'actuator',
+                                                ('force', 'z'))
+            columns = {'x_c': joints[:, 0], 'x_s': joints[:, 1],
+                       'p': _hold(stamps, chamber_stamps, pressure)[:, 0],
+                       'f': _hold(stamps, wrench_stamps, force)[:, 0]}
+        else:
+            raise DataError(path, f"unknown system '{system}' (segment or actuator)")
+    required, optional = COLUMNS[system]
+    values = {'t': (stamps - stamps[0]) * 1e-9}
+    values.update(columns)
+    names = [n for n in required + optional if n in values]
+    table = Table(str(path), names, {n: values[n] for n in names})
+    check_increasing(table, 't')
+    return table

@@ -1,0 +1,52 @@
+"""Benchmark of `bellows diagnose`: a 10-minute 1 kHz actuator record (600 000 rows).
+
+Target (issue 6): under 60 s per diagnosis on the project machine. The reference, measured in the
+same run, is reading the file and fitting and scoring the baseline only; the ratio says what the
+search over the candidate causes costs on top of that.
+"""
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from bellows_ros.bench import Result
+from bellows_ros.doctor.diagnosis import diagnose
+from bellows_ros.models.actuator import load_actuator_params
+from bellows_ros.models.actuator_experiments import actuator_record
+
+EFFECTS = {'air_leak': {'conductance': 3e-12}, 'sensor_lag': {'time_constant': 0.05}}
+
+
+def _write(path, record, names=('t', 'x_c', 'x_s', 'p', 'f')):
+    np.savetxt(path, np.column_stack([record[n] for n in names]), delimiter=',',
+               header=','.join(names), comments='', fmt='%.10g')
+
+
+def _median_time(fn, repeats):
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        result = fn()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times), result
+
+
+def run(quick=False):
+    duration, repeats = (60.0, 1) if quick else (600.0, 3)
+    params = load_actuator_params()
+    record = actuator_record(params, EFFECTS, seed=1, duration=duration)
+    with tempfile.TemporaryDirectory() as directory:
+        path = Path(directory) / 'actuator_10min.csv'
+        _write(path, record)
+        reference_time, _ = _median_time(lambda: diagnose('actuator', path, causes=()), repeats)
+        full_time, result = _median_time(lambda: diagnose('actuator', path), repeats)
+    rows = len(record['t'])
+    reference = Result('doctor: read + baseline only', reference_time, 's', repeats,
+                       extra={'rows': rows})
+    return [reference,
+            Result(f'doctor: diagnose actuator, {rows} rows at 1 kHz', full_time, 's', repeats,
+                   reference=reference.name, ratio=full_time / reference_time, target=60.0,
+                   extra={'rows': rows, 'causes': list(result.causes), 'gain': result.gain,
+                          'fitted_samples': len(result.record)})]

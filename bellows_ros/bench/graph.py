@@ -1,0 +1,147 @@
+"""Benchmark of the node graph over real DDS: sim_arm_node -> driver_node -> model_node.
+
+Measured in one run (separate processes, the DDS runtime, CAN over udp_multicast):
+- achieved rate: arm samples the driver published per second (target 1000 Hz);
+- fraction of those samples the model node evaluated (target >= 0.99), from their final counters;
+- end-to-end latency, sample stamp (driver, at arrival from the bus) -> driving torque published
+  (model node), p50 and p99: the model node reports both per 1 s window on /diagnostics; the
+  figure is the median over the windows, the worst window's p99 in `extra` (target p99 <= 2 ms);
+- CPU per node: utime + stime from /proc/<pid>/stat over the window, as a fraction of one core.
+Reference, measured in the same run: `SegmentModel.step` for the same segments, in-process (the
+model's own cost, without DDS); the latency ratio is against it.
+Nothing here asserts a time.
+"""
+import os
+import random
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from bellows_ros.bench import Result, timing
+from bellows_ros.models.segment import SegmentModel, load_segment_params
+
+CONFIG = Path(__file__).resolve().parent.parent.parent / 'config' / 'nodes_sim.yaml'
+NODES = ('sim_arm_node', 'driver_node', 'model_node')
+
+
+def _cpu_seconds(pid):
+    """utime + stime of a process, s (fields 14 and 15 of /proc/<pid>/stat)."""
+    with open(f'/proc/{pid}/stat') as stream:
+        fields = stream.read().rsplit(')', 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+
+
+def _model_reference(segments):
+    model = SegmentModel(load_segment_params())
+    state = {'k': 0}
+
+    def step_all():
+        state['k'] += 1
+        psi = 0.3 * ((state['k'] % 200) / 100.0 - 1.0)
+        for _ in range(segments):
+            model.step(psi, 0.1, 3.0e5, 1.2e5)
+    return timing(f'graph.model_step_inprocess_{segments}seg', step_all, 5000)
+
+
+def run(quick=False, segments=4):
+    from bellows_ros.runtime import dds_node
+    from bellows_ros.runtime.messages import msg
+
+    window = 3.0 if quick else 10.0
+    reference = _model_reference(segments)
+    domain = str(random.randint(231, 232))
+    group = f'239.74.166.{random.randint(2, 250)}'
+    env = dict(os.environ, ROS_DOMAIN_ID=domain, BELLOWS_RUNTIME='dds')
+    args = {'sim_arm_node': ['-p', f'can.channel:={group}', '-p', f'n_segments:={segments}'],
+            'driver_node': ['-p', f'arm.channel:={group}', '-p', f'arm.n_segments:={segments}',
+                            '-p', 'actuator.enabled:=false'],
+            'model_node': ['-p', f'segments:={list(range(1, segments + 1))}']}
+    binary = Path(sys.executable).parent
+    logs = tempfile.TemporaryDirectory()
+    processes = {}
+    windows, final = [], {}
+    previous_env = os.environ.get('ROS_DOMAIN_ID')
+    os.environ['ROS_DOMAIN_ID'] = domain
+    try:
+        for name in NODES:
+            log = open(Path(logs.name) / f'{name}.log', 'w')
+            processes[name] = subprocess.Popen(
+                [str(binary / name), '--ros-args', '--params-file', str(CONFIG), *args[name]],
+                env=env, stdout=log, stderr=subprocess.STDOUT)
+            time.sleep(1.0 if name == 'sim_arm_node' else 0.2)
+        dds_node.init([])
+        node = dds_node.Node('bench_graph')
+
+        def on_diagnostics(array):
+            for status in array.status:
+                values = {kv.key: kv.value for kv in status.values}
+                final[status.name] = values
+                if status.name.startswith('model_node') and 'latency_p99_us' in values:
+                    windows.append(values)
+        node.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
+        _spin(dds_node, node, 4.0)  # start-up and discovery
+        cpu0 = {name: _cpu_seconds(p.pid) for name, p in processes.items()}
+        windows.clear()
+        start = time.monotonic()
+        _spin(dds_node, node, window)
+        elapsed = time.monotonic() - start
+        cpu = {name: (_cpu_seconds(p.pid) - cpu0[name]) / elapsed
+               for name, p in processes.items()}
+        measured = list(windows)
+        processes['driver_node'].send_signal(2)
+        processes['driver_node'].wait(timeout=10)
+        _spin(dds_node, node, 2.5)  # the model's next report carries its final count
+    finally:
+        for process in processes.values():
+            if process.poll() is None:
+                process.send_signal(2)
+        for process in processes.values():
+            try:
+                process.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                process.kill()
+        dds_node.shutdown()
+        if previous_env is None:
+            os.environ.pop('ROS_DOMAIN_ID', None)
+        else:
+            os.environ['ROS_DOMAIN_ID'] = previous_env
+        logs.cleanup()
+    driver = final.get('driver_node: arm', {})
+    model = final.get('model_node: driving torque', {})
+    published = int(driver.get('published', 0))
+    evaluated = int(model.get('evaluated', 0))
+    rates = [float(w['rate_hz']) for w in measured]
+    p50 = [float(w['latency_p50_us']) * 1e-6 for w in measured]
+    p99 = [float(w['latency_p99_us']) * 1e-6 for w in measured]
+    results = [reference]
+    results.append(Result('graph.rate', statistics.median(rates) if rates else 0.0, 'Hz',
+                          len(rates), target=1000.0))
+    results.append(Result('graph.fraction_evaluated', evaluated / published if published else 0.0,
+                          '', published, target=0.99,
+                          extra={'published': published, 'evaluated': evaluated,
+                                 'rejected': int(model.get('rejected', 0)),
+                                 'unmatched_dropped': int(model.get('unmatched_dropped', 0))}))
+    latency50 = statistics.median(p50) if p50 else float('nan')
+    latency = Result('graph.latency_p50', latency50, 's', len(p50), reference=reference.name,
+                     ratio=latency50 / reference.value)
+    results.append(latency)
+    results.append(Result('graph.latency_p99', statistics.median(p99) if p99 else float('nan'),
+                          's', len(p99), target=2e-3,
+                          extra={'worst_window_p99': max(p99) if p99 else float('nan')}))
+    for name, fraction in cpu.items():
+        results.append(Result(f'graph.cpu.{name}', fraction, 'core', 1))
+    return results
+
+
+def _spin(dds_node, node, seconds):
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        dds_node.spin_once(node, timeout_sec=0.05)
+
+
+if __name__ == '__main__':
+    for result in run(quick='--quick' in sys.argv):
+        print(result.as_dict())

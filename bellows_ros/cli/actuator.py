@@ -1,0 +1,98 @@
+"""`bellows simulate actuator` and `bellows identify actuator` (DESIGN.md, docs/actuator.md)."""
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from bellows_ros import params as param_files
+from bellows_ros.data import check_increasing, check_range, read_csv, read_table, write_csv
+from bellows_ros.errors import DataError
+from bellows_ros.identify.actuator import fit_actuator
+from bellows_ros.models.actuator import evaluate_array, load_actuator_params, params_to_flat
+from bellows_ros.models.actuator_plant import ActuatorPlant, effect_parameters
+
+
+def _read(path, columns):
+    """Actuator input: a CSV needs `columns` (p, f optional), a rosbag2 directory the full set."""
+    if Path(path).is_dir():
+        return read_table(path, 'actuator')
+    table = read_csv(path, columns, ('t', 'x_c', 'x_s', 'p', 'f'))
+    check_increasing(table, 't')
+    return table
+
+
+def _check_compressions(table, params):
+    """Compressions must lie within the travel limits of the YAML (geometry and end stops)."""
+    c, s = params.chamber, params.spring
+    check_range(table, 'x_c', c.x_min, c.x_max, 'm')
+    check_range(table, 'x_s', s.x_min, s.x_max, 'm')
+
+
+def simulate(input_path, output_path, params_path, effects):
+    """Model (no effects) or plant (effects) over the input's x_c, x_s; writes input + p, f, k.
+
+    With effects the plant is driven by the input: x_c moves the lead-screw nut (the plate follows
+    through the backlash, if any), x_s is imposed; sensors are noise-free so the output shows the
+    effects alone. p and f columns of the input, if any, are replaced by the simulated ones.
+    """
+    params = load_actuator_params(params_path)
+    chosen = effect_parameters(params, effects) if effects else {}
+    table = _read(input_path, ('t', 'x_c', 'x_s'))
+    _check_compressions(table, params)
+    x_c, x_s, t = table['x_c'], table['x_s'], table['t']
+    if not chosen:
+        p, f, k = evaluate_array(params, x_c, x_s)
+    else:
+        p, f, k = _run_plant(params, chosen, t, x_c, x_s)
+    write_csv(output_path, table, {'p': p, 'f': f, 'k': k})
+    what = 'model' if not chosen else 'plant with ' + ', '.join(chosen)
+    print(f'bellows simulate actuator: {len(t)} rows, {what} -> {output_path}', file=sys.stderr)
+    return 0
+
+
+def _run_plant(params, effects, t, x_c, x_s):
+    plant = ActuatorPlant(params, effects, noise=False, x_c0=x_c[0], x_s0=x_s[0])
+    n = len(t)
+    p, f, k = np.empty(n), np.empty(n), np.empty(n)
+    p[0], f[0], k[0] = plant.pressure, plant.force, plant.stiffness
+    for i in range(1, n):
+        sample = plant.step_nut(t[i] - t[i - 1], x_c[i], x_s_imposed=x_s[i])
+        p[i], f[i], k[i] = sample.p, sample.f, plant.stiffness
+    return p, f, k
+
+
+def identify(args):
+    """Fit V_tube, P0 (p_ref), E_V, F_MTS and E_F to DATA; write them as a ROS 2 parameter file."""
+    params = load_actuator_params(args.params)
+    table = read_table(args.data, 'actuator')
+    _check_compressions(table, params)
+    run = None
+    if 'run' in table.extras:
+        run = _numeric_extra(table, 'run')
+    fit = fit_actuator(params, table['x_c'], table['x_s'], table['p'], table['f'], run=run,
+                       seed=args.seed, progress=not args.quiet)
+    fitted = fit.params
+    header = (f'bellows identify actuator {args.data}\n'
+              f'volume error rms {fit.volume_error_ml[0]:.3f} mL, force error rms {fit.force_error_n[0]:.3f} N')
+    param_files.write_file(args.output, params_to_flat(fitted), header)
+    rms, low, high = fit.volume_error_ml
+    print(f'volume error: {low:+.2f} mL to {high:+.2f} mL (rms {rms:.3f} mL) over {fit.rows} samples')
+    rms, low, high = fit.force_error_n
+    print(f'force error: {low:+.2f} N to {high:+.2f} N (rms {rms:.3f} N)')
+    print(f'V_tube = {fitted.v_tube * 1e6:.2f} mL, P0 (p_ref at x_c = {fitted.x_c_ref * 1e3:g} mm) = '
+          f'{fitted.p_ref:.0f} Pa, F_MTS = [{", ".join(f"{v:.5g}" for v in fitted.f_mts)}], '
+          f'E_F = [{", ".join(f"{v:.5g}" for v in fitted.e_f)}]')
+    print(f'wrote {args.output}')
+    return 0
+
+
+def _numeric_extra(table, name):
+    values = np.empty(len(table))
+    for row, cell in enumerate(table.extras[name]):
+        try:
+            values[row] = float(cell)
+        except ValueError:
+            raise DataError(table.path, f'not a number: {cell.strip()!r}', table.line(row), name) from None
+        if not np.isfinite(values[row]):
+            raise DataError(table.path, f'{cell.strip()} is not a finite number', table.line(row), name)
+    return values

@@ -1,0 +1,99 @@
+"""`bellows simulate segment` and `bellows identify segment` (DESIGN.md "The bellows command").
+
+simulate: without --effect the paper-A model runs over the input rows (strain memory carried from
+row to row) and the columns sa1, sa2, tau_a, tau_s, tau_f, tau_drive, tau_prev are appended. With
+--effect the simulated segment (`SegmentPlant`, seed 0) runs instead: the input psi is imposed, the
+input p1/p2 are the pressure *commands* (kept as p1_cmd, p2_cmd); psi, psi_dot, p1, p2, tau_ext and
+tau_motion are replaced by the plant's measurements (noise from `segment.plant.noise`), and the 7
+output columns are the plant's true values.
+"""
+from pathlib import Path
+
+import numpy as np
+
+from bellows_ros import data
+from bellows_ros.errors import DataError
+from bellows_ros.identify.segment import fit_segment
+from bellows_ros.models.segment import load_segment_params, simulate_model, velocity
+from bellows_ros.models.segment_plant import SegmentPlant, check_effects
+
+INPUT_REQUIRED = ('t', 'psi', 'p1', 'p2')
+INPUT_OPTIONAL = ('psi_dot', 'tau_ext', 'tau_motion')
+
+
+def _read(path, params, required):
+    """Read and validate a segment file: finite numbers, increasing t, 0 ≤ p ≤ p_max."""
+    if Path(path).is_dir():
+        table = data.read_table(path, 'segment')
+    else:
+        table = data.read_csv(path, required, tuple(c for c in ('t', 'psi', 'p1', 'p2', 'tau_ext') + INPUT_OPTIONAL
+                                                    if c not in required))
+        data.check_increasing(table, 't')
+    for name in ('p1', 'p2'):
+        data.check_range(table, name, 0.0, params.p_max, 'Pa')
+    return table
+
+
+def _psi_dot(table):
+    return table['psi_dot'] if 'psi_dot' in table else velocity(table['t'], table['psi'])
+
+
+def simulate(input_path, output_path, params_path, effects):
+    """Run the model (no effects) or the plant (effects: name -> {param: float}); write the CSV."""
+    params = load_segment_params(params_path)
+    effects = check_effects(effects)
+    table = _read(input_path, params, INPUT_REQUIRED)
+    if not effects:
+        outputs = simulate_model(params, table['psi'], table['p1'], table['p2'], _psi_dot(table))
+    else:
+        outputs = _run_plant(params, effects, table)
+    data.write_csv(output_path, table, outputs)
+    return 0
+
+
+def _run_plant(params, effects, table):
+    t = table['t']
+    steps = np.diff(t, prepend=t[0] - (t[1] - t[0] if len(t) > 1 else 1e-3))
+    plant = SegmentPlant(params, effects, seed=0, psi0=float(table['psi'][0]))
+    measured, true = [], []
+    for dt, psi, p1, p2 in zip(steps.tolist(), table['psi'].tolist(), table['p1'].tolist(),
+                               table['p2'].tolist()):
+        sample = plant.step(dt, p1, p2, psi_imposed=psi)
+        measured.append((sample.psi, sample.psi_dot, sample.p1, sample.p2, sample.tau_ext,
+                         plant.tau_motion))
+        true.append(plant.outputs)
+    measured, true = np.array(measured), np.array(true)
+    outputs = {'p1_cmd': table['p1'], 'p2_cmd': table['p2']}
+    for k, name in enumerate(('psi', 'psi_dot', 'p1', 'p2', 'tau_ext', 'tau_motion')):
+        outputs[name] = measured[:, k]
+    for k, name in enumerate(('sa1', 'sa2', 'tau_a', 'tau_s', 'tau_f', 'tau_drive', 'tau_prev')):
+        outputs[name] = true[:, k]
+    if 'contact_hysteresis' not in effects:  # the plant's driving torque is the previous model's
+        outputs['tau_drive'] = true[:, 6]
+    return outputs
+
+
+def identify(args):
+    """Fit paper A's model to DATA, write the parameters, print held-out errors of both models."""
+    params = load_segment_params(args.params)
+    table = _read(args.data, params, ('t', 'psi', 'p1', 'p2', 'tau_ext'))
+    if len(table) < 50:
+        raise DataError(table.path, f'only {len(table)} rows: identification needs at least 50')
+    record = {name: table[name] for name in ('t', 'psi', 'p1', 'p2', 'tau_ext') + INPUT_OPTIONAL
+              if name in table}
+    fit = fit_segment(params, record, seed=args.seed, progress=not args.quiet)
+    header = (f'bellows identify segment {args.data}\n'
+              f'held-out RMSE {fit.heldout["model"][0]:.4g} N·m (previous model '
+              f'{fit.heldout["previous"][0]:.4g} N·m) on the last {fit.heldout_rows} rows')
+    from bellows_ros.params import write_file
+    write_file(args.output, fit.params.flat(), header=header)
+    mu, gamma = fit.params.ogden_mu, fit.params.ogden_gamma
+    print(f'fitted: mu = [{mu[0]:.6g}, {mu[1]:.6g}] N/m, gamma = [{gamma[0]:.4g}, {gamma[1]:.4g}], '
+          f'c_psi0 = {fit.params.restoring_c_psi0:.4g}, c_psi0_p = {fit.params.restoring_c_psi0_p:.4g} rad '
+          f'({fit.evaluations} evaluations)')
+    print(f'held-out error on the last {fit.heldout_rows} of {fit.train_rows + fit.heldout_rows} rows:')
+    print(f'  {"model":<34} {"RMSE N·m":>10} {"MAE N·m":>10}')
+    print(f'  {"paper A (29) with strain memory":<34} {fit.heldout["model"][0]:10.4f} {fit.heldout["model"][1]:10.4f}')
+    print(f'  {"previous model (34), refitted":<34} {fit.heldout["previous"][0]:10.4f} {fit.heldout["previous"][1]:10.4f}')
+    print(f'wrote {args.output}')
+    return 0

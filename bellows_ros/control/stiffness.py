@@ -1,0 +1,58 @@
+"""Stiffness set-point -> chamber compression target, corrected from the measured pressure.
+
+Paper B tunes the spring's stiffness by compressing the air chamber: K = K_s(x_c) (13-17). The
+inverse map (`models.stiffness_map`) gives the compression for a target stiffness *for a given
+amount of gas*. A slow leak or a temperature change alters that amount, so a fixed x_c would drift
+the stiffness. The amount is therefore estimated continuously from the measured pressure at the
+measured (x_c, x_s) (`models.actuator.estimate_gas`, the gas law (17)), low-pass filtered (the
+estimate is as noisy as the pressure sensor, and the drift it corrects takes seconds to minutes), and
+the target compression is recomputed with it.
+"""
+import math
+
+from bellows_ros.models.actuator import estimate_gas, stiffness
+from bellows_ros.models.stiffness_map import compression_for_stiffness, stiffness_range
+
+
+class StiffnessSetpoint:
+    """Tracks the gas amount and turns stiffness set-points into compression targets.
+
+    params: ActuatorParams; gas_time_constant: s, filter of the gas estimate.
+    `update_measurement(x_c, x_s, p, dt)` feeds one sample (m, m, Pa abs, s);
+    `target()` -> x_c (m) for the current set-point (None before one is set);
+    `estimate()` -> present stiffness (N/m) from the measured state.
+    """
+
+    def __init__(self, params, gas_time_constant):
+        self.params = params
+        self.gas_time_constant = float(gas_time_constant)
+        self.gas = params.p_ref
+        self.k_target = None
+        self._x_c = params.x_c_ref
+
+    def set_stiffness(self, k_target):
+        """Set the target (N/m). Raises ParameterError (naming the range) when unreachable."""
+        compression_for_stiffness(self.params, k_target, self.gas)  # validates the range
+        self.k_target = float(k_target)
+
+    def range(self):
+        """(k_min, k_max), N/m, reachable with the present gas amount."""
+        return stiffness_range(self.params, self.gas)
+
+    def update_measurement(self, x_c, x_s, p, dt):
+        measured = estimate_gas(self.params, p, x_c, x_s)
+        blend = 1.0 - math.exp(-dt / self.gas_time_constant) if self.gas_time_constant > 0 else 1.0
+        self.gas += blend * (measured - self.gas)
+        self._x_c = x_c
+
+    def target(self):
+        if self.k_target is None:
+            return None
+        k_min, k_max = self.range()
+        # The leak may have moved the range under a set-point that used to fit: hold the end.
+        k = min(max(self.k_target, k_min), k_max)
+        return compression_for_stiffness(self.params, k, self.gas)
+
+    def estimate(self):
+        """Stiffness (N/m) at the measured compression with the estimated gas amount."""
+        return stiffness(self.params, self._x_c, self.gas)

@@ -1,0 +1,214 @@
+"""The actuator's baseline and its candidate causes, as physically parameterised extensions.
+
+Baseline (DESIGN.md "Baselines"): paper B's gas law (17) with the purely geometric volume (2-4, no
+E_V), isothermal sealed gas; the gas amount (as `p_ref`) and `v_tube` are refitted to the data. The
+doctor compares the predicted system pressure with the measured one (Pa); the force follows from the
+pressure (7-12), so every cause below shows first in the pressure.
+
+Each cause adds the missing physics with its own physical parameters (MODEL.md, config/actuator.yaml
+`actuator.effects`):
+- air_leak: volume flow C (P - P_atm) out of the sealed gas; the gas amount N = P V then follows
+  dN/dt = -C P (P - P_atm) (isothermal outflow at the chamber pressure).
+- heat_exchange: polytropic compression with heat capacity ratio γ and first-order relaxation of
+  the gas temperature to ambient with time constant τ_th ≥ 0.1 s (heat through silicone walls into
+  ~0.1 L of air is slow; a faster "relaxation" would only mimic a sensor lag):
+  d ln T/dt = -(γ - 1) d ln V/dt - (ln T - ln T_a)/τ_th (linearised in T/T_a - 1).
+- wall_bulging: paper B's augmented volume (5, 6), V = V_geo + E_V(Δh, P), with the terms of the
+  full cubic that a pressure record can separate: q, d q (both bellows) and d² (both bellows).
+- sensor_lag: the pressure sensor as a first-order lag with time constant τ.
+- backlash: a dead band of width b between the lead screw (the encoder's x_c) and the chamber.
+"""
+import dataclasses
+
+import numpy as np
+
+from bellows_ros.doctor.filters import lag, play, recurrence, relax
+from bellows_ros.doctor.scoring import Model
+from bellows_ros.models.actuator import params_to_flat, pressure, without_bulging
+from bellows_ros.models.actuator_geometry import P_ATM, volume_geo
+
+CAUSES = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash')
+BASELINE = ('paper B (17): geometric volume (no E_V), isothermal sealed gas, '
+            'p_ref and v_tube refitted')
+FIT_RATE = 200.0  # Hz, highest rate the doctor fits at: sensor lag and heating act within tens of ms
+UNIT = 'Pa'
+SIGNAL = 'p'
+ML = 1e-6  # m³ per mL: volumes are fitted in mL so that all parameters are O(1)
+
+# Nonlinear parameters of each part: (name, start, lower, upper), other starts for multi-start.
+SPECS = {
+    'baseline': [('p_ref_kpa', 101.325, 20.0, 500.0), ('v_tube_ml', 20.0, 0.0, 400.0)],
+    'air_leak': [('log10_conductance', -11.0, -15.0, -7.0)],
+    'heat_exchange': [('log10_time_constant', 0.0, -1.0, 2.5), ('gamma', 1.4, 1.0, 1.67)],
+    'wall_bulging': [('e_q_ml', 0.0, -200.0, 200.0), ('e_dq_chamber_ml', 0.0, -200.0, 200.0),
+                     ('e_dq_spring_ml', 0.0, -200.0, 200.0), ('e_dd_chamber_ml', 0.0, -200.0, 200.0),
+                     ('e_dd_spring_ml', 0.0, -200.0, 200.0)],
+    'sensor_lag': [('log10_time_constant', -1.5, -3.5, 0.5)],
+    'backlash': [('width_mm', 0.3, 0.0, 3.0)],
+}
+STARTS = {
+    'air_leak': [[-9.5], [-12.5]],
+    'heat_exchange': [[-0.7, 1.4], [1.3, 1.4]],
+    'sensor_lag': [[-2.5], [-0.5]],
+    'backlash': [[1.0], [0.05]],
+    'wall_bulging': [],
+}
+
+
+def measured(record):
+    return record[SIGNAL]
+
+
+def initial_guess(record, params):
+    """Start of the baseline fit: p_ref from the mean measured P·V at the nominal v_tube."""
+    base = without_bulging(params)
+    v = total_geometric_volume(base, record['x_c'], record['x_s'], base.v_tube)
+    v_ref = total_geometric_volume(base, base.x_c_ref, 0.0, base.v_tube)
+    return {'p_ref_kpa': float(np.mean(record['p'] * v) / v_ref / 1e3), 'v_tube_ml': base.v_tube / ML}
+
+
+def total_geometric_volume(params, x_c, x_s, v_tube):
+    """V_geo,c(x_c) + V_geo,s(x_s) + V_tube, m³ (4, 17)."""
+    return volume_geo(params.chamber, x_c) + volume_geo(params.spring, x_s) + v_tube
+
+
+def bulged(params, e):
+    """`params` with the fitted E_V terms (m³) placed in both bellows' coefficient vectors (5)."""
+    e_q, e_dq_c, e_dq_s, e_dd_c, e_dd_s = e
+    chamber = [0.0] * 10
+    spring = [0.0] * 10
+    chamber[2], chamber[4], chamber[3] = e_q, e_dq_c, e_dd_c   # a01, a11, a20 of (5)
+    spring[4], spring[3] = e_dq_s, e_dd_s
+    return dataclasses.replace(params, chamber=dataclasses.replace(params.chamber, e_v=tuple(chamber)),
+                               spring=dataclasses.replace(params.spring, e_v=tuple(spring)))
+
+
+def predict(params, causes, values, x_c, x_s, dt):
+    """Pressure the extended model predicts at the sensor (Pa) over a record.
+
+    `values`: physical parameters {cause: {name: value}} plus 'baseline': {'p_ref', 'v_tube'}.
+    Only the inputs x_c, x_s enter: no measured pressure, so nothing of the held-out output leaks in.
+    """
+    base = values['baseline']
+    model = dataclasses.replace(without_bulging(params), p_ref=base['p_ref'], v_tube=base['v_tube'])
+    if 'wall_bulging' in causes:
+        e = values['wall_bulging']
+        model = bulged(model, [e['e_q'], e['e_dq_chamber'], e['e_dq_spring'], e['e_dd_chamber'],
+                               e['e_dd_spring']])
+    if 'backlash' in causes:
+        x_c = play(x_c, values['backlash']['width'])
+    gas = np.ones(len(x_c))  # gas amount (times temperature), relative to the sealed amount
+    if 'heat_exchange' in causes or 'air_leak' in causes:
+        volume = total_geometric_volume(model, x_c, x_s, model.v_tube)
+        temperature = np.ones(len(x_c))
+        if 'heat_exchange' in causes:
+            h = values['heat_exchange']
+            temperature = np.exp(relax(-(h['gamma'] - 1.0) * np.log(volume), dt, h['time_constant']))
+        gas = temperature
+        if 'air_leak' in causes:
+            # N_{k+1} = N_k - dt C P_k (N_k T_k / V_k - P_atm), with N relative to N_0
+            # The flow's pressure factor is taken from the sealed gas (second order in the leak).
+            n0 = model.p_ref * total_geometric_volume(model, model.x_c_ref, 0.0, model.v_tube)
+            flow = dt * values['air_leak']['conductance'] * n0 * temperature / volume
+            amount = recurrence(1.0 - flow * temperature / volume, flow * P_ATM / n0, 1.0)
+            gas = temperature * amount
+    if 'wall_bulging' in causes:
+        p = pressure(model, x_c, x_s, gas=model.p_ref * gas)
+    else:
+        p = _pressure_geometric(model, x_c, x_s, gas)
+    if 'sensor_lag' in causes:
+        p = lag(p, dt, values['sensor_lag']['time_constant'])
+    return p
+
+
+def _pressure_geometric(model, x_c, x_s, gas):
+    """(17) without E_V: P = N / V, the gas amount N scaled by `gas`."""
+    n0 = model.p_ref * total_geometric_volume(model, model.x_c_ref, 0.0, model.v_tube)
+    return n0 * gas / total_geometric_volume(model, x_c, x_s, model.v_tube)
+
+
+def physical(causes, theta):
+    """Scaled fit variables -> physical parameters {part: {name: SI value}}."""
+    values, k = {}, 0
+    for part in ('baseline',) + tuple(causes):
+        raw = {}
+        for name, *_ in SPECS[part]:
+            raw[name] = float(theta[k])
+            k += 1
+        values[part] = _to_si(part, raw)
+    return values
+
+
+def _to_si(part, raw):
+    if part == 'baseline':
+        return {'p_ref': raw['p_ref_kpa'] * 1e3, 'v_tube': raw['v_tube_ml'] * ML}
+    if part == 'air_leak':
+        return {'conductance': 10.0 ** raw['log10_conductance']}
+    if part in ('heat_exchange', 'sensor_lag'):
+        out = {'time_constant': 10.0 ** raw['log10_time_constant']}
+        if part == 'heat_exchange':
+            out['gamma'] = raw['gamma']
+        return out
+    if part == 'backlash':
+        return {'width': raw['width_mm'] * 1e-3}
+    return {name[:-3]: value * ML for name, value in raw.items()}  # wall_bulging, m³
+
+
+def build_model(record, params, causes, warm=None):
+    """The baseline plus `causes` on `record`, as a `scoring.Model` to fit to the measured pressure.
+
+    `warm` ({fit variable: value}) starts the fit from an earlier model's solution.
+    """
+    causes = tuple(causes)
+    names, x0, lower, upper = [], [], [], []
+    guess = initial_guess(record, params)
+    for part in ('baseline',) + causes:
+        for name, start, lo, hi in SPECS[part]:
+            key = f'{part}.{name}'
+            names.append(key)
+            if warm and key in warm:
+                start = warm[key]
+            elif part == 'baseline':
+                start = guess[name]
+            x0.append(start)
+            lower.append(lo)
+            upper.append(hi)
+    starts = []
+    if causes:
+        width = len(SPECS[causes[-1]])
+        for alternative in STARTS[causes[-1]]:
+            starts.append(x0[:-width] + list(alternative))
+        if warm:
+            # A cold start too: an earlier model may have bent v_tube to mimic the missing effect.
+            cold = [guess[name] for name, *_ in SPECS['baseline']]
+            starts.append(cold + x0[len(cold):])
+    x_c, x_s, dt = record['x_c'], record['x_s'], record.dt
+
+    def run(theta, train):
+        return predict(params, causes, physical(causes, theta), x_c, x_s, dt), {}
+
+    return Model(causes, names, x0, lower, upper, run, lambda theta, linear: physical(causes, theta),
+                 n_linear=0, starts=starts)
+
+
+def extended_flat(params, causes, values):
+    """Flat ROS 2 parameters of the extended model (for `params.write_file`): the refitted gas and
+    tube, E_V if wall bulging pays, and the fitted effect parameters under `actuator.effects.*`
+    (read by `bellows simulate actuator --effect NAME` and the plant)."""
+    base = values['baseline']
+    model = dataclasses.replace(params, p_ref=base['p_ref'], v_tube=base['v_tube'])
+    model = without_bulging(model)
+    if 'wall_bulging' in causes:
+        e = values['wall_bulging']
+        model = bulged(model, [e['e_q'], e['e_dq_chamber'], e['e_dq_spring'], e['e_dd_chamber'],
+                               e['e_dd_spring']])
+    flat = params_to_flat(model)
+    for cause in causes:
+        if cause == 'wall_bulging':
+            flat['actuator.effects.wall_bulging.scale'] = 1.0
+            continue
+        for name, value in values[cause].items():
+            key = f'actuator.effects.{cause}.{name}'
+            if key in flat:
+                flat[key] = value
+    return flat

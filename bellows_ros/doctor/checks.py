@@ -1,0 +1,180 @@
+"""Loading and checking the data the doctor is given.
+
+Two kinds of verdict: a `DataError` when the file cannot be diagnosed at all (too short, unevenly
+sampled, the input never moves), and per cause a reason why this record cannot separate that cause
+("not identifiable from this data"), so that the doctor skips it instead of guessing.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from bellows_ros.data import check_range, read_table
+from bellows_ros.errors import DataError
+
+P_ATM = 101325.0          # Pa, ambient
+MIN_SAMPLES = 200
+MIN_DURATION = 5.0        # s
+MAX_JITTER = 0.05         # relative std of the sampling interval above which data is resampled
+MAX_GAP = 10.0            # a gap this many sampling intervals long is an error
+
+
+@dataclass
+class Record:
+    """Evenly sampled columns of one record. `factor` > 1 for a block-averaged copy."""
+    system: str
+    path: str
+    dt: float
+    columns: dict
+    factor: int = 1
+    resampled: bool = False
+
+    def __getitem__(self, name):
+        return self.columns[name]
+
+    def __contains__(self, name):
+        return name in self.columns
+
+    def __len__(self):
+        return len(self.columns['t'])
+
+    @property
+    def duration(self):
+        return float(self.columns['t'][-1] - self.columns['t'][0])
+
+    def decimated(self, factor):
+        """Block means of `factor` consecutive samples (an anti-alias filter and a decimator in one:
+        it also divides white noise variance by `factor`)."""
+        if factor <= 1:
+            return self
+        n = len(self) // factor * factor
+        columns = {name: column[:n].reshape(-1, factor).mean(axis=1)
+                   for name, column in self.columns.items()}
+        return Record(self.system, self.path, self.dt * factor, columns, self.factor * factor,
+                      self.resampled)
+
+
+def load(path, system):
+    """Read a CSV or rosbag2 record of `system`, check it, return an evenly sampled `Record`."""
+    table = read_table(path, system)
+    if len(table) < MIN_SAMPLES:
+        raise DataError(path, f'only {len(table)} samples; the doctor needs at least {MIN_SAMPLES} '
+                              'to fit on some blocks of time and score on others')
+    columns = {name: np.asarray(table[name], float) for name in table.values}
+    t = columns['t']
+    duration = t[-1] - t[0]
+    if duration < MIN_DURATION:
+        raise DataError(path, f'record lasts {duration:.3g} s; the doctor needs at least '
+                              f'{MIN_DURATION:g} s (held-out blocks of time must each contain motion)')
+    steps = np.diff(t)
+    dt = float(np.median(steps))
+    worst = int(np.argmax(steps))
+    if steps[worst] > MAX_GAP * dt:
+        raise DataError(path, f'gap of {steps[worst]:.3g} s in the time column after t = {t[worst]:.6g} s '
+                              f'(sampling interval {dt:.3g} s); split the record at the gap',
+                        table.line(worst + 1), 't')
+    if system == 'actuator':
+        check_range(table, 'p', 1e3, 2e6, 'Pa')
+        for name in ('x_c', 'x_s'):
+            check_range(table, name, -0.2, 0.2, 'm')
+    else:
+        for name in ('p1', 'p2'):
+            check_range(table, name, 1e3, 2e6, 'Pa')
+        check_range(table, 'psi', -np.pi, np.pi, 'rad')
+    resampled = bool(np.std(steps) > MAX_JITTER * dt)
+    if resampled:
+        # Stamped samples from a bag arrive with jitter; the filters of the causes need a fixed step.
+        grid = t[0] + dt * np.arange(int(duration / dt) + 1)
+        columns = {name: np.interp(grid, t, column) for name, column in columns.items()}
+        columns['t'] = grid
+    record = Record(system, str(path), dt, columns, resampled=resampled)
+    _check_excitation(record)
+    return record
+
+
+def _check_excitation(record):
+    if record.system == 'actuator':
+        if np.ptp(record['x_c']) < 1e-4:
+            raise DataError(record.path, "column 'x_c': not identifiable from this data: the air-chamber "
+                                         'compression never changes by 0.1 mm, so the model has no input')
+    else:
+        if np.ptp(record['psi']) < np.radians(1.0):
+            raise DataError(record.path, "column 'psi': not identifiable from this data: the segment "
+                                         'angle never changes by 1 degree')
+
+
+def reversals(signal, threshold):
+    """Number of direction reversals of `signal` by more than `threshold` (a zig-zag count that
+    ignores noise smaller than the threshold)."""
+    count, direction = 0, 0
+    high = low = float(signal[0])
+    for value in np.asarray(signal, float).tolist():
+        if direction == 0:
+            high, low = max(high, value), min(low, value)
+            if high - value > threshold:
+                direction, low = -1, value
+            elif value - low > threshold:
+                direction, high = 1, value
+        elif direction > 0:
+            if value > high:
+                high = value
+            elif high - value > threshold:
+                direction, low, count = -1, value, count + 1
+        else:
+            if value < low:
+                low = value
+            elif value - low > threshold:
+                direction, high, count = 1, value, count + 1
+    return count
+
+
+def moving_fraction(position, dt, speed):
+    """Fraction of samples moving faster than `speed` (position units per s)."""
+    rate = np.gradient(position, dt)
+    return float(np.mean(np.abs(rate) > speed))
+
+
+def identifiability(record, noise):
+    """For each cause: None if this record can separate it, else the reason why not.
+
+    `record` is the (decimated) record, `noise` the white-noise floor of the measured signal.
+    """
+    reasons = {}
+    if record.system == 'actuator':
+        p, x_c, x_s = record['p'], record['x_c'], record['x_s']
+        turns = reversals(x_c, 1e-4)
+        # The lead screw is slow (well under 1 mm/s); the spring may be compressed fast.
+        rate_c = np.abs(np.gradient(x_c, record.dt))
+        rate_s = np.abs(np.gradient(x_s, record.dt))
+        moving = float(np.mean((rate_c > 2e-5) | (rate_s > 1e-3)))
+        offset = float(np.median(np.abs(p - P_ATM)))
+        reasons['air_leak'] = (None if offset > 300 and record.duration >= 10 else
+                               f'the pressure stays within {offset:.0f} Pa of ambient (or the record is '
+                               'shorter than 10 s), so no air would flow through a leak')
+        reasons['heat_exchange'] = (None if 0.02 < moving < 0.98 else
+                                    'the bellows never both move and hold still, so a temperature '
+                                    'relaxation after compression cannot be seen')
+        reasons['sensor_lag'] = (None if np.ptp(p) > 30 * noise and moving > 0.02 else
+                                 'the pressure hardly changes, so a lag of the sensor cannot be seen')
+        reasons['backlash'] = (None if turns >= 1 else
+                               'the air-chamber compression never reverses; backlash shows only at '
+                               'reversals')
+        reasons['wall_bulging'] = (None if np.ptp(p) > 2000 else
+                                   f'the pressure spans only {np.ptp(p):.0f} Pa; a pressure-dependent '
+                                   'volume needs a wider range')
+    else:
+        psi, p1, p2 = record['psi'], record['p1'], record['p2']
+        turns = reversals(psi, np.radians(1.0))
+        spread = max(np.ptp(p1), np.ptp(p2))
+        moving = moving_fraction(psi, record.dt, np.radians(0.5))
+        reasons['contact_hysteresis'] = (None if turns >= 2 and max(p1.max(), p2.max()) > P_ATM + 2e4 else
+                                         f'the angle reverses only {turns} time(s) or no chain is '
+                                         'pressurised; the contact memory shows only on a return path')
+        reasons['pressure_friction'] = (None if spread > 5e4 and moving > 0.02 and turns >= 2 else
+                                        'friction needs motion in both directions at several pressures')
+        reasons['natural_curvature'] = (None if spread > 5e4 else
+                                        f'the chain pressures span only {spread:.0f} Pa; a '
+                                        'pressure-dependent rest angle needs a wider range')
+        rate = np.abs(np.gradient(p1, record.dt)) + np.abs(np.gradient(p2, record.dt))
+        reasons['sensor_lag'] = (None if spread > 5e4 and np.percentile(rate, 99) > 1e5 else
+                                 'the pressures never change fast, so a lag of the sensors cannot be seen')
+    return reasons

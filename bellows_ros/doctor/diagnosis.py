@@ -1,0 +1,183 @@
+"""The model doctor's decision procedure (docs/doctor.md).
+
+1. Load and check the record; estimate the white-noise floor of the measured signal at full rate.
+2. Fit on a block-averaged copy (at most the system's `FIT_RATE` Hz and `FIT_SAMPLES` samples): the
+   dynamics of every cause are slower than that, and averaging also lowers the noise.
+3. Score the baseline on held-out blocks of time.
+4. Greedy forward selection: try every identifiable cause as an extension of the current model,
+   keep the best if it *pays* (`scoring.pays`), refit, repeat with the remaining causes.
+5. Look at what is left: if the final held-out residual is still well above the noise floor and
+   correlated in time, the record holds structure that no candidate explains (`unexplained`).
+"""
+import sys
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bellows_ros.doctor import checks, scoring
+
+FIT_SAMPLES = 20000     # most samples of the fitted copy (the highest rate is the system's FIT_RATE)
+# Unexplained structure: final held-out RMSE above this multiple of the (averaged) noise floor ...
+UNEXPLAINED_RATIO = 2.0
+# ... and a Ljung-Box statistic over LB_LAGS lags of the residual with p below LB_P.
+LB_LAGS = 20
+LB_P = 1e-3
+
+
+@dataclass
+class Candidate:
+    cause: str
+    identifiable: bool
+    reason: str = None
+    score: scoring.Score = None
+    extends: tuple = ()
+    gain: float = None
+    pays: bool = False
+
+
+@dataclass
+class Diagnosis:
+    system: str
+    path: str
+    record: checks.Record          # the fitted (block-averaged) copy
+    signal: np.ndarray             # the measured signal compared with the model, on `record`
+    unit: str
+    baseline_name: str
+    baseline: scoring.Score
+    final: scoring.Score
+    causes: list
+    candidates: dict
+    noise: float                   # noise floor at full rate
+    evidence: dict
+    unexplained: bool
+    values: dict                   # physical parameters of the final model {part: {name: value}}
+    extended_flat: dict            # ROS 2 parameters of the extended model
+    timings: dict = field(default_factory=dict)
+
+    @property
+    def gain(self):
+        return scoring.gain(self.final.rmse, self.baseline.rmse)
+
+    @property
+    def cause(self):
+        return self.causes[0] if self.causes else 'none'
+
+
+def system_module(system):
+    if system == 'actuator':
+        from bellows_ros.doctor import actuator_causes as module
+    else:
+        from bellows_ros.doctor import segment_causes as module
+    return module
+
+
+def load_params(system, params_path):
+    if system == 'actuator':
+        from bellows_ros.models.actuator import load_actuator_params
+        return load_actuator_params(params_path)
+    from bellows_ros.models.segment import load_segment_params
+    return load_segment_params(params_path)
+
+
+def decimation_factor(record, rate):
+    """Block length that brings `record` to at most `rate` Hz and `FIT_SAMPLES` samples."""
+    by_rate = int(np.floor(1.0 / (record.dt * rate) + 1e-6)) or 1
+    by_size = int(np.ceil(len(record) / FIT_SAMPLES))
+    return max(1, by_rate, by_size)
+
+
+def diagnose(system, path, params_path=None, progress=False, causes=None):
+    """Diagnose the record at `path` (CSV or rosbag2 directory). Returns a `Diagnosis`.
+
+    `causes` restricts the candidates (default: the whole vocabulary of the system; `()` fits and
+    scores the baseline only, the benchmark's reference).
+    """
+    started = time.perf_counter()
+    module = system_module(system)
+    params = load_params(system, params_path)
+    full = checks.load(path, system)
+    if system == 'segment':
+        module.add_columns(full, params)
+    noise = scoring.noise_floor(module.measured(full))
+    record = full.decimated(decimation_factor(full, module.FIT_RATE))
+    y = module.measured(record)
+    reasons = checks.identifiability(record, noise / np.sqrt(record.factor))
+    timings = {'load': time.perf_counter() - started}
+    bar = _progress(progress, total=1 + 2 * len(module.CAUSES if causes is None else causes))
+    extra = {}
+    if system == 'segment':
+        from bellows_ros.doctor.segment_causes import _Contact
+        extra['contact'] = _Contact(params, record)
+
+    def score(causes, warm=None):
+        model = module.build_model(record, params, causes, warm=warm, **extra)
+        result = scoring.score(model, y)
+        bar.update(1)
+        return result
+
+    baseline = score(())
+    timings['baseline'] = time.perf_counter() - started
+    candidates = {cause: Candidate(cause, reason is None, reason)
+                  for cause, reason in reasons.items()}
+    current, chosen = baseline, []
+    vocabulary = module.CAUSES if causes is None else tuple(causes)
+    remaining = [c for c in vocabulary if candidates[c].identifiable]
+    while remaining:
+        warm = dict(zip(current.model.names, current.full.theta))
+        round_scores = {}
+        for cause in remaining:
+            result = score(tuple(chosen) + (cause,), warm)
+            round_scores[cause] = result
+            candidate = candidates[cause]
+            candidate.score, candidate.extends = result, tuple(chosen)
+            candidate.gain = scoring.gain(result.rmse, current.rmse)
+        best = min(round_scores, key=lambda c: round_scores[c].rmse)
+        if not scoring.pays(round_scores[best], current):
+            break
+        candidates[best].pays = True
+        chosen.append(best)
+        remaining.remove(best)
+        current = round_scores[best]
+    bar.close()
+    timings['fit'] = time.perf_counter() - started
+    evidence = residual_evidence(record, current.heldout, noise / np.sqrt(record.factor), system)
+    unexplained = evidence['rmse_over_noise'] > UNEXPLAINED_RATIO and evidence['ljung_box_p'] < LB_P
+    values = current.params()
+    return Diagnosis(system, str(path), record, y, module.UNIT, module.BASELINE, baseline, current,
+                     chosen, candidates, noise, evidence, bool(unexplained), values,
+                     module.extended_flat(params, chosen, values), timings)
+
+
+def residual_evidence(record, residual, noise, system):
+    """Numbers that say whether structure is left in a held-out residual."""
+    q, p_value = scoring.ljung_box(residual, LB_LAGS)
+    position = record['x_c'] if system == 'actuator' else record['psi']
+    rate = np.gradient(position, record.dt)
+    pressure = record['p'] if system == 'actuator' else record['p1'] - record['p2']
+    rmse = float(np.sqrt(np.mean(residual ** 2)))
+    return {
+        'rmse': rmse,
+        'noise_floor': float(noise),
+        'rmse_over_noise': rmse / noise if noise > 0 else float('inf'),
+        'ljung_box_q': q,
+        'ljung_box_lags': LB_LAGS,
+        'ljung_box_p': p_value,
+        'autocorrelation_lag1': float(scoring.autocorrelation(residual, 1)[1]),
+        'correlation_with_rate': _correlation(residual, rate),
+        'correlation_with_position': _correlation(residual, position),
+        'correlation_with_pressure': _correlation(residual, pressure),
+        'correlation_with_direction': _correlation(residual, np.sign(rate)),
+    }
+
+
+def _correlation(a, b):
+    if np.std(a) == 0 or np.std(b) == 0:
+        return 0.0
+    return float(np.corrcoef(a, b)[0, 1])
+
+
+def _progress(enabled, total):
+    from tqdm import tqdm
+    return tqdm(total=total, desc='diagnose', unit='fit', file=sys.stderr, disable=not enabled,
+                leave=False)

@@ -1,0 +1,171 @@
+"""`bellows diagnose`: run the doctor and write DIR/report.json, report.md, extended.yaml, details.json
+and the PNG plots.
+
+report.json has exactly the keys of DESIGN.md; everything else (per-candidate gains, the decision,
+the residual evidence, timings) goes to details.json.
+"""
+import json
+import math
+from pathlib import Path
+
+from bellows_ros import params as param_files
+from bellows_ros.doctor import diagnosis as engine
+from bellows_ros.doctor import scoring
+from bellows_ros.errors import BellowsError
+
+EXTENDED_FILE = 'extended.yaml'
+
+
+def diagnose_command(args):
+    """Entry point of `bellows diagnose` (args: system, data, report, params, quiet)."""
+    result = engine.diagnose(args.system, args.data, params_path=getattr(args, 'params', None),
+                             progress=not getattr(args, 'quiet', False))
+    write_report(result, args.report)
+    causes = ', '.join(result.causes) or 'none'
+    print(f'{args.system}: cause {causes}; held-out RMSE {result.baseline.rmse:.4g} -> '
+          f'{result.final.rmse:.4g} {result.unit} (gain {100 * result.gain:.1f} %)'
+          f'{"; unexplained structure left" if result.unexplained else ""}; report in {args.report}')
+    return 0
+
+
+def _number(value):
+    return None if value is None or not math.isfinite(value) else float(value)
+
+
+def report_dict(d):
+    """report.json (DESIGN.md keys)."""
+    candidates = []
+    for cause, candidate in d.candidates.items():
+        params = {}
+        if candidate.score is not None:
+            params = candidate.score.params().get(cause, {})
+        candidates.append({'cause': cause,
+                           'heldout_rmse': _number(candidate.score.rmse) if candidate.score else None,
+                           'params': params})
+    return {
+        'system': d.system,
+        'baseline': {'model': d.baseline_name, 'rmse': d.baseline.rmse, 'unit': d.unit},
+        'cause': d.cause,
+        'extended': {'model': extended_name(d), 'rmse': d.final.rmse},
+        'gain': d.gain,
+        'causes': list(d.causes),
+        'unexplained': d.unexplained,
+        'candidates': candidates,
+    }
+
+
+def extended_name(d):
+    return 'baseline + ' + ' + '.join(d.causes) if d.causes else 'baseline (no cause pays)'
+
+
+def details_dict(d):
+    candidates = {}
+    for cause, c in d.candidates.items():
+        candidates[cause] = {'identifiable': c.identifiable, 'reason': c.reason,
+                             'extends': list(c.extends), 'gain_over_extended_model': c.gain,
+                             'pays': c.pays,
+                             'heldout_rmse': c.score.rmse if c.score else None}
+    return {
+        'data': d.path,
+        'samples_fitted': len(d.record),
+        'fit_rate_hz': 1.0 / d.record.dt,
+        'decimation': d.record.factor,
+        'resampled': d.record.resampled,
+        'noise_floor_full_rate': d.noise,
+        'rule': {'min_gain': scoring.MIN_GAIN, 'blocks': scoring.BLOCKS, 'penalty': 'BIC on held-out',
+                 'unexplained_ratio': engine.UNEXPLAINED_RATIO, 'ljung_box_p': engine.LB_P},
+        'candidates': candidates,
+        'evidence': d.evidence,
+        'extended_params': d.values,
+        'timings_s': d.timings,
+    }
+
+
+def write_report(d, directory):
+    """Write every output file into `directory` (created if needed)."""
+    from bellows_ros.doctor.plots import write_plots
+    directory = Path(directory)
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise BellowsError(f'{directory}: cannot create the report directory ({exc.strerror})') from None
+    (directory / 'report.json').write_text(json.dumps(report_dict(d), indent=2) + '\n')
+    (directory / 'details.json').write_text(json.dumps(details_dict(d), indent=2, default=float) + '\n')
+    header = (f'Extended {d.system} model written by `bellows diagnose` from {d.path}\n'
+              f'causes: {", ".join(d.causes) or "none"}; held-out gain {100 * d.gain:.1f} %')
+    param_files.write_file(directory / EXTENDED_FILE, d.extended_flat, header)
+    plots = write_plots(d, directory)
+    (directory / 'report.md').write_text(markdown(d, plots))
+
+
+def _fmt(value):
+    if isinstance(value, float):
+        return f'{value:.4g}'
+    return str(value)
+
+
+def markdown(d, plots):
+    lines = [f'# Model doctor: {d.system}', '', f'Data: `{d.path}` — {len(d.record)} samples fitted '
+             f'at {1 / d.record.dt:.0f} Hz (block means of {d.record.factor} raw samples).', '']
+    if d.causes:
+        lines.append(f'**Cause: {", ".join(f"`{c}`" for c in d.causes)}.** Extending the baseline with '
+                     f'{"it" if len(d.causes) == 1 else "them"} cuts the held-out RMSE from '
+                     f'{d.baseline.rmse:.4g} to {d.final.rmse:.4g} {d.unit} '
+                     f'(gain {100 * d.gain:.1f} %).')
+    else:
+        lines.append(f'**Cause: `none`.** No candidate cause improves the held-out RMSE '
+                     f'({d.baseline.rmse:.4g} {d.unit}) by at least {100 * scoring.MIN_GAIN:.0f} %.')
+    ev = d.evidence
+    lines += ['', '## What is left', '',
+              f'Held-out residual RMSE {ev["rmse"]:.4g} {d.unit} = {ev["rmse_over_noise"]:.2f} × the '
+              f'noise floor ({ev["noise_floor"]:.3g} {d.unit} after averaging); Ljung-Box Q = '
+              f'{ev["ljung_box_q"]:.4g} over {ev["ljung_box_lags"]} lags (p = {ev["ljung_box_p"]:.2g}); '
+              f'lag-1 autocorrelation {ev["autocorrelation_lag1"]:.2f}; correlation with rate '
+              f'{ev["correlation_with_rate"]:.2f}, position {ev["correlation_with_position"]:.2f}, '
+              f'pressure {ev["correlation_with_pressure"]:.2f}, direction {ev["correlation_with_direction"]:.2f}.', '']
+    if d.unexplained:
+        lines.append('**Unexplained structure remains**: the residual is more than '
+                     f'{engine.UNEXPLAINED_RATIO:g} × the noise floor and correlated in time, and no '
+                     'candidate in the vocabulary removes it. Something outside the vocabulary is at '
+                     'work; the correlations above say what it moves with.')
+    else:
+        lines.append('No structure beyond the noise is left that the doctor can tell apart.')
+    lines += ['', '## Candidates (held-out, greedy forward selection)', '',
+              '| cause | identifiable | extends | held-out RMSE | gain over that model | pays |',
+              '|---|---|---|---|---|---|']
+    for cause, c in d.candidates.items():
+        if not c.identifiable:
+            lines.append(f'| `{cause}` | no: {c.reason} | | | | no |')
+            continue
+        extends = ' + '.join(('baseline',) + c.extends)
+        lines.append(f'| `{cause}` | yes | {extends} | {c.score.rmse:.4g} {d.unit} | '
+                     f'{100 * c.gain:.1f} % | {"yes" if c.pays else "no"} |')
+    lines += ['', '## Fitted parameters of the extended model (SI)', '']
+    for part, values in d.values.items():
+        if values:
+            lines.append(f'- {part}: ' + ', '.join(f'{k} = {_fmt(v)}' for k, v in values.items()))
+    lines += ['', '## Using the extended model', '',
+              f'`{EXTENDED_FILE}` holds the extended model in ROS 2 parameter format. Lay it over the '
+              'defaults wherever parameters are read:', '',
+              f'    bellows simulate {d.system} --input IN.csv --output OUT.csv --params {EXTENDED_FILE}'
+              + ''.join(f' --effect {c}' for c in d.causes if c in _PLANT_ONLY.get(d.system, ())),
+              f'    ros2 run bellows_ros <node> --ros-args --params-file {EXTENDED_FILE}', '']
+    plant_only = [c for c in d.causes if c in _PLANT_ONLY.get(d.system, ())]
+    if plant_only:
+        lines.append(f'{", ".join(plant_only)} {"is a dynamic effect" if len(plant_only) == 1 else "are dynamic effects"}'
+                     ' of the plant: the fitted values are its `--effect` defaults in the file, so '
+                     '`--effect NAME` switches it on with them.')
+    lines += ['', '## How the doctor decided', '',
+              f'The record was cut into {scoring.BLOCKS} contiguous blocks of time; every model was '
+              'fitted on the other blocks and scored on the block it did not see. A cause pays when it '
+              f'cuts the held-out RMSE of the current model by at least {100 * scoring.MIN_GAIN:.0f} % '
+              'and its held-out BIC (n ln MSE + k ln n) decreases; the best paying cause is added and the '
+              'search repeats (see docs/doctor.md).', '', '## Plots', '']
+    lines += [f'![{name}]({name})' for name in plots]
+    return '\n'.join(lines) + '\n'
+
+
+# Causes that are plant effects switched on by `--effect` (the rest change the model's own parameters).
+_PLANT_ONLY = {'actuator': ('air_leak', 'heat_exchange', 'sensor_lag', 'backlash'),
+               'segment': ('sensor_lag',)}
+

@@ -1,0 +1,196 @@
+"""Fitting candidate models and scoring them on held-out blocks of time.
+
+A *model* here is the baseline with zero or more candidate causes switched on. It is described by
+its nonlinear physical parameters (time constants, conductances, widths ...) with bounds, and a
+`predict(theta, train)` function that returns the predicted measured signal over the whole record
+(dynamic effects need the whole history) after solving any linear coefficients by least squares on
+the `train` rows only. The doctor never sees more than this interface.
+
+Held-out scoring (docs/doctor.md): the record is cut into `BLOCKS` contiguous blocks of time, dealt
+into `FOLDS` folds. For each fold the model is refitted on the other folds' blocks and its residual
+is taken on the blocks it did not see; every sample is held out exactly once, and the held-out RMSE
+is over all of them.
+
+Decision rule: an extension *pays* when its held-out gain over the current model is at least
+`MIN_GAIN` and its held-out log-likelihood gain beats a BIC penalty for the parameters it adds.
+"""
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+from scipy.optimize import least_squares
+
+# A cause must cut the held-out RMSE of the current model by at least this fraction (docs/doctor.md).
+MIN_GAIN = 0.05
+# Contiguous blocks of time, and folds they are dealt into (each fold holds out BLOCKS / FOLDS).
+BLOCKS = 20
+FOLDS = 5
+# Samples left out of training on each side of a held-out block (fraction of a block).
+GUARD = 0.1
+# Function evaluations of a held-out refit (warm-started from the fit on all data).
+FOLD_NFEV = 25
+
+
+@dataclass
+class Model:
+    """The baseline plus the causes in `causes`, ready to fit.
+
+    names, x0, lower, upper: nonlinear parameters (scaled so that O(1) steps are meaningful).
+    predict(theta, train) -> (prediction over the whole record, dict of linear coefficients).
+    physical(theta, linear) -> dict of physical parameters for the report (SI units).
+    n_linear: number of linear coefficients solved inside `predict` (counts in the penalty).
+    """
+    causes: tuple
+    names: list
+    x0: list
+    lower: list
+    upper: list
+    predict: Callable
+    physical: Callable
+    n_linear: int = 0
+    starts: list = field(default_factory=list)
+
+    @property
+    def n_params(self):
+        return len(self.names) + self.n_linear
+
+
+@dataclass
+class Fit:
+    theta: np.ndarray
+    linear: dict
+    prediction: np.ndarray
+    cost: float
+
+
+def fit(model, y, train, x0=None, max_nfev=60):
+    """Least-squares fit of `model` to `y` on the boolean mask `train` (several starts).
+
+    Returns the best `Fit`. Starts are `x0` (a warm start) if given, else `model.x0` and
+    `model.starts`.
+    """
+    def residual(theta):
+        prediction, _ = model.predict(theta, train)
+        return (prediction - y)[train]
+
+    if not model.names:
+        prediction, linear = model.predict(np.empty(0), train)
+        return Fit(np.empty(0), linear, prediction, _cost(prediction, y, train))
+    starts = [x0] if x0 is not None else [model.x0] + list(model.starts)
+    best = None
+    for start in starts:
+        start = np.clip(np.asarray(start, float), model.lower, model.upper)
+        solution = least_squares(residual, start, bounds=(model.lower, model.upper),
+                                 x_scale='jac', max_nfev=max_nfev, diff_step=1e-3)
+        if best is None or solution.cost < best.cost:
+            best = solution
+    prediction, linear = model.predict(best.x, train)
+    return Fit(best.x, linear, prediction, _cost(prediction, y, train))
+
+
+def _cost(prediction, y, mask):
+    return float(np.mean((prediction - y)[mask] ** 2))
+
+
+def block_masks(n, blocks=BLOCKS, folds=FOLDS, guard=GUARD):
+    """(train, test) boolean masks of each fold.
+
+    The record is cut into `blocks` contiguous blocks of time; fold k holds out blocks k, k + folds,
+    k + 2 folds, ... Spreading each fold's held-out time over the record keeps every training set
+    covering the whole range of the operating conditions (so the score measures the model, not an
+    extrapolation to an unseen pressure), while each held-out block stays long compared with the
+    dynamics of the causes. `guard` (fraction of a block) is left out of training on both sides of
+    a held-out block.
+    """
+    edges = np.linspace(0, n, blocks + 1).astype(int)
+    pad = int(guard * n / blocks)
+    masks = []
+    for fold in range(folds):
+        test = np.zeros(n, bool)
+        train = np.ones(n, bool)
+        for lo, hi in zip(edges[fold:-1:folds], edges[fold + 1::folds]):
+            test[lo:hi] = True
+            train[max(0, lo - pad):min(n, hi + pad)] = False
+        masks.append((train, test))
+    return masks
+
+
+@dataclass
+class Score:
+    """A model fitted on all data (`full`) and its held-out residual (`heldout`, one per sample)."""
+    model: Model
+    full: Fit
+    heldout: np.ndarray
+
+    @property
+    def rmse(self):
+        return float(np.sqrt(np.mean(self.heldout ** 2)))
+
+    def params(self):
+        return self.model.physical(self.full.theta, self.full.linear)
+
+
+def score(model, y, warm=None):
+    """Fit `model` to all of `y`, then refit per held-out block (warm-started) and collect the
+    held-out residuals. `warm` optionally gives a start for the full fit."""
+    everything = np.ones(len(y), bool)
+    full = fit(model, y, everything, x0=warm)
+    heldout = np.empty(len(y))
+    for train, test in block_masks(len(y)):
+        fold = fit(model, y, train, x0=full.theta if model.names else None, max_nfev=FOLD_NFEV)
+        heldout[test] = (fold.prediction - y)[test]
+    return Score(model, full, heldout)
+
+
+def gain(extended_rmse, baseline_rmse):
+    """1 - extended / baseline (the `gain` of report.json)."""
+    return float(1.0 - extended_rmse / baseline_rmse) if baseline_rmse > 0 else 0.0
+
+
+def bic_delta(candidate, current):
+    """Change of a BIC-like criterion on held-out residuals: n ln(MSE ratio) + k ln(n), with n the
+    number of held-out samples and k the number of parameters the candidate adds.
+
+    Negative means the candidate is worth its added parameters. With thousands of samples this
+    penalty is small; the minimum gain is then the binding part of the rule.
+    """
+    n = len(candidate.heldout)
+    added = max(candidate.model.n_params - current.model.n_params, 0)
+    ratio = np.mean(candidate.heldout ** 2) / np.mean(current.heldout ** 2)
+    return float(n * np.log(ratio) + added * np.log(n))
+
+
+def pays(candidate, current):
+    """Decision rule: held-out gain ≥ MIN_GAIN and the BIC-like criterion decreases."""
+    return gain(candidate.rmse, current.rmse) >= MIN_GAIN and bic_delta(candidate, current) < 0
+
+
+def autocorrelation(x, max_lag):
+    """Sample autocorrelation r_0..r_max_lag (r_0 = 1) via FFT."""
+    x = np.asarray(x, float) - np.mean(x)
+    n = len(x)
+    size = 1 << int(np.ceil(np.log2(2 * n)))
+    spectrum = np.fft.rfft(x, size)
+    acf = np.fft.irfft(spectrum * np.conj(spectrum), size)[:max_lag + 1]
+    return acf / acf[0] if acf[0] > 0 else np.zeros(max_lag + 1)
+
+
+def ljung_box(residual, lags):
+    """Ljung-Box Q over lags 1..`lags` and its p-value (chi-square with `lags` dof).
+
+    For white noise Q ≈ lags; structure left in a residual makes Q large.
+    """
+    from scipy.stats import chi2
+    n = len(residual)
+    r = autocorrelation(residual, lags)[1:]
+    q = float(n * (n + 2) * np.sum(r ** 2 / (n - np.arange(1, lags + 1))))
+    return q, float(chi2.sf(q, lags))
+
+
+def noise_floor(signal):
+    """Standard deviation of the white measurement noise on `signal`, from its first differences
+    (robust MAD estimate). At 1 kHz the signal itself changes little between samples, so the
+    differences are dominated by noise: var(diff) = 2 sigma^2."""
+    d = np.diff(np.asarray(signal, float))
+    d = d - np.median(d)
+    return float(1.4826 * np.median(np.abs(d)) / np.sqrt(2))

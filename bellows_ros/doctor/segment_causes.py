@@ -1,0 +1,216 @@
+"""The segment's baseline and its candidate causes, as physically parameterised extensions.
+
+What is compared: the driving torque the record implies, Y = τ_motion - τ_ext (30), with the model's
+driving torque. τ_motion comes from the record's `tau_motion` column, else from the equation of
+motion (2) with `segment.dynamics` (quasi-static by default: Y = -τ_ext).
+
+Baseline (DESIGN.md "Baselines"): paper A's previous model (34) with constant friction (c_f only)
+and no natural curvature (Ψ_j0 = 0, no k_s,p): Y = X_prev θ_prev + 2Ψ k_s + tanh(c_vel Ψ̇) c_f, all
+linear coefficients solved by least squares (32) on the training rows.
+
+Each cause adds the missing piece (paper A; MODEL.md):
+- contact_hysteresis: X_prev is swapped for the membrane-contact actuator torque (29), X_a(s̃_a),
+  with s̃_a carried along the record by the no-slip strain memory (Algorithm 1) for the material and
+  geometry of the parameter file; θ_a refitted.
+- pressure_friction: adds c_f,p (5), the friction that grows with the bearing load.
+- natural_curvature: adds Ψ_j0(p) = σ_j c_Ψ0,p tanh(c_Ψ0 p_scl,j) (4) and k_s,p (3); c_Ψ0, c_Ψ0,p are
+  fitted (nonlinear), k_s, k_s,p by least squares.
+- sensor_lag: the pressure sensors lag the chambers with a time constant τ; the model is fed the
+  pressures the sensors lag behind, p + τ dp/dt (the inverse of the first-order lag).
+"""
+import numpy as np
+from scipy.linalg import cho_factor, cho_solve
+from scipy.signal import savgol_filter
+
+from bellows_ros.doctor.scoring import Model
+from bellows_ros.models.segment import (actuator_regressor, contact_lengths, friction_regressor,
+                                        previous_regressor, restoring_regressor, scaled_pressure,
+                                        velocity)
+
+CAUSES = ('contact_hysteresis', 'pressure_friction', 'natural_curvature', 'sensor_lag')
+BASELINE = ('paper A previous model (34), constant friction c_f, no natural curvature '
+            '(psi_j0 = 0, k_s,p = 0); coefficients refitted')
+FIT_RATE = 100.0  # Hz, highest rate the doctor fits at: quasi-static bench records; the sensor lag is ~30 ms
+UNIT = 'N·m'
+
+# Nonlinear parameters: (name, start, lower, upper); alternative starts for multi-start.
+SPECS = {
+    'natural_curvature': [('c_psi0', 3.0, 0.1, 30.0), ('c_psi0_p', 0.3, -1.5, 1.5)],
+    'sensor_lag': [('log10_tau', -1.5, -3.0, 0.0)],
+}
+STARTS = {
+    'natural_curvature': [[1.0, -0.3], [10.0, 0.6], [20.0, 0.8], [20.0, -0.8]],
+    'sensor_lag': [[-2.3], [-0.8]],
+}
+LINEAR_NAMES = {
+    'previous': ['previous.theta'] * 4,
+    'contact': ['actuator.theta'] * 8,
+}
+
+
+def add_columns(record, params):
+    """Add the derived columns the segment causes need: Ψ̇ (if absent) and Y (the target)."""
+    columns = record.columns
+    if 'psi_dot' not in columns:
+        columns['psi_dot'] = velocity(columns['t'], columns['psi'])
+    if 'tau_motion' in columns:
+        motion = columns['tau_motion']
+    else:
+        acceleration = np.gradient(columns['psi_dot'], columns['t'])
+        motion = (params.dynamics_inertia * acceleration + params.dynamics_damping * columns['psi_dot']
+                  + params.dynamics_gravity * np.sin(columns['psi']))
+    columns['y'] = motion - columns['tau_ext']
+    return record
+
+
+def measured(record):
+    return record['y']
+
+
+class _Contact:
+    """s̃_a of both chains over the record, computed once (Algorithm 1 is sequential and costly)."""
+
+    def __init__(self, params, record):
+        self.params, self.record, self.value = params, record, None
+
+    def __call__(self):
+        if self.value is None:
+            r = self.record
+            self.value = contact_lengths(self.params, r['psi'], r['p1'], r['p2'])
+        return self.value
+
+
+def least_squares_solution(x, y):
+    """θ minimising |X θ - Y|² (32), by the normal equations of the column-scaled X.
+
+    Scaling makes XᵀX well conditioned enough for a Cholesky solve of a dozen unknowns, which is
+    much cheaper than an SVD-based solver when the fit calls it hundreds of times; a relative ridge
+    of 1e-10 keeps an unexcited column from making the system singular.
+    """
+    scale = np.sqrt(np.sum(x * x, axis=0))
+    scale[scale == 0] = 1.0
+    xs = x / scale
+    gram = xs.T @ xs
+    gram[np.diag_indices_from(gram)] += 1e-10
+    return cho_solve(cho_factor(gram), xs.T @ y) / scale
+
+
+def build_model(record, params, causes, warm=None, contact=None):
+    """The baseline plus `causes` on `record` (with `add_columns` applied), as a `scoring.Model`."""
+    causes = tuple(causes)
+    contact = contact or _Contact(params, record)
+    psi, psi_dot, dt = record['psi'], record['psi_dot'], record.dt
+    y = record['y']
+    nonlinear = [c for c in causes if c in SPECS]
+    names, x0, lower, upper = [], [], [], []
+    for cause in nonlinear:
+        for name, start, lo, hi in SPECS[cause]:
+            key = f'{cause}.{name}'
+            names.append(key)
+            x0.append(warm[key] if warm and key in warm else start)
+            lower.append(lo)
+            upper.append(hi)
+    starts = []
+    if causes and causes[-1] in SPECS:
+        width = len(SPECS[causes[-1]])
+        starts = [x0[:-width] + list(alt) for alt in STARTS[causes[-1]]]
+
+    def columns(theta):
+        values = dict(zip(names, theta))
+        p1, p2 = record['p1'], record['p2']
+        if 'sensor_lag' in causes:
+            tau = 10.0 ** values['sensor_lag.log10_tau']
+            p1 = p1 + tau * savgol_filter(p1, 9, 2, deriv=1, delta=dt)
+            p2 = p2 + tau * savgol_filter(p2, 9, 2, deriv=1, delta=dt)
+        ps1, ps2 = scaled_pressure(params, p1), scaled_pressure(params, p2)
+        blocks, labels = [], []
+        if 'contact_hysteresis' in causes:
+            sa1, sa2 = contact()
+            blocks.append(actuator_regressor(psi, ps1, ps2, sa1, sa2))
+            labels += [f'actuator.theta[{k}]' for k in range(8)]
+        else:
+            blocks.append(previous_regressor(psi, ps1, ps2))
+            labels += [f'previous.theta[{k}]' for k in range(4)]
+        if 'natural_curvature' in causes:
+            blocks.append(restoring_regressor(psi, ps1, ps2, values['natural_curvature.c_psi0'],
+                                              values['natural_curvature.c_psi0_p']))
+            labels += ['restoring.k_s', 'restoring.k_sp']
+        else:
+            blocks.append(restoring_regressor(psi, ps1, ps2, 0.0, 0.0)[:, :1])
+            labels += ['restoring.k_s']
+        friction = friction_regressor(psi_dot, ps1, ps2, params.friction_c_vel)
+        if 'pressure_friction' in causes:
+            blocks.append(friction)
+            labels += ['friction.c_f', 'friction.c_fp']
+        else:
+            blocks.append(friction[:, :1])
+            labels += ['friction.c_f']
+        return np.column_stack(blocks), labels
+
+    cache = {}
+
+    def run(theta, train):
+        key = tuple(np.round(theta, 12))
+        if key not in cache:
+            cache.clear()
+            cache[key] = columns(theta)
+        x, labels = cache[key]
+        coefficients = least_squares_solution(x[train], y[train])
+        return x @ coefficients, dict(zip(labels, coefficients))
+
+    n_linear = (8 if 'contact_hysteresis' in causes else 4) + 1 + ('natural_curvature' in causes) \
+        + 1 + ('pressure_friction' in causes)
+
+    def physical(theta, linear):
+        values = dict(zip(names, theta))
+        out = {'baseline': {}}
+        for cause in causes:
+            out[cause] = {}
+        for label, value in linear.items():
+            part = 'baseline'
+            if label.startswith('actuator.'):
+                part = 'contact_hysteresis'
+            elif label == 'friction.c_fp':
+                part = 'pressure_friction'
+            elif label == 'restoring.k_sp':
+                part = 'natural_curvature'
+            out[part][label] = float(value)
+        if 'natural_curvature' in causes:
+            out['natural_curvature']['restoring.c_psi0'] = float(values['natural_curvature.c_psi0'])
+            out['natural_curvature']['restoring.c_psi0_p'] = float(values['natural_curvature.c_psi0_p'])
+        if 'sensor_lag' in causes:
+            out['sensor_lag']['tau'] = float(10.0 ** values['sensor_lag.log10_tau'])
+        return out
+
+    return Model(causes, names, x0, lower, upper, run, physical, n_linear=n_linear, starts=starts)
+
+
+def extended_flat(params, causes, values):
+    """Flat ROS 2 parameters of the extended model for `params.write_file` (names of
+    config/segment.yaml, loadable by `load_segment_params`).
+
+    The fitted coefficients go to their YAML names; physics a cause did not find is written as
+    switched off (c_f,p = 0, c_Ψ0,p = k_s,p = 0), so the file describes exactly the extended model.
+    A fitted sensor lag goes to `segment.plant.sensor_lag_tau` (the plant's `sensor_lag` effect).
+    """
+    flat = params.flat()
+    vector = {'actuator.theta': list(params.actuator_theta), 'previous.theta': list(params.previous_theta)}
+    scalars = {}
+    if 'pressure_friction' not in causes:
+        scalars['friction.c_fp'] = 0.0
+    if 'natural_curvature' not in causes:
+        scalars.update({'restoring.c_psi0_p': 0.0, 'restoring.k_sp': 0.0})
+    for part in values.values():
+        for label, value in part.items():
+            if '[' in label:
+                name, index = label[:-1].split('[')
+                vector[name][int(index)] = value
+            elif label == 'tau':
+                scalars['plant.sensor_lag_tau'] = value
+            else:
+                scalars[label] = value
+    for name, value in vector.items():
+        flat[f'segment.{name}'] = [float(v) for v in value]
+    for name, value in scalars.items():
+        flat[f'segment.{name}'] = float(value)
+    return flat

@@ -1,0 +1,291 @@
+"""Driver for the actuator board (DC motor + encoder, system pressure, spring position and force).
+
+Talks the serial protocol of `serial_protocol` over pyserial. One reader thread parses telemetry and
+reconnects when the port vanishes; one heartbeat thread sends heartbeats and runs the command
+watchdog.
+
+API
+---
+- ``load_config(params_path=None) -> ActuatorBoardConfig`` (from config/hardware.yaml,
+  ``hardware.actuator_board.*``).
+- ``ActuatorBoard(config, on_sample=None)``; ``on_sample(sample: ActuatorSample)`` is called from
+  the reader thread for every good telemetry frame (keep it short).
+- ``.latest() -> ActuatorSample | None``: newest good sample, None when there is none or it is
+  stale.
+- ``.send_duty(duty: float) -> float``: duty -1..1 (positive compresses the air chamber); returns
+  the duty actually sent after the safety limits.
+- ``.connected``, ``.stale`` (bool); ``.counters() -> dict[str, int]``; ``.close()``.
+
+Safety: |duty| <= duty_max; no duty into an end stop (board status flags or the x_c soft limits);
+duty 0 while the data is stale; duty 0 when no command arrives for `command_timeout` (watchdog); the
+board itself stops after `BOARD_HEARTBEAT_TIMEOUT` without heartbeats. A sample that failed any
+check is never delivered.
+"""
+import dataclasses
+import logging
+import threading
+import time
+
+import serial
+
+from bellows_ros import params
+from bellows_ros.hardware import serial_protocol as sp
+from bellows_ros.hardware.safety import Watchdog, limit_duty
+from bellows_ros.models.actuator import load_actuator_params
+
+log = logging.getLogger(__name__)
+
+
+@dataclasses.dataclass(frozen=True)
+class ActuatorBoardConfig:
+    port: str
+    baud: int
+    stale_timeout: float
+    reconnect_interval: float
+    heartbeat_period: float
+    command_timeout: float
+    duty_max: float
+    metres_per_count: float
+    x_c_min: float
+    x_c_max: float
+
+
+def load_config(params_path=None, actuator_params_path=None):
+    """`ActuatorBoardConfig` from config/hardware.yaml with the user's file laid over it.
+
+    The encoder scaling and the end stops are not repeated in hardware.yaml: they come from the
+    actuator's drive and travel limits (config/actuator.yaml, or `actuator_params_path`), their one
+    source. The soft end stops lie `end_stop_margin` (m) inside the mechanical ones.
+    """
+    flat = params.section(params.load('hardware', params_path), 'hardware.actuator_board')
+    actuator = load_actuator_params(actuator_params_path)
+    margin = flat.pop('end_stop_margin')
+    flat.update(metres_per_count=actuator.drive.metres_per_count,
+                x_c_min=actuator.chamber.x_min + margin, x_c_max=actuator.chamber.x_max - margin)
+    return params.build(ActuatorBoardConfig, flat, params_path or 'config/hardware.yaml')
+
+
+@dataclasses.dataclass(frozen=True)
+class ActuatorSample:
+    """One good telemetry frame in SI units (names as the `actuator` data columns of DESIGN.md).
+
+    t_receive: time.monotonic() at reception, s; t_device: board clock (unwrapped), s; index:
+    sequence number, unwrapped (starts at the first frame's seq when the port (re)opens); x_c:
+    air-chamber compression from the encoder, m; x_s: spring compression, m; p: system pressure, Pa
+    abs; f: spring force, N; status: `serial_protocol` status bits.
+    """
+    t_receive: float
+    t_device: float
+    index: int
+    encoder_counts: int
+    x_c: float
+    x_s: float
+    p: float
+    f: float
+    status: int
+
+
+class ActuatorBoard:
+    def __init__(self, config, on_sample=None):
+        self.config = config
+        self._on_sample = on_sample
+        self._serial = None
+        self._io_lock = threading.Lock()   # guards the port object and writes
+        self._stop = threading.Event()
+        self._latest = None
+        self._decoder = sp.FrameDecoder()
+        self._tx_seq = 0
+        self._last_seq = None
+        self._index = 0
+        self._t_offset_us = 0
+        self._last_t_us = None
+        self._duty = 0.0
+        self._watchdog = Watchdog(config.command_timeout, time.monotonic())
+        self._watchdog_tripped = True       # nothing commanded yet
+        self._counts = dict.fromkeys(
+            ['samples', 'callback_errors', 'dropped', 'duplicates', 'sequence_resets',
+             'reconnects', 'disconnects', 'tx_errors', 'duty_clamps', 'duty_invalid',
+             'end_stop_stops', 'stale_stops', 'watchdog_stops'], 0)
+        self._reader = threading.Thread(target=self._read_loop, name='actuator-reader', daemon=True)
+        self._heart = threading.Thread(target=self._heartbeat_loop, name='actuator-heartbeat',
+                                       daemon=True)
+        self._reader.start()
+        self._heart.start()
+
+    # -- state for the next layer ---------------------------------------------------------------
+    @property
+    def connected(self):
+        return self._serial is not None
+
+    @property
+    def stale(self):
+        return self.latest() is None
+
+    def latest(self):
+        sample = self._latest
+        if sample is None or time.monotonic() - sample.t_receive > self.config.stale_timeout:
+            return None
+        return sample
+
+    def counters(self):
+        d = self._decoder
+        out = dict(self._counts)
+        out.update(crc_errors=d.crc_errors, framing_errors=d.framing_errors,
+                   version_errors=d.version_errors, unknown_types=d.unknown_types)
+        return out
+
+    # -- commands -------------------------------------------------------------------------------
+    def send_duty(self, duty):
+        """Limit and send a motor duty; kicks the command watchdog."""
+        self._watchdog.kick(time.monotonic())
+        self._watchdog_tripped = False
+        return self._command(duty)
+
+    def _command(self, duty):
+        sample = self.latest()
+        if sample is None:
+            limited, reason = 0.0, ('stale' if duty != 0 else None)
+        else:
+            limited, reason = limit_duty(duty, self.config.duty_max, *self._at_stops(sample))
+        if reason is not None:
+            key = {'stale': 'stale_stops', 'invalid': 'duty_invalid', 'clamped': 'duty_clamps',
+                   'end_stop': 'end_stop_stops'}[reason]
+            self._counts[key] += 1
+        self._duty = limited
+        q15 = sp.duty_to_q15(limited)
+        self._send(lambda seq: sp.MotorCommand(seq, q15))
+        return limited
+
+    def _at_stops(self, sample):
+        """(at the low stop, at the high stop): the board's switches or the x_c soft limits."""
+        return (bool(sample.status & sp.END_STOP_LOW) or sample.x_c <= self.config.x_c_min,
+                bool(sample.status & sp.END_STOP_HIGH) or sample.x_c >= self.config.x_c_max)
+
+    def _send(self, make):
+        """Send `make(seq)`; the sequence number is taken under the lock shared by both threads."""
+        with self._io_lock:
+            if self._serial is None:
+                return
+            self._tx_seq = (self._tx_seq + 1) & 0xFFFF
+            try:
+                self._serial.write(sp.encode(make(self._tx_seq)))
+            except (serial.SerialException, OSError):
+                self._counts['tx_errors'] += 1  # the reader notices a vanished port and reconnects
+
+    # -- threads --------------------------------------------------------------------------------
+    def _heartbeat_loop(self):
+        while not self._stop.wait(self.config.heartbeat_period):
+            self._send(sp.Heartbeat)
+            if not self._watchdog_tripped and self._watchdog.expired(time.monotonic()):
+                self._watchdog_tripped = True
+                if self._duty != 0.0:
+                    self._counts['watchdog_stops'] += 1
+                    log.warning('actuator board: no motor command for %.3f s, motor stopped',
+                                self.config.command_timeout)
+                    self._command(0.0)
+
+    def _open(self):
+        try:
+            port = serial.Serial(self.config.port, self.config.baud, timeout=0.02,
+                                 write_timeout=0.05)
+        except (serial.SerialException, OSError):
+            return False
+        with self._io_lock:
+            self._serial = port
+        self._last_seq = None  # a re-plugged board restarts its sequence and clock
+        self._last_t_us = None
+        return True
+
+    def _drop_port(self, error):
+        with self._io_lock:
+            port, self._serial = self._serial, None
+        try:
+            port.close()
+        except Exception:  # closing a vanished port may fail; it is gone either way
+            pass
+        self._counts['disconnects'] += 1
+        log.warning('actuator board: lost %s (%s); reconnecting', self.config.port, error)
+
+    def _read_loop(self):
+        ever_opened, outage_reported = False, False
+        while not self._stop.is_set():
+            if self._serial is None:
+                if not self._open():
+                    if not outage_reported:
+                        log.warning('actuator board: cannot open %s; retrying every %.2f s',
+                                    self.config.port, self.config.reconnect_interval)
+                        outage_reported = True
+                    self._stop.wait(self.config.reconnect_interval)
+                    continue
+                if ever_opened:
+                    self._counts['reconnects'] += 1
+                    log.warning('actuator board: reconnected to %s', self.config.port)
+                else:
+                    log.info('actuator board: opened %s', self.config.port)
+                ever_opened, outage_reported = True, False
+            try:
+                data = self._serial.read(max(1, self._serial.in_waiting))
+            except (serial.SerialException, OSError, TypeError) as error:
+                # TypeError: pyserial reading a port that close() shut under it
+                if self._stop.is_set():
+                    break
+                self._drop_port(error)
+                continue
+            for message in self._decoder.feed(data):
+                if isinstance(message, sp.Telemetry):
+                    self._accept(message)
+
+    def _accept(self, t):
+        now = time.monotonic()
+        if self._last_seq is not None:
+            delta = (t.seq - self._last_seq) & 0xFFFF
+            if delta == 0:
+                self._counts['duplicates'] += 1
+                return
+            if delta < 0x8000:
+                self._counts['dropped'] += delta - 1
+                self._index += delta
+            else:  # the board restarted
+                self._counts['sequence_resets'] += 1
+                self._index += 1
+        else:  # first frame since the port (re)opened
+            self._index = t.seq
+        self._last_seq = t.seq
+        if self._last_t_us is not None and t.t_us < self._last_t_us:
+            self._t_offset_us += 1 << 32
+        self._last_t_us = t.t_us
+        m = self.config.metres_per_count
+        sample = ActuatorSample(
+            t_receive=now, t_device=(t.t_us + self._t_offset_us) * 1e-6, index=self._index,
+            encoder_counts=t.encoder_counts, x_c=t.encoder_counts * m, x_s=t.spring_um * 1e-6,
+            p=float(t.pressure_pa), f=t.force_mn * 1e-3, status=t.status)
+        self._latest = sample
+        self._counts['samples'] += 1
+        if self._duty != 0.0:  # re-check the end stops against every new position
+            low, high = self._at_stops(sample)
+            if (self._duty < 0 and low) or (self._duty > 0 and high):
+                self._counts['end_stop_stops'] += 1
+                self._duty = 0.0
+                self._send(lambda seq: sp.MotorCommand(seq, 0))
+        if self._on_sample is not None:
+            try:
+                self._on_sample(sample)
+            except Exception:  # a failing consumer must not kill the reader (and the watchdogs)
+                self._counts['callback_errors'] += 1
+                if self._counts['callback_errors'] == 1:
+                    log.exception('actuator board: on_sample callback failed '
+                                  '(further failures only counted)')
+
+    def close(self):
+        """Stop the motor, stop the threads, close the port."""
+        if self._stop.is_set():
+            return
+        self._duty = 0.0
+        self._send(lambda seq: sp.MotorCommand(seq, 0))
+        self._stop.set()
+        self._heart.join(timeout=1.0)
+        self._reader.join(timeout=1.0)
+        with self._io_lock:
+            port, self._serial = self._serial, None
+        if port is not None:
+            port.close()

@@ -1,0 +1,157 @@
+"""CAN protocol of the arm: frames described by config/arm.dbc, used through cantools.
+
+Every frame ends with two DBC signals, ``Counter`` (8-bit, +1 per transmission of that frame ID) and
+``CRC`` (CRC-8 SAE J1850 over the frame's other data bytes followed by the frame ID as two bytes,
+little-endian -- the data-ID idea of AUTOSAR E2E profile 1, so a frame with a valid CRC under
+another ID is still rejected). Spec and bus-load budget: docs/protocols.md, "CAN".
+
+API
+---
+- ``load_dbc(path=None) -> cantools.database.can.Database`` (default config/arm.dbc).
+- ``crc8_j1850(data: bytes) -> int``; ``chamber_of(signal_name) -> int | None``.
+- ``encode_frame(message, values: dict, counter: int) -> bytes``: signals in physical units, CRC
+  filled.
+- ``FrameChecker(db, resync_after=0.05)``; ``.check(frame_id, data, now) -> (Message, dict) |
+  None``; counters ``unknown_ids``, ``malformed``, ``crc_errors``, ``replayed``, ``lost`` (frames
+  missing per counter gaps), ``accepted``. Never raises on any input.
+- ``frame_bits(length, extended=False) -> int`` (worst-case stuffed length), ``bus_load(db, bitrate,
+  names=None) -> float`` (fraction of the bus used by the DBC's cyclic frames).
+"""
+import re
+
+import cantools
+
+from bellows_ros import params
+
+VENT_PRESSURE = 101325.0  # Pa abs: what the arm's valves hold when vented (they exhaust to ambient)
+ARM_HEARTBEAT_TIMEOUT = 0.1  # s without ARM_HOST_HEARTBEAT before the arm vents every chamber
+
+
+def load_dbc(path=None):
+    """The arm's CAN database (default: config/arm.dbc)."""
+    path = path or params.config_dir() / 'arm.dbc'
+    db = cantools.database.load_file(str(path))
+    for message in db.messages:
+        names = [s.name for s in message.signals]
+        if 'Counter' not in names or 'CRC' not in names:
+            raise ValueError(f'{path}: frame {message.name} lacks a Counter or CRC signal')
+        crc = message.get_signal_by_name('CRC')
+        if crc.length != 8 or crc.start % 8:
+            raise ValueError(f'{path}: frame {message.name}: CRC must be one whole byte')
+    return db
+
+
+def chamber_of(signal_name):
+    """0-based chamber index of a set-point signal ``S<segment>_P<chain>`` (order seg1 chain1, seg1
+    chain2, seg2 chain1, ...), or None for any other signal."""
+    match = re.fullmatch(r'S(\d+)_P([12])', signal_name)
+    return None if match is None else 2 * (int(match[1]) - 1) + int(match[2]) - 1
+
+
+def _j1850_table():
+    table = []
+    for byte in range(256):
+        crc = byte
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x1D) & 0xFF if crc & 0x80 else (crc << 1) & 0xFF
+        table.append(crc)
+    return table
+
+
+_TABLE = _j1850_table()
+
+
+def crc8_j1850(data):
+    """CRC-8 SAE J1850: poly 0x1D, init 0xFF, final XOR 0xFF (check value of b'123456789' =
+    0x4B)."""
+    crc = 0xFF
+    for byte in data:
+        crc = _TABLE[crc ^ byte]
+    return crc ^ 0xFF
+
+
+def _frame_crc(message, data):
+    crc_byte = message.get_signal_by_name('CRC').start // 8
+    covered = bytes(data[:crc_byte]) + bytes(data[crc_byte + 1:])
+    return crc8_j1850(covered + message.frame_id.to_bytes(2, 'little'))
+
+
+def encode_frame(message, values, counter):
+    """Data bytes of `message` (a cantools Message) with `values`, the rolling counter and the
+    CRC."""
+    values = dict(values, Counter=counter & 0xFF, CRC=0)
+    data = message.encode(values)  # strict: an out-of-range value raises, never wraps
+    values['CRC'] = _frame_crc(message, data)
+    return message.encode(values, strict=False)  # same values, already range-checked
+
+
+class FrameChecker:
+    """Decode received frames; reject and count unknown, malformed, corrupt and replayed ones.
+
+    A frame is a replay when its counter did not advance (delta 0) or went back (delta > 128, i.e.
+    it is older than the last accepted one). After `resync_after` seconds of silence from an ID the
+    counter is taken afresh (a restarted sender).
+    """
+
+    def __init__(self, db, resync_after=0.05):
+        self.db = db
+        self.resync_after = resync_after
+        self._last = {}  # frame_id -> (counter, time)
+        self.unknown_ids = self.malformed = self.crc_errors = 0
+        self.replayed = self.lost = self.accepted = 0
+
+    def counters(self):
+        return {'unknown_ids': self.unknown_ids, 'malformed': self.malformed,
+                'crc_errors': self.crc_errors, 'replayed': self.replayed, 'lost': self.lost,
+                'accepted': self.accepted}
+
+    def check(self, frame_id, data, now):
+        try:
+            message = self.db.get_message_by_frame_id(frame_id)
+        except KeyError:
+            self.unknown_ids += 1
+            return None
+        if len(data) != message.length:
+            self.malformed += 1
+            return None
+        try:
+            values = message.decode(bytes(data), decode_choices=False)
+        except Exception:  # cantools raises several types for undecodable data; all mean malformed
+            self.malformed += 1
+            return None
+        if values['CRC'] != _frame_crc(message, data):
+            self.crc_errors += 1
+            return None
+        counter = values['Counter']
+        last = self._last.get(frame_id)
+        if last is not None and now - last[1] <= self.resync_after:
+            delta = (counter - last[0]) & 0xFF
+            if delta == 0 or delta > 128:
+                self.replayed += 1
+                return None
+            self.lost += delta - 1
+        self._last[frame_id] = (counter, now)
+        self.accepted += 1
+        return message, values
+
+
+def frame_bits(length, extended=False):
+    """Worst-case bits of a classic CAN data frame with `length` data bytes, incl. stuff bits and
+    the 3-bit interframe space (Davis, Burns, Bril, Lukkien 2007, eq. (2)): g + 8n + 13 +
+    floor((g+8n-1)/4), g = 34 (11-bit ID) or 54 (29-bit ID) bits exposed to stuffing."""
+    g = 54 if extended else 34
+    return g + 8 * length + 13 + (g + 8 * length - 1) // 4
+
+
+def bus_load(db, bitrate, names=None):
+    """Fraction of a `bitrate` bit/s bus taken by the cyclic frames of `db` (all, or those in
+    `names`)."""
+    bits_per_second = 0.0
+    for message in db.messages:
+        if names is not None and message.name not in names:
+            continue
+        if not message.cycle_time:
+            raise ValueError(f'frame {message.name} has no GenMsgCycleTime')
+        bits_per_second += frame_bits(message.length, message.is_extended_frame) \
+            * 1000.0 / message.cycle_time
+    return bits_per_second / bitrate

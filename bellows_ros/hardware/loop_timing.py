@@ -1,0 +1,121 @@
+"""Absolute-deadline periodic loops and their timing statistics (no ROS).
+
+Used by the simulated devices, the drivers and the nodes for every 1 kHz loop (DESIGN.md "Timing")::
+
+    stats = LoopStats()
+    loop = PeriodicLoop(period=1e-3, stats=stats)
+    for dt in loop.ticks(stop_event):      # dt: time this tick stands for, s (period x ticks
+    advanced)
+        work(dt)
+    stats.summary()   # {'count', 'misses', 'period_p50', 'period_p99', 'lateness_p50', ...} in s
+
+API
+---
+- ``PeriodicLoop(period, stats=None, spin=1e-4)``; ``.ticks(stop_event) -> Iterator[float]``.
+- ``LoopStats(window=10000)``; ``.record(period, lateness, compute)``, ``.add_misses(n)``,
+  ``.summary() -> dict[str, float]``.
+
+Deadlines are ``t0 + k * period`` on ``time.perf_counter`` (absolute, so sleep jitter never
+accumulates into drift). The loop sleeps until ``spin`` seconds before the deadline and busy-waits
+the rest, because ``time.sleep`` on Linux overshoots by 50-100 us (timer slack). When a tick starts
+more than one period late, the slots it lost are *skipped*, not replayed in a burst, and counted as
+deadline misses; the returned ``dt`` then covers the skipped slots so that simulated time keeps pace
+with wall time.
+"""
+import threading
+import time
+from collections import deque
+
+import numpy as np
+
+
+class LoopStats:
+    """Rolling timing statistics of a periodic loop (the last `window` ticks), all in seconds.
+
+    Thread-safe: the loop thread records, a diagnostics thread reads `summary()`.
+    """
+
+    def __init__(self, window=10000):
+        self._lock = threading.Lock()
+        self._period = deque(maxlen=window)
+        self._lateness = deque(maxlen=window)
+        self._compute = deque(maxlen=window)
+        self.count = 0
+        self.misses = 0
+
+    def record(self, period, lateness, compute):
+        """One tick: interval since the previous tick start, start minus deadline, work time."""
+        with self._lock:
+            self._period.append(period)
+            self._lateness.append(lateness)
+            self._compute.append(compute)
+            self.count += 1
+
+    def add_misses(self, n):
+        """`n` deadlines that passed without their tick running."""
+        with self._lock:
+            self.misses += n
+
+    def summary(self):
+        """Counts and p50/p99/max of period, lateness and compute time over the window."""
+        with self._lock:
+            series = {'period': np.array(self._period), 'lateness': np.array(self._lateness),
+                      'compute': np.array(self._compute)}
+            out = {'count': float(self.count), 'misses': float(self.misses)}
+        for name, values in series.items():
+            if values.size:
+                p50, p99 = np.percentile(values, [50, 99])
+                out.update({f'{name}_p50': float(p50), f'{name}_p99': float(p99),
+                            f'{name}_max': float(values.max())})
+            else:
+                out.update({f'{name}_p50': float('nan'), f'{name}_p99': float('nan'),
+                            f'{name}_max': float('nan')})
+        return out
+
+
+class PeriodicLoop:
+    """Run a body every `period` seconds against absolute deadlines.
+
+    Parameters ---------- period : float
+        Loop period, s.
+    stats : LoopStats, optional
+        Where each tick's timing is recorded.
+    spin : float
+        Busy-wait margin before each deadline, s.
+    """
+
+    def __init__(self, period, stats=None, spin=1e-4):
+        if not period > 0:
+            raise ValueError(f'period must be positive, got {period}')
+        self.period = float(period)
+        self.stats = stats if stats is not None else LoopStats()
+        self.spin = float(spin)
+
+    def _sleep_until(self, deadline):
+        remaining = deadline - time.perf_counter()
+        if remaining > self.spin:
+            time.sleep(remaining - self.spin)
+        while time.perf_counter() < deadline:
+            pass
+
+    def ticks(self, stop_event):
+        """Yield once per period until `stop_event` is set; yields the time step dt, s."""
+        period = self.period
+        start = time.perf_counter()
+        k = 0
+        previous_start = start
+        while not stop_event.is_set():
+            deadline = start + k * period
+            self._sleep_until(deadline)
+            tick_start = time.perf_counter()
+            lateness = tick_start - deadline
+            skipped = int(lateness // period)
+            if skipped:
+                self.stats.add_misses(skipped)
+                k += skipped
+            k += 1
+            dt = period * (1 + skipped)
+            yield dt
+            compute = time.perf_counter() - tick_start
+            self.stats.record(tick_start - previous_start, lateness, compute)
+            previous_start = tick_start

@@ -1,0 +1,222 @@
+"""Simulated actuator board: the firmware side of the serial protocol on a pseudo-terminal.
+
+The emulator holds the pty master; the driver opens the slave through a symlink the emulator
+controls (``.port``), just as the real board appears under ``/dev/serial/by-id/...``: udev removes
+that link when the USB device vanishes and creates it again, pointing at a new tty, when it comes
+back. ``unplug()`` and ``replug()`` do exactly that with a fresh pty, so the driver's reconnect path
+is the real one.
+
+API
+---
+- ``SimActuatorBoard(step, config=None, link_path=None, faults=None, period=1e-3, record=False)``
+  ``step(dt: float, duty: float) -> state`` advances the plant by dt seconds with the motor duty the
+  board applies and returns any object with attributes ``x_c`` (m), ``p`` (Pa abs), ``x_s`` (m),
+  ``f`` (N) -- e.g. ``ActuatorState``. `config` (ActuatorBoardConfig, default from hardware.yaml)
+  gives the encoder resolution and the end-stop switch positions.
+- ``.start()``, ``.stop()``, ``.close()``; ``.port`` (path for the driver); ``.unplug()``,
+  ``.replug()``.
+- ``.faults`` (`Faults`, settable at run time); ``.duty`` (duty applied now); ``.counters()``;
+  ``.sent`` (with record=True: {sequence index: Telemetry} of every frame put on the wire,
+  uncorrupted); ``.stats`` (LoopStats).
+
+Board behaviour (docs/protocols.md): 1 kHz telemetry; a motor command holds until the next one; the
+motor stops at an end-stop switch and after `BOARD_HEARTBEAT_TIMEOUT` without a command or
+heartbeat.
+"""
+import dataclasses
+import errno
+import os
+import shutil
+import tempfile
+import logging
+import threading
+import time
+import tty
+
+from bellows_ros.hardware import serial_protocol as sp
+from bellows_ros.hardware.actuator_board import load_config
+from bellows_ros.hardware.faults import Faults
+from bellows_ros.hardware.loop_timing import LoopStats, PeriodicLoop
+
+log = logging.getLogger(__name__)
+
+
+@dataclasses.dataclass(frozen=True)
+class ActuatorState:
+    """What the plant callback returns: chamber compression x_c (m), pressure p (Pa abs), spring
+    compression x_s (m), spring force f (N)."""
+    x_c: float
+    p: float
+    x_s: float
+    f: float
+
+
+class SimActuatorBoard:
+    def __init__(self, step, config=None, link_path=None, faults=None, period=1e-3, record=False):
+        if config is None:
+            config = load_config()
+        self._step = step
+        self.config = config
+        self.faults = faults if faults is not None else Faults()
+        self.period = period
+        self.record = record
+        self.sent = {}
+        self.stats = LoopStats()
+        self._tmpdir = None
+        if link_path is None:
+            self._tmpdir = tempfile.mkdtemp(prefix='sim_actuator_')
+            link_path = os.path.join(self._tmpdir, 'actuator_board')
+        self.port = str(link_path)
+        self._fd_lock = threading.Lock()
+        self._master = self._slave = None
+        self._decoder = sp.FrameDecoder()
+        self._stop = threading.Event()
+        self._thread = None
+        self.duty = 0.0
+        self._last_host = time.monotonic()
+        self._stuck_p = None
+        self._counts = {'sent': 0, 'dropped': 0, 'corrupted': 0, 'tx_overflow': 0,
+                        'motor_commands': 0, 'heartbeats': 0, 'heartbeat_stops': 0}
+        self.replug()
+
+    # -- the pty and its symlink ------------------------------------------------------------
+    def replug(self):
+        """A fresh pty, the symlink pointed at it atomically."""
+        master, slave = os.openpty()
+        tty.setraw(slave)  # no echo or line editing: the driver sees the bytes the board sends
+        os.set_blocking(master, False)
+        tmp_link = self.port + '.new'
+        if os.path.lexists(tmp_link):
+            os.unlink(tmp_link)
+        os.symlink(os.ttyname(slave), tmp_link)
+        os.replace(tmp_link, self.port)
+        with self._fd_lock:
+            self._master, self._slave = master, slave
+
+    def unplug(self):
+        """The device vanishes: the pty is closed (the driver's reads fail) and the symlink
+        removed."""
+        with self._fd_lock:
+            master, slave, self._master, self._slave = self._master, self._slave, None, None
+        if os.path.lexists(self.port):
+            os.unlink(self.port)
+        for fd in (master, slave):
+            if fd is not None:
+                os.close(fd)
+
+    # -- run ----------------------------------------------------------------------------------
+    def start(self):
+        self._stop.clear()
+        self._last_host = time.monotonic()
+        self._thread = threading.Thread(target=self._run, name='sim-actuator-board', daemon=True)
+        self._thread.start()
+
+    def stop(self):
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
+            self._thread = None
+
+    def close(self):
+        self.stop()
+        self.unplug()
+        if self._tmpdir is not None:
+            shutil.rmtree(self._tmpdir, ignore_errors=True)
+
+    def counters(self):
+        out = dict(self._counts)
+        out.update(rx_crc_errors=self._decoder.crc_errors,
+                   rx_framing_errors=self._decoder.framing_errors)
+        return out
+
+    def _run(self):
+        try:
+            self._loop()
+        except Exception:  # e.g. the plant callback: say so instead of dying silently
+            log.exception('simulated actuator board: loop stopped')
+            raise
+
+    def _loop(self):
+        t_us = 0
+        seq = 0
+        state = None
+        for dt in PeriodicLoop(self.period, self.stats).ticks(self._stop):
+            self._read_host()
+            status = self._apply_safety(state)
+            state = self._step(dt, self.duty)
+            t_us = (t_us + int(round(dt * 1e6))) & 0xFFFFFFFF
+            status |= self._end_stops(state.x_c) | (sp.MOTOR_ON if self.duty else 0)
+            p = state.p
+            if self.faults.stuck:
+                self._stuck_p = p if self._stuck_p is None else self._stuck_p
+                p = self._stuck_p
+            else:
+                self._stuck_p = None
+            telemetry = sp.Telemetry(
+                seq=seq & 0xFFFF, t_us=t_us,
+                encoder_counts=int(round(state.x_c / self.config.metres_per_count)),
+                pressure_pa=min(max(int(round(p)), 0), 0xFFFFFFFF),
+                spring_um=int(round(state.x_s * 1e6)), force_mn=int(round(state.f * 1e3)),
+                status=status)
+            self._transmit(seq, telemetry)
+            seq += 1
+
+    def _end_stops(self, x_c):
+        return ((sp.END_STOP_LOW if x_c <= self.config.x_c_min else 0)
+                | (sp.END_STOP_HIGH if x_c >= self.config.x_c_max else 0))
+
+    def _apply_safety(self, state):
+        """The firmware's own limits, applied before the plant sees the duty; returns status
+        bits."""
+        status = 0
+        if time.monotonic() - self._last_host > sp.BOARD_HEARTBEAT_TIMEOUT:
+            status |= sp.HEARTBEAT_LOST
+            if self.duty != 0.0:
+                self._counts['heartbeat_stops'] += 1
+                self.duty = 0.0
+        if state is not None:
+            stops = self._end_stops(state.x_c)
+            if (self.duty < 0 and stops & sp.END_STOP_LOW) or \
+                    (self.duty > 0 and stops & sp.END_STOP_HIGH):
+                self.duty = 0.0
+        return status
+
+    def _read_host(self):
+        with self._fd_lock:
+            if self._master is None:
+                return
+            try:
+                data = os.read(self._master, 4096)
+            except OSError as error:  # EAGAIN: nothing; EIO: no driver has the slave open
+                if error.errno not in (errno.EAGAIN, errno.EIO):
+                    raise
+                return
+        for message in self._decoder.feed(data):
+            self._last_host = time.monotonic()
+            if isinstance(message, sp.MotorCommand):
+                self._counts['motor_commands'] += 1
+                self.duty = sp.q15_to_duty(message.duty_q15)
+            else:
+                self._counts['heartbeats'] += 1
+
+    def _transmit(self, seq, telemetry):
+        if self.faults.drop():
+            self._counts['dropped'] += 1
+            return
+        frame, corrupted = self.faults.corrupt(sp.encode(telemetry))
+        self._counts['corrupted'] += corrupted
+        if self.record and not corrupted:
+            self.sent[seq] = telemetry
+        with self._fd_lock:
+            if self._master is None:
+                return
+            try:
+                written = os.write(self._master, frame)
+            except OSError as error:  # the driver is not reading: the pty buffer is full
+                if error.errno not in (errno.EAGAIN, errno.EIO):
+                    raise
+                written = 0
+        if written < len(frame):
+            self._counts['tx_overflow'] += 1
+        else:
+            self._counts['sent'] += 1

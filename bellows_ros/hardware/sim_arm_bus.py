@@ -1,0 +1,173 @@
+"""Simulated arm: the firmware side of the arm's CAN protocol on a python-can bus.
+
+API
+---
+- ``SimArmBus(bus, step, n_segments=4, faults=None, dbc=None)`` ``step(dt: float, setpoints:
+  tuple[float, ...]) -> sequence of n_segments (p1, p2, psi)`` advances the plant by dt seconds with
+  the chamber pressure set-points the valves apply (Pa abs, order seg1 chain1, seg1 chain2, ...) and
+  returns the measured chain pressures (Pa abs) and angle (rad) per segment.
+- ``.start()``, ``.stop()``, ``.close()`` (also shuts `bus` down: the emulator owns it).
+- ``.faults`` (`Faults`, settable at run time); ``.setpoints`` (what the valves apply now);
+  ``.counters()``; ``.stats`` (LoopStats).
+
+Arm behaviour (docs/protocols.md): one ARM_SEGi_SAMPLE per segment per period (DBC cycle time, 1
+ms), all carrying the instant's number as Counter; ARM_STATUS every 100 ms; host frames are
+CRC/counter-checked like on the driver side; every chamber vents after `ARM_HEARTBEAT_TIMEOUT`
+without a host heartbeat.
+"""
+import logging
+import threading
+import time
+
+import can
+
+from bellows_ros.hardware import can_protocol as cp
+from bellows_ros.hardware.faults import Faults
+from bellows_ros.hardware.loop_timing import LoopStats, PeriodicLoop
+
+log = logging.getLogger(__name__)
+
+
+class SimArmBus:
+    def __init__(self, bus, step, n_segments=4, faults=None, dbc=None):
+        self.db = cp.load_dbc(dbc)
+        self._bus = bus
+        self._step = step
+        self.n_segments = n_segments
+        self.faults = faults if faults is not None else Faults()
+        self.stats = LoopStats()
+        self._checker = cp.FrameChecker(self.db)
+        self._samples = [self.db.get_message_by_name(f'ARM_SEG{i + 1}_SAMPLE')
+                         for i in range(n_segments)]
+        self._status = self.db.get_message_by_name('ARM_STATUS')
+        self._heartbeat_id = self.db.get_message_by_name('ARM_HOST_HEARTBEAT').frame_id
+        self._setpoint_ids = {m.frame_id for m in self.db.messages
+                              if m.name.startswith('ARM_SETPOINT_')}
+        self._own_ids = {m.frame_id for m in self._samples} | {self._status.frame_id}
+        self.period = self._samples[0].cycle_time * 1e-3
+        self._status_every = max(1, round(self._status.cycle_time * 1e-3 / self.period))
+        p1 = self._samples[0].get_signal_by_name('P1')
+        psi = self._samples[0].get_signal_by_name('Psi')
+        self._p_range = (p1.minimum, p1.maximum)
+        self._psi_range = (psi.minimum, psi.maximum)
+        self.setpoints = (cp.VENT_PRESSURE,) * (2 * n_segments)
+        self._commanded = list(self.setpoints)
+        self._last_host = None      # never heard: vented until a host speaks
+        self._heartbeat_lost = True
+        self._stuck = None
+        self._counts = {'sent': 0, 'dropped': 0, 'corrupted': 0, 'replayed': 0, 'tx_errors': 0,
+                        'heartbeat_vents': 0}
+        self._stop = threading.Event()
+        self._thread = None
+
+    def start(self):
+        self._stop.clear()
+        self._thread = threading.Thread(target=self._run, name='sim-arm-bus', daemon=True)
+        self._thread.start()
+
+    def stop(self):
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
+            self._thread = None
+
+    def close(self):
+        self.stop()
+        self._bus.shutdown()
+
+    def counters(self):
+        out = dict(self._counts)
+        out.update({f'rx_{k}': v for k, v in self._checker.counters().items()})
+        return out
+
+    def _run(self):
+        try:
+            self._loop()
+        except Exception:  # e.g. the plant callback: say so instead of dying silently
+            log.exception('simulated arm: loop stopped')
+            raise
+
+    def _loop(self):
+        tick = 0
+        previous = None
+        for dt in PeriodicLoop(self.period, self.stats).ticks(self._stop):
+            self._read_host()
+            self._apply_heartbeat()
+            measured = self._step(dt, self.setpoints)
+            frames = self._encode(tick, measured)
+            for frame in frames:
+                previous = self._transmit(frame, previous)
+            if tick % self._status_every == 0:
+                values = {'HeartbeatLost': int(self._heartbeat_lost), 'SensorFault': 0,
+                          'RxErrors': min(255, self._checker.crc_errors + self._checker.replayed)}
+                data = cp.encode_frame(self._status, values, tick // self._status_every)
+                status = can.Message(arbitration_id=self._status.frame_id, is_extended_id=False,
+                                     data=data)
+                self._transmit(status, None)
+            tick += 1
+
+    def _read_host(self):
+        for _ in range(64):  # bounded: a flooding host cannot stall the 1 kHz loop
+            frame = self._bus.recv(timeout=0)
+            if frame is None:
+                return
+            if frame.arbitration_id in self._own_ids:
+                continue
+            checked = self._checker.check(frame.arbitration_id, frame.data, time.monotonic())
+            if checked is None:
+                continue
+            message, values = checked
+            if message.frame_id == self._heartbeat_id:
+                self._last_host = time.monotonic()
+            elif message.frame_id in self._setpoint_ids:
+                for name, value in values.items():
+                    chamber = cp.chamber_of(name)
+                    if chamber is not None and chamber < len(self._commanded):
+                        self._commanded[chamber] = value
+
+    def _apply_heartbeat(self):
+        lost = self._last_host is None or \
+            time.monotonic() - self._last_host > cp.ARM_HEARTBEAT_TIMEOUT
+        if lost and not self._heartbeat_lost:
+            self._counts['heartbeat_vents'] += 1
+        self._heartbeat_lost = lost
+        self.setpoints = ((cp.VENT_PRESSURE,) * (2 * self.n_segments) if lost
+                          else tuple(self._commanded))
+
+    def _encode(self, counter, measured):
+        lo, hi = self._p_range
+        psi_lo, psi_hi = self._psi_range
+        frames = []
+        for i, (message, (p1, p2, psi)) in enumerate(zip(self._samples, measured)):
+            if i == 0 and self.faults.stuck:
+                self._stuck = p1 if self._stuck is None else self._stuck
+                p1 = self._stuck
+            elif i == 0:
+                self._stuck = None
+            # A real sensor saturates at its range; the DBC would refuse an out-of-range value.
+            values = {'P1': min(max(p1, lo), hi), 'P2': min(max(p2, lo), hi),
+                      'Psi': min(max(psi, psi_lo), psi_hi)}
+            frames.append(can.Message(arbitration_id=message.frame_id, is_extended_id=False,
+                                      data=cp.encode_frame(message, values, counter)))
+        return frames
+
+    def _transmit(self, frame, previous):
+        """Send `frame` through the fault switches; returns what a replay would resend."""
+        if self.faults.drop():
+            self._counts['dropped'] += 1
+            return previous
+        data, corrupted = self.faults.corrupt(bytes(frame.data))
+        self._counts['corrupted'] += corrupted
+        out = can.Message(arbitration_id=frame.arbitration_id, is_extended_id=False, data=data)
+        self._send(out)
+        if previous is not None and self.faults.replay():
+            self._counts['replayed'] += 1
+            self._send(previous)
+        return out
+
+    def _send(self, frame):
+        try:
+            self._bus.send(frame, timeout=0.01)
+            self._counts['sent'] += 1
+        except can.CanError:
+            self._counts['tx_errors'] += 1

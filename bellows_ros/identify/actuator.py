@@ -1,0 +1,197 @@
+"""Identification of paper B's actuator model from a record `t, x_c, x_s, p, f`.
+
+Two stages, as in the paper:
+
+1. Gas and volume (1, 5, 6, 17). The gas law P (V_geo,c + V_geo,s + V_tube + E_V,c + E_V,s) = N is
+   linear in the unknowns (N, V_tube, E_V coefficients) once P is measured:
+       P (V_geo,c + V_geo,s) = N - P V_tube - Σ a_k P m_k(Δh, P),
+   so one least-squares solve gives them. From sealed records E_V is identifiable only up to terms a different V_tube or N can imitate: a00, the pressure-only terms and
+   the term linear in Δh are kept from the starting parameters (see `fit_volume`); several
+   separately sealed runs (a `run` column) pin the rest better. P0 (`p_ref`) follows from N.
+   The volume error is reported the paper's way: the volume the gas law gives for the measured
+   pressure (N/P) against the model's volume, in mL.
+2. Force (7-12). With P measured, f - (P - P_atm) A(Δh_s, P) = F_MTS(x_s) + E_F(Δh_s, P): the
+   polynomial F_MTS and C1 are linear, (C2, C3) enter E_F nonlinearly — variable projection with
+   SciPy `least_squares` over (C2, C3) from several starting points. C4 is fixed at -C2 P_atm (it
+   is redundant with C1). The force error is the full model's (pressure predicted from x_c, x_s)
+   against the measured force, in N.
+
+`calibrate_stiffness` is how `config/actuator.yaml` was made to reproduce the measured stiffness.
+"""
+import dataclasses
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import fsolve, least_squares
+
+from bellows_ros.errors import BellowsError
+from bellows_ros.models.actuator import (evaluate_array, p_ref_of_amount, stiffness,
+                                         total_volume)
+from bellows_ros.models.actuator_geometry import (E_V_TERMS, P_ATM, e_v, e_v_regressors, frustum_state,
+                                                  volume_geo)
+
+# E_V terms kept from the starting parameters (see `fit_volume`): the constant, the pressure-only
+# terms and the term linear in Δh. Fitted: a20, a11, a30, a21, a12 (bulging that grows with the
+# compression, and its pressure coupling).
+_KEPT = [k for k, (i, j) in enumerate(E_V_TERMS) if i == 0 or (i, j) == (1, 0)]
+# Ridge weight per row on the fitted E_V coefficients in mL, tiny against the data term (about
+# (1e5 Pa · 1e-6 m³)² per row for 1 mL of misfit): it only settles directions the data leave free.
+_RIDGE = 1e-8
+
+
+@dataclass
+class ActuatorFit:
+    """Result of `fit_actuator`: fitted parameters and the errors the paper reports.
+
+    volume_error_ml: (rms, min, max) of model minus gas-law volume, mL;
+    force_error_n: (rms, min, max) of model minus measured force, N.
+    """
+    params: object
+    volume_error_ml: tuple
+    force_error_n: tuple
+    rows: int
+
+
+def fit_volume(params, x_c, x_s, p, wall_bulging=True, run=None):
+    """Stage 1: V_tube, the gas amount of each run and (optionally) the E_V coefficients.
+
+    `run` (optional array of run numbers) marks separately sealed fills, each with its own gas
+    amount, like the paper's syringe settings; without it the record is one sealed fill.
+    Some E_V terms are kept from `params` (`_KEPT`): from pressures alone a sealed record fixes
+    volumes only up to what a different tube volume or gas amount can imitate. A pressure-only
+    term acts like a larger tube (P·a01·q = a01·P²/P_atm - a01·P), and a term linear in Δh changes
+    the effective area, which with V_tube and N rescales every volume. The paper measured those
+    with the syringe rig of known volume; here they come from the YAML or `--params`.
+    Returns (params, amounts) with amounts an array (Pa·m³) per row; params.p_ref is the design-
+    point pressure of the first run's gas.
+    """
+    c, s = params.chamber, params.spring
+    v_known = volume_geo(c, x_c) + volume_geo(s, x_s)
+    labels = np.zeros(len(p), dtype=int) if run is None else np.unique(run, return_inverse=True)[1]
+    runs = int(labels.max()) + 1
+    columns = [(labels == j).astype(float) for j in range(runs)] + [-p]
+    names = [('n', j) for j in range(runs)] + [('v_tube', None)]
+    e_c, e_s = [0.0] * 10, [0.0] * 10
+    if wall_bulging:
+        m_c = e_v_regressors(c, x_c, p)
+        m_s = e_v_regressors(s, x_s, p)
+        for k in range(10):
+            if k in _KEPT:
+                e_c[k], e_s[k] = c.e_v[k], s.e_v[k]
+                v_known = v_known + e_c[k] * m_c[k] + e_s[k] * m_s[k]
+                continue
+            columns += [-p * m_c[k], -p * m_s[k]]
+            names += [('chamber', k), ('spring', k)]
+    # Unknowns in convenient units (N in Pa·m³, volumes in mL) so one ridge weight fits all E_V terms.
+    a = np.column_stack(columns)
+    units = np.array([1.0] * runs + [1e-6] * (len(columns) - runs))
+    a = a * units
+    # A light ridge on the E_V coefficients (not on N, V_tube): where the data leave terms nearly
+    # collinear it picks the smallest polynomial that fits instead of huge cancelling terms.
+    first_ev = runs + 1
+    penalty = np.zeros((len(columns) - first_ev, len(columns)))
+    penalty[:, first_ev:] = np.sqrt(_RIDGE * len(p)) * np.eye(len(columns) - first_ev)
+    solution, *_ = np.linalg.lstsq(np.vstack([a, penalty]),
+                                   np.concatenate([p * v_known, np.zeros(len(penalty))]), rcond=None)
+    solution = solution * units
+    amounts, v_tube = solution[:runs], solution[runs]
+    if not (np.all(np.isfinite(amounts)) and np.all(amounts > 0.0)):
+        raise BellowsError('identification failed: the data do not determine the gas amount '
+                           '(does the pressure vary with the compressions?)')
+    for value, (which, k) in zip(solution[first_ev:], names[first_ev:]):
+        (e_c if which == 'chamber' else e_s)[k] = float(value)
+    fitted = dataclasses.replace(
+        params, v_tube=float(v_tube),
+        chamber=dataclasses.replace(c, e_v=tuple(e_c)),
+        spring=dataclasses.replace(s, e_v=tuple(e_s)))
+    fitted = dataclasses.replace(fitted, p_ref=float(p_ref_of_amount(fitted, amounts[0])))
+    return fitted, amounts[labels]
+
+
+def _force_regressors(params, x_s, p):
+    s = params.spring
+    _, _, f = frustum_state(s, x_s)
+    area = s._k * f
+    if s.bulging:
+        area = area - e_v(s, x_s, p)[1]
+    poly = np.column_stack([x_s ** (i + 1) for i in range(len(params.f_mts))])
+    return (p - P_ATM) * area, poly
+
+
+def fit_force(params, x_s, p, f, force_error=True, seed=0, progress=False):
+    """Stage 2: F_MTS (same degree as the YAML's) and, optionally, E_F (11). Returns params."""
+    air, poly = _force_regressors(params, x_s, p)
+    target = f - air
+    dh = x_s / params.spring.n
+    if not force_error:
+        coef, *_ = np.linalg.lstsq(poly, target, rcond=None)
+        return dataclasses.replace(params, f_mts=tuple(float(v) for v in coef), e_f=(0.0, 0.0, 0.0, 0.0))
+
+    def solve_linear(z):
+        c2, c3 = z[0] * 1e-5, z[1] * 1e2          # scaled so both unknowns are O(1)
+        shape = np.exp(c2 * (p - P_ATM) + c3 * dh)
+        a = np.column_stack([poly, shape])
+        coef, *_ = np.linalg.lstsq(a, target, rcond=None)
+        return coef, a @ coef - target
+
+    rng = np.random.default_rng(seed)
+    starts = [np.array([3.0, 8.0]), np.array([1.0, 2.0])] + [rng.uniform([0.0, 0.0], [10.0, 15.0]) for _ in range(4)]
+    best = None
+    bar = _progress(len(starts), 'force fit', progress)
+    for start in starts:
+        result = least_squares(lambda z: solve_linear(z)[1], start, bounds=([-20.0, -30.0], [20.0, 30.0]),
+                               x_scale=1.0, max_nfev=200)
+        if best is None or result.cost < best.cost:
+            best = result
+        bar.update(1)
+    bar.close()
+    coef, _ = solve_linear(best.x)
+    c2, c3 = best.x[0] * 1e-5, best.x[1] * 1e2
+    return dataclasses.replace(params, f_mts=tuple(float(v) for v in coef[:-1]),
+                               e_f=(float(coef[-1]), float(c2), float(c3), float(-c2 * P_ATM)))
+
+
+def _progress(total, label, enabled):
+    """A tqdm bar on stderr that appears only if the work takes more than a second."""
+    from tqdm import tqdm
+    return tqdm(total=total, desc=label, file=sys.stderr, delay=1.0, disable=not enabled, leave=False)
+
+
+def fit_actuator(params, x_c, x_s, p, f, run=None, wall_bulging=True, force_error=True, seed=0,
+                 progress=False):
+    """Both stages on arrays (m, m, Pa, N; `run` as in `fit_volume`); returns `ActuatorFit`."""
+    x_c, x_s, p, f = (np.asarray(v, dtype=float) for v in (x_c, x_s, p, f))
+    fitted, amount = fit_volume(params, x_c, x_s, p, wall_bulging, run)
+    fitted = fit_force(fitted, x_s, p, f, force_error, seed, progress)
+    volume_error = (total_volume(fitted, x_c, x_s, p) - amount / p) * 1e6
+    gas = p_ref_of_amount(fitted, amount) if run is not None else None
+    _, force_model, _ = evaluate_array(fitted, x_c, x_s, gas)
+    force_error_n = force_model - f
+    return ActuatorFit(fitted, _summary(volume_error), _summary(force_error_n), len(p))
+
+
+def _summary(error):
+    return (float(np.sqrt(np.mean(error ** 2))), float(np.min(error)), float(np.max(error)))
+
+
+def calibrate_stiffness(params, k_low=1483.0, k_high=1975.0, x_c_low=-0.020, x_c_high=0.020):
+    """Scale F_MTS and C1 of E_F so the model's stiffness is k_low at x_c_low and k_high at x_c_high.
+
+    Paper B measured 1483 N/m at x_c = -20 mm and 1975 N/m at +20 mm (section IV-D). The shape of
+    F_MTS (ratios of its coefficients) and C2, C3 are kept; the two amplitudes are solved for.
+    """
+    shape = np.array(params.f_mts) / params.f_mts[0]
+
+    def with_amplitudes(z):
+        k1, c1 = z
+        return dataclasses.replace(params, f_mts=tuple(float(k1 * a) for a in shape),
+                                   e_f=(float(c1),) + tuple(params.e_f[1:]))
+
+    def residual(z):
+        trial = with_amplitudes(z)
+        return [stiffness(trial, x_c_low) - k_low, stiffness(trial, x_c_high) - k_high]
+    solution, info, ok, message = fsolve(residual, [params.f_mts[0], params.e_f[0]], full_output=True)
+    if ok != 1:
+        raise BellowsError(f'stiffness calibration did not converge: {message}')
+    return with_amplitudes(solution)

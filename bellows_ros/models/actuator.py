@@ -1,0 +1,366 @@
+"""Paper B's dual-bellows tunable-stiffness actuator: gas, force and stiffness (equations 1-17).
+
+Two bellows, the air chamber (c) and the spring (s), share one sealed gas through a tube. Given the
+chamber compression x_c and the spring compression x_s (m, positive = compressed), the pressure P is
+the root of the isothermal gas law (17) with volumes that depend on P through E_V (14, 15):
+
+    P (V_c(x_c, P) + V_s(x_s, P) + V_tube) = N,
+
+where N (Pa·m³) is the amount of gas. The amount is given as `p_ref`: the pressure the same gas
+would have at the design point (x_c = x_c_ref = 20 mm, x_s = 0); nominally atmospheric, as in the
+paper's design. A leak or a temperature change shows up as a different `p_ref` (see `estimate_gas`).
+
+The spring force is F = F_air + F_mat (7) with F_air = (P - P_atm) A (9, 10) and
+F_mat = F_MTS(x_s) + E_F(Δh_s, P) (11, 12); the stiffness K = dF/dx_s (13) is the exact total
+derivative (P moves with x_s), not a finite difference.
+
+`evaluate` is the fast scalar path (floats, `math`); `evaluate_array` runs the same equations on
+NumPy arrays (a vectorised Newton on P).
+"""
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from bellows_ros import params as param_files
+from bellows_ros.errors import ParameterError
+from bellows_ros.models.actuator_geometry import (P_ATM, Bellows, e_v, e_v_in_q, frustum_state,
+                                                  volume, volume_geo)
+
+_NEWTON_TOL = 1e-6   # Pa
+_NEWTON_MAX = 30
+
+
+@dataclass(frozen=True)
+class Drive:
+    """Motor, gearbox and lead screw (section II-A): a Pololu-class 12 V DC gear motor.
+
+    supply_voltage V; resistance Ω; inductance H; torque_constant N·m/A (= back-EMF V·s/rad);
+    rotor_inertia kg·m²; viscous_friction N·m·s/rad (motor side); gear_ratio (100:1);
+    counts_per_rev: encoder counts per motor turn; lead: m per lead-screw turn (20 TPI = 1.27 mm);
+    efficiency: lead screw (< 0.5, so it is not back-drivable).
+    """
+    supply_voltage: float
+    resistance: float
+    inductance: float
+    torque_constant: float
+    rotor_inertia: float
+    viscous_friction: float
+    gear_ratio: float
+    counts_per_rev: int
+    lead: float
+    efficiency: float
+
+    @property
+    def metres_per_count(self):
+        return self.lead / (self.gear_ratio * self.counts_per_rev)
+
+    @property
+    def max_speed(self):
+        """Chamber speed (m/s) at full duty with no load: no-load motor speed through the drive."""
+        k = self.torque_constant
+        omega = k * self.supply_voltage / (k * k + self.resistance * self.viscous_friction)
+        return omega / (2.0 * math.pi) / self.gear_ratio * self.lead
+
+
+@dataclass(frozen=True)
+class Sensors:
+    """Pressure and force sensors: white noise (standard deviation) and quantisation step."""
+    pressure_noise: float
+    pressure_quantum: float
+    force_noise: float
+    force_quantum: float
+
+
+@dataclass(frozen=True)
+class ActuatorParams:
+    """All parameters of `config/actuator.yaml` (section `actuator.`), SI units.
+
+    chamber, spring: `Bellows` (Table II, E_V); p_ref: gas amount as the design-point pressure, Pa;
+    x_c_ref: design-point chamber compression, m; v_tube: tube volume, m³ (17);
+    f_mts: F_MTS(x) = Σ f_mts[i] x^(i+1), N (unpressurised spring curve); e_f: C1..C4 of (11);
+    x_s_low, x_s_high: spring range of the paper's average-slope stiffness (0-12 mm);
+    drive, sensors: the hardware; effects: default parameters of the plant's physical effects.
+    """
+    chamber: Bellows
+    spring: Bellows
+    p_ref: float
+    x_c_ref: float
+    v_tube: float
+    f_mts: tuple
+    e_f: tuple
+    x_s_low: float
+    x_s_high: float
+    drive: Drive
+    sensors: Sensors
+    effects: tuple = ()
+
+    def __post_init__(self):
+        if len(self.e_f) != 4:
+            raise ParameterError(f'actuator.force.e_f: expected 4 coefficients C1..C4, got {len(self.e_f)}')
+        if not self.f_mts:
+            raise ParameterError('actuator.force.f_mts: expected at least one coefficient')
+        for bellows, name in ((self.chamber, 'air_chamber'), (self.spring, 'spring')):
+            if len(bellows.e_v) != 10:
+                raise ParameterError(f'actuator.{name}.e_v: expected 10 coefficients, got {len(bellows.e_v)}')
+        object.__setattr__(self, '_gas_nominal', gas_amount(self, self.p_ref))
+
+    def effect_defaults(self):
+        """{effect name: {parameter: value}} from the YAML."""
+        return {name: dict(items) for name, items in self.effects}
+
+
+def load_actuator_params(params_path=None):
+    """`config/actuator.yaml` with the user's file (if any) laid over it -> `ActuatorParams`."""
+    flat = param_files.load('actuator', params_path)
+    return params_from_flat(flat, params_path or 'config/actuator.yaml')
+
+
+def params_from_flat(flat, source='parameters'):
+    """Build `ActuatorParams` from flat dotted names (`actuator.gas.v_tube`, ...)."""
+    values = param_files.section(flat, 'actuator')
+    build = param_files.build
+    parts = {}
+    for prefix in ('air_chamber', 'spring', 'gas', 'force', 'stiffness', 'drive', 'sensors', 'effects'):
+        parts[prefix] = param_files.section(values, prefix)
+    known = {name.split('.')[0] for name in values}
+    unknown = sorted(known - set(parts))
+    if unknown:
+        raise ParameterError(f"{source}: unknown parameter 'actuator.{unknown[0]}'")
+    effects = {}
+    for name, value in parts['effects'].items():
+        effect, _, key = name.partition('.')
+        effects.setdefault(effect, {})[key] = float(value)
+    try:
+        return ActuatorParams(
+            chamber=build(Bellows, parts['air_chamber'], f'{source}: actuator.air_chamber'),
+            spring=build(Bellows, parts['spring'], f'{source}: actuator.spring'),
+            p_ref=float(_need(parts['gas'], 'p_ref', source, 'gas')),
+            x_c_ref=float(_need(parts['gas'], 'x_c_ref', source, 'gas')),
+            v_tube=float(_need(parts['gas'], 'v_tube', source, 'gas')),
+            f_mts=tuple(float(v) for v in _need(parts['force'], 'f_mts', source, 'force')),
+            e_f=tuple(float(v) for v in _need(parts['force'], 'e_f', source, 'force')),
+            x_s_low=float(_need(parts['stiffness'], 'x_s_low', source, 'stiffness')),
+            x_s_high=float(_need(parts['stiffness'], 'x_s_high', source, 'stiffness')),
+            drive=build(Drive, parts['drive'], f'{source}: actuator.drive'),
+            sensors=build(Sensors, parts['sensors'], f'{source}: actuator.sensors'),
+            effects=tuple(sorted((k, tuple(sorted(v.items()))) for k, v in effects.items())),
+        )
+    except TypeError as exc:  # a list where a number belongs, or the reverse
+        raise ParameterError(f'{source}: {exc}') from None
+
+
+def _need(mapping, name, source, group):
+    if name not in mapping:
+        raise ParameterError(f"{source}: missing parameter 'actuator.{group}.{name}'")
+    return mapping[name]
+
+
+def params_to_flat(params):
+    """Inverse of `params_from_flat`: flat dotted names, ready for `params.write_file`."""
+    flat = {}
+    for name, bellows in (('air_chamber', params.chamber), ('spring', params.spring)):
+        for field in dataclasses.fields(Bellows):
+            value = getattr(bellows, field.name)
+            flat[f'actuator.{name}.{field.name}'] = list(value) if isinstance(value, tuple) else value
+    flat['actuator.gas.p_ref'] = params.p_ref
+    flat['actuator.gas.x_c_ref'] = params.x_c_ref
+    flat['actuator.gas.v_tube'] = params.v_tube
+    flat['actuator.force.f_mts'] = list(params.f_mts)
+    flat['actuator.force.e_f'] = list(params.e_f)
+    flat['actuator.stiffness.x_s_low'] = params.x_s_low
+    flat['actuator.stiffness.x_s_high'] = params.x_s_high
+    for group, obj in (('drive', params.drive), ('sensors', params.sensors)):
+        for field in dataclasses.fields(obj):
+            flat[f'actuator.{group}.{field.name}'] = getattr(obj, field.name)
+    for effect, items in params.effects:
+        for key, value in items:
+            flat[f'actuator.effects.{effect}.{key}'] = value
+    return flat
+
+
+def without_bulging(params):
+    """The same actuator with the purely geometric volume (E_V = 0): the doctor's baseline."""
+    return scaled_bulging(params, 0.0)
+
+
+def scaled_bulging(params, scale):
+    """The same actuator with both E_V polynomials multiplied by `scale`."""
+    return dataclasses.replace(
+        params,
+        chamber=dataclasses.replace(params.chamber, e_v=tuple(scale * a for a in params.chamber.e_v)),
+        spring=dataclasses.replace(params.spring, e_v=tuple(scale * a for a in params.spring.e_v)))
+
+
+# --- gas (1, 16, 17) -----------------------------------------------------------------------------
+
+def total_volume(params, x_c, x_s, p):
+    """V_c(x_c, P) + V_s(x_s, P) + V_tube, m³ (17)."""
+    return volume(params.chamber, x_c, p) + volume(params.spring, x_s, p) + params.v_tube
+
+
+def gas_amount(params, p_ref):
+    """N = P·V (Pa·m³) of the gas whose design-point pressure is `p_ref`."""
+    return p_ref * total_volume(params, params.x_c_ref, 0.0, p_ref)
+
+
+def _gas(params, gas):
+    return params._gas_nominal if gas is None else gas_amount(params, gas)
+
+
+def pressure(params, x_c, x_s, gas=None):
+    """System pressure P (Pa) at (x_c, x_s): the root of (17), floats or arrays."""
+    amount = _gas(params, gas)
+    return _solve_pressure(params, x_c, x_s, amount)[0]
+
+
+def _solve_pressure(params, x_c, x_s, amount, v_geo=None):
+    """Newton on g(P) = P·V(P) - N; returns P and g'(P) = V + P ∂V/∂P (needed for dP/dx).
+
+    `v_geo` (the geometric total volume) may be passed when the caller already has it.
+    """
+    c, s = params.chamber, params.spring
+    if v_geo is None:
+        v_geo = volume_geo(c, x_c) + volume_geo(s, x_s) + params.v_tube
+    p = amount / v_geo   # exact when E_V = 0, the starting point otherwise
+    if not (c.bulging or s.bulging):
+        return p, v_geo
+    # Both E_V polynomials as one cubic in q: V(P) = v0 + b1 q + b2 q² + b3 q³.
+    c0, c1, c2, c3 = e_v_in_q(c, x_c)
+    s0, s1, s2, s3 = e_v_in_q(s, x_s)
+    v0, b1, b2, b3 = v_geo + c0 + s0, c1 + s1, c2 + s2, c3 + s3
+    scalar = isinstance(p, float)
+    for _ in range(_NEWTON_MAX):
+        q = (p - P_ATM) / P_ATM
+        v = v0 + q * (b1 + q * (b2 + q * b3))
+        slope = v + p * (b1 + q * (2.0 * b2 + 3.0 * b3 * q)) / P_ATM
+        step = (p * v - amount) / slope
+        p = p - step
+        size = abs(step) if scalar else float(np.max(np.abs(step)))
+        if size < _NEWTON_TOL:
+            break
+    else:
+        raise ParameterError('actuator: the gas law (17) has no positive pressure root for these '
+                             'parameters (check actuator.*.e_v and actuator.gas.v_tube)')
+    # `slope` is g'(P) at the previous iterate; after convergence the difference is < 1e-12.
+    return p, slope
+
+
+def estimate_gas(params, p_measured, x_c, x_s):
+    """Gas amount as `p_ref` (Pa) from a measured pressure at (x_c, x_s).
+
+    The stiffness controller uses this to correct for a slow leak or a temperature change: the
+    measured P with (17) gives N = P·V(x_c, x_s, P), and `p_ref` is the design-point pressure of N.
+    """
+    return p_ref_of_amount(params, p_measured * total_volume(params, x_c, x_s, p_measured))
+
+
+def p_ref_of_amount(params, amount):
+    """Design-point pressure p_ref (Pa) of the gas amount N (Pa·m³): (17) solved at the design point."""
+    if isinstance(amount, np.ndarray):
+        x_c = np.full(amount.shape, params.x_c_ref)
+        return _solve_pressure(params, x_c, np.zeros(amount.shape), amount)[0]
+    return _solve_pressure(params, params.x_c_ref, 0.0, float(amount))[0]
+
+
+# --- force and stiffness (7-13) -------------------------------------------------------------------
+
+def evaluate(params, x_c, x_s, gas=None):
+    """Pressure P (Pa), spring force F (N) and stiffness K = dF/dx_s (N/m) at one (x_c, x_s).
+
+    The fast scalar path: floats in, floats out. `gas` is the gas amount as `p_ref` (Pa), default
+    `params.p_ref`.
+    """
+    return _forward(params, float(x_c), float(x_s), _gas(params, gas), math.exp)
+
+
+def evaluate_array(params, x_c, x_s, gas=None):
+    """`evaluate` over arrays (broadcast); returns three float arrays (P, F, K).
+
+    `gas` may be a scalar or an array of `p_ref` values (e.g. a leak over a record).
+    """
+    x_c = np.asarray(x_c, dtype=float)
+    x_s = np.asarray(x_s, dtype=float)
+    if gas is None:
+        amount = params._gas_nominal
+    else:
+        amount = gas_amount(params, np.asarray(gas, dtype=float))
+    x_c, x_s = np.broadcast_arrays(x_c, x_s)
+    return _forward(params, x_c, x_s, amount, np.exp)
+
+
+def _forward(params, x_c, x_s, amount, exp):
+    """(P, F, K) from the gas law (17), the force (7-12) and its exact derivative (13)."""
+    s = params.spring
+    radius, d_radius, f = frustum_state(s, x_s)
+    k = s._k
+    height = s.h0 - x_s / s.n
+    v_geo = volume_geo(params.chamber, x_c) + k * s.n * height * f + params.v_tube
+    p, g_slope = _solve_pressure(params, x_c, x_s, amount, v_geo)
+    area = k * f                                        # (10), geometric part
+    d_f = (2.0 * radius + s.r_small) * d_radius
+    d_area_dx = k * d_f / s.n
+    d_area_dp = 0.0
+    dv_dx = k * (height * d_f - f)                      # exact dV_s/dx_s (4) for the gas law
+    if s.bulging:
+        _, e_x, _, e_xx, e_xp = e_v(s, x_s, p)
+        # [choice] (10) adds dE_V/d(nh) = -∂E_V/∂x to the equivalent area (x = nΔh = -(nh - nh0)).
+        area = area - e_x
+        d_area_dx = d_area_dx - e_xx
+        d_area_dp = -e_xp
+        dv_dx = dv_dx + e_x
+    dp_dx = -p * dv_dx / g_slope                        # implicit differentiation of (17)
+    gauge = p - P_ATM
+    force = gauge * area                                # (9)
+    stiffness = dp_dx * area + gauge * (d_area_dx + d_area_dp * dp_dx)
+    # F_MTS: polynomial fitted to the unpressurised spring (MODEL.md [choice] for the FEA curve).
+    power, f_mts, k_mts = 1.0, 0.0, 0.0
+    for i, coefficient in enumerate(params.f_mts):
+        k_mts = k_mts + (i + 1) * coefficient * power
+        power = power * x_s
+        f_mts = f_mts + coefficient * power
+    c1, c2, c3, c4 = params.e_f
+    e_f = c1 * exp(c2 * p + c3 * x_s / s.n + c4)        # (11)
+    force = force + f_mts + e_f                         # (7), (12)
+    stiffness = stiffness + k_mts + e_f * (c2 * dp_dx + c3 / s.n)
+    return p, force, stiffness
+
+
+def stiffness(params, x_c, gas=None):
+    """Paper B's stiffness figure (N/m): the average slope of F over spring 0-12 mm (section IV-D)."""
+    amount = _gas(params, gas)
+    low, high = params.x_s_low, params.x_s_high
+    f_low = _forward(params, float(x_c), low, amount, math.exp)[1]
+    f_high = _forward(params, float(x_c), high, amount, math.exp)[1]
+    return (f_high - f_low) / (high - low)
+
+
+def rest_length_change(params, p, x_low=-0.03, x_high=0.03):
+    """Elongation (m, positive = longer) of the spring's rest length at pressure P (Fig. 10).
+
+    The spring alone held at pressure P: the rest point is where F(x_s, P) = 0, so the elongation
+    is -x_s there. Below atmospheric it contracts, above it extends.
+    """
+    from scipy.optimize import brentq
+    s = params.spring
+    c1, c2, c3, c4 = params.e_f
+
+    def force(x):
+        radius, _, f = frustum_state(s, x)
+        area = s._k * f - (e_v(s, x, p)[1] if s.bulging else 0.0)
+        f_mts = sum(a * x ** (i + 1) for i, a in enumerate(params.f_mts))
+        return (p - P_ATM) * area + f_mts + c1 * math.exp(c2 * p + c3 * x / s.n + c4)
+    try:
+        return -brentq(force, x_low, x_high, xtol=1e-9)
+    except ValueError:
+        raise ParameterError(f'actuator: no rest length within [{x_low}, {x_high}] m at {p:.0f} Pa') from None
+
+
+def check_compression(params, x_c, x_s):
+    """ParameterError unless x_c and x_s lie within the travel limits of the YAML."""
+    c, s = params.chamber, params.spring
+    if not c.x_min <= x_c <= c.x_max:
+        raise ParameterError(f'air-chamber compression {x_c:g} m is outside [{c.x_min:g}, {c.x_max:g}] m')
+    if not s.x_min <= x_s <= s.x_max:
+        raise ParameterError(f'spring compression {x_s:g} m is outside [{s.x_min:g}, {s.x_max:g}] m')

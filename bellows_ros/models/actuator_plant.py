@@ -1,0 +1,337 @@
+"""The simulated dual-bellows actuator: drive dynamics, sensors and switchable physical effects.
+
+What the simulated hardware and the tests run. Underneath is paper B's model (`actuator`); on top:
+
+- drive (section II-A): duty (-1..1) -> armature voltage -> current (R-L circuit, back-EMF) ->
+  torque -> rotor (inertia, viscous friction) -> 100:1 gearbox -> 1.27 mm lead screw -> chamber
+  plate; magnetic encoder counts on the motor shaft; hard end stops at the chamber's travel limits.
+  The lead screw is not back-drivable: the gas load on the plate only ever resists the motor (like
+  friction) and cannot turn it.
+- spring: compression imposed (a test machine) or the quasi-static position under a load force.
+- sensors: pressure and force with white noise and quantisation.
+- effects, each off unless named (parameters SI, defaults under `actuator.effects` in the YAML):
+  `air_leak` (conductance, m³/(s·Pa)): laminar flow through a restriction to ambient,
+      dN/dt = -P · conductance · (P - P_atm) · T_amb/T   (N = P·V in Pa·m³ at ambient temperature);
+  `heat_exchange` (time_constant s, gamma, t_ambient K): the gas heats on compression
+      (adiabatic over each step, T V^(γ-1) = const) and relaxes to ambient through the walls,
+      dT/dt = -(T - T_amb)/time_constant;
+  `wall_bulging` (scale): the volume error E_V (5, 6) of the YAML times `scale`; without it the
+      plant's volumes are purely geometric (4), the doctor's baseline;
+  `sensor_lag` (time_constant s): first-order lag of the pressure sensor;
+  `backlash` (width m): dead band between the lead-screw nut (what the encoder sees) and the plate.
+
+With no effect the plant is exactly `actuator.evaluate(without_bulging(params), ...)` plus sensor
+noise; `model_params(params, effects)` returns the parameters the model needs for the same physics.
+"""
+import math
+import random
+from typing import NamedTuple
+
+from bellows_ros.errors import ParameterError
+from bellows_ros.models.actuator import (_forward, gas_amount, p_ref_of_amount, scaled_bulging,
+                                         without_bulging)
+from bellows_ros.models.actuator_geometry import P_ATM, frustum_state, volume
+
+ACTUATOR_EFFECTS = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash')
+NOISE_KEYS = ('pressure_noise', 'pressure_quantum', 'force_noise', 'force_quantum')
+
+
+class ActuatorSample(NamedTuple):
+    """One sample of the simulated hardware (SI units).
+
+    t s; encoder_counts: motor encoder (0 at x_c = 0); x_c: true plate compression m;
+    x_s: spring compression m; p: measured pressure Pa abs; f: measured spring force N;
+    at_lower_stop / at_upper_stop: the nut is on an end stop.
+    """
+    t: float
+    encoder_counts: int
+    x_c: float
+    x_s: float
+    p: float
+    f: float
+    at_lower_stop: bool
+    at_upper_stop: bool
+
+
+def effect_parameters(params, effects):
+    """Validate `effects` and fill in the YAML defaults.
+
+    `effects`: None, an iterable of names, or {name: {parameter: value}} (as `--effect` gives).
+    Returns {name: {parameter: float}}. An unknown effect or parameter, or a negative or non-finite
+    value, raises ParameterError naming it.
+    """
+    if effects is None:
+        return {}
+    if not isinstance(effects, dict):
+        effects = {name: {} for name in effects}
+    defaults = params.effect_defaults()
+    chosen = {}
+    for name, overrides in effects.items():
+        if name not in ACTUATOR_EFFECTS:
+            raise ParameterError(f"unknown actuator effect '{name}' (known: {', '.join(ACTUATOR_EFFECTS)})")
+        values = dict(defaults.get(name, {}))
+        for key, value in (overrides or {}).items():
+            if key not in values:
+                raise ParameterError(f"effect '{name}': unknown parameter '{key}' "
+                                     f"(known: {', '.join(sorted(values))})")
+            values[key] = value
+        for key, value in values.items():
+            value = float(value)
+            if not math.isfinite(value) or value < 0.0:
+                raise ParameterError(f"effect '{name}': parameter '{key}' must be finite and >= 0, got {value}")
+            values[key] = value
+        chosen[name] = values
+    if 'heat_exchange' in chosen and chosen['heat_exchange']['time_constant'] <= 0.0:
+        raise ParameterError("effect 'heat_exchange': parameter 'time_constant' must be > 0")
+    return chosen
+
+
+def model_params(params, effects=None):
+    """Parameters for which `actuator.evaluate` has the plant's static physics (E_V on or off)."""
+    chosen = effect_parameters(params, effects)
+    if 'wall_bulging' in chosen:
+        return scaled_bulging(params, chosen['wall_bulging']['scale'])
+    return without_bulging(params)
+
+
+class ActuatorPlant:
+    """Simulated actuator stepped at a fixed or varying dt (see module docstring).
+
+    Parameters
+    ----------
+    params : ActuatorParams
+    effects : None, iterable of names or {name: {parameter: value}} (see `effect_parameters`)
+    noise : None (the YAML's `actuator.sensors`), False (no noise, no quantisation), or a dict
+        overriding some of `NOISE_KEYS`
+    seed : int, optional, for the sensor noise
+    x_c0, x_s0 : initial chamber and spring compression, m (default: the design point)
+    gas : gas amount sealed in, as design-point pressure p_ref (Pa); default the YAML's p_ref
+    """
+
+    def __init__(self, params, effects=None, noise=None, seed=None, x_c0=None, x_s0=0.0, gas=None):
+        self.effects = effect_parameters(params, effects)
+        self.params = model_params(params, self.effects)
+        drive = params.drive
+        self.lead = drive.lead
+        self.gear_ratio = drive.gear_ratio
+        self.counts_per_rev = int(drive.counts_per_rev)
+        self.x_c_min, self.x_c_max = params.chamber.x_min, params.chamber.x_max
+        self.max_speed = drive.max_speed
+        self._drive = drive
+        self._metres_per_rad = drive.lead / (2.0 * math.pi * drive.gear_ratio)
+        self._noise = self._noise_settings(params, noise)
+        self._random = random.Random(seed)
+        # Effect switches and parameters, read once.
+        e = self.effects
+        self._leak = e.get('air_leak', {}).get('conductance', 0.0)
+        heat = e.get('heat_exchange')
+        self._heat_tau = heat['time_constant'] if heat else None
+        self._gamma = heat['gamma'] if heat else 1.4
+        self._t_amb = heat['t_ambient'] if heat else 293.15
+        self._lag_tau = e.get('sensor_lag', {}).get('time_constant', 0.0)
+        self._half_play = 0.5 * e.get('backlash', {}).get('width', 0.0)
+        # State.
+        x_c = params.x_c_ref if x_c0 is None else float(x_c0)
+        if not self.x_c_min <= x_c <= self.x_c_max:
+            raise ParameterError(f'initial chamber compression {x_c} m is outside '
+                                 f'[{self.x_c_min}, {self.x_c_max}] m')
+        self.t = 0.0
+        self._theta = x_c / self._metres_per_rad     # motor angle, rad (nut position through the drive)
+        self._omega = 0.0
+        self._current = 0.0
+        self._x_c = x_c                              # plate
+        self._x_s = float(x_s0)
+        self._gas = gas_amount(self.params, params.p_ref if gas is None else float(gas))  # N = P V at T_amb
+        self._temperature = self._t_amb
+        self._exp_cache = (None, 0.0, 0.0, 0.0)
+        p, force, k = _forward(self.params, self._x_c, self._x_s, self._gas, math.exp)
+        self._p, self._f, self._k = p, force, k
+        self._p_sensor = p
+        self._volume = self._total_volume(p)
+
+    @staticmethod
+    def _noise_settings(params, noise):
+        s = params.sensors
+        settings = {key: float(getattr(s, key)) for key in NOISE_KEYS}
+        if noise is False:
+            return dict.fromkeys(NOISE_KEYS, 0.0)
+        for key, value in (noise or {}).items():
+            if key not in settings:
+                raise ParameterError(f"unknown noise parameter '{key}' (known: {', '.join(NOISE_KEYS)})")
+            settings[key] = float(value)
+        return settings
+
+    # --- state the controller and the tests may read ---------------------------------------------
+
+    @property
+    def x_nut(self):
+        """Lead-screw nut position (what the encoder measures), m."""
+        return self._theta * self._metres_per_rad
+
+    @property
+    def pressure(self):
+        """True system pressure, Pa."""
+        return self._p
+
+    @property
+    def force(self):
+        """True spring force, N."""
+        return self._f
+
+    @property
+    def temperature(self):
+        """Gas temperature, K (stays at ambient without `heat_exchange`)."""
+        return self._temperature
+
+    @property
+    def gas(self):
+        """Present gas amount as design-point pressure p_ref, Pa (drops with `air_leak`)."""
+        return p_ref_of_amount(self.params, self._gas)
+
+    def travel_time(self, x_from, x_to):
+        """Lower bound on the time (s) the lead screw needs to move the chamber between two points."""
+        return abs(x_to - x_from) / self.max_speed
+
+    # --- simulation -------------------------------------------------------------------------------
+
+    def step(self, dt, duty, x_s_imposed=None, f_load=None):
+        """Advance by `dt` (s) with motor duty in -1..1; the spring is imposed or loaded.
+
+        Pass `x_s_imposed` (m) to move the spring like a test machine, or `f_load` (N) to load it
+        (quasi-static: the spring settles where its force equals the load); neither keeps x_s.
+        """
+        if not dt > 0.0:
+            raise ParameterError(f'time step must be > 0, got {dt}')
+        duty = -1.0 if duty < -1.0 else 1.0 if duty > 1.0 else float(duty)
+        self._step_drive(dt, duty)
+        if x_s_imposed is not None:
+            self._x_s = float(x_s_imposed)
+        elif f_load is not None:
+            self._x_s = self._spring_under_load(float(f_load))
+        self._step_gas(dt)
+        self.t += dt
+        return self._sample(dt)
+
+    def step_nut(self, dt, x_nut, x_s_imposed=None, f_load=None):
+        """Advance by `dt` (s) with the lead-screw nut moved to `x_nut` (m) kinematically.
+
+        For replaying a measured chamber trajectory (`bellows simulate actuator --effect ...`): the
+        motor is assumed to follow, the plate still sees the backlash and the end stops.
+        """
+        if not dt > 0.0:
+            raise ParameterError(f'time step must be > 0, got {dt}')
+        self._update_exp(dt)
+        x_nut = min(max(float(x_nut), self.x_c_min), self.x_c_max)
+        new_theta = x_nut / self._metres_per_rad
+        self._omega = (new_theta - self._theta) / dt
+        self._theta = new_theta
+        self._move_plate(x_nut)
+        if x_s_imposed is not None:
+            self._x_s = float(x_s_imposed)
+        elif f_load is not None:
+            self._x_s = self._spring_under_load(float(f_load))
+        self._step_gas(dt)
+        self.t += dt
+        return self._sample(dt)
+
+    @property
+    def stiffness(self):
+        """True dF/dx_s (N/m) at the present state (13)."""
+        return self._k
+
+    def _update_exp(self, dt):
+        if self._exp_cache[0] != dt:
+            d = self._drive
+            self._exp_cache = (dt, math.exp(-d.resistance * dt / d.inductance),
+                               1.0 - math.exp(-dt / self._lag_tau) if self._lag_tau > 0.0 else 1.0,
+                               math.exp(-dt / self._heat_tau) if self._heat_tau else 1.0)
+
+    def _move_plate(self, nut):
+        """Backlash as a play operator: the plate moves only when the nut pushes it."""
+        h = self._half_play
+        if nut - self._x_c > h:
+            self._x_c = nut - h
+        elif self._x_c - nut > h:
+            self._x_c = nut + h
+        self._x_c = min(max(self._x_c, self.x_c_min), self.x_c_max)
+
+    def _step_drive(self, dt, duty):
+        d = self._drive
+        self._update_exp(dt)
+        decay = self._exp_cache[1]
+        k = d.torque_constant
+        # R-L armature, exact over the step for the present back-EMF.
+        i_ss = (duty * d.supply_voltage - k * self._omega) / d.resistance
+        self._current = i_ss + (self._current - i_ss) * decay
+        torque = k * self._current
+        # Gas load on the plate, reflected to the motor through a self-locking screw: it resists
+        # motion in either direction and never drives the motor.
+        area_c = self._chamber_area()
+        resist = abs((self._p - P_ATM) * area_c) * self._metres_per_rad / d.efficiency
+        omega = self._omega
+        if omega == 0.0 and abs(torque) <= resist:
+            omega = 0.0
+        else:
+            direction = omega if omega != 0.0 else torque
+            drag = resist if direction > 0.0 else -resist
+            new = (omega + dt * (torque - drag) / d.rotor_inertia) / (1.0 + dt * d.viscous_friction / d.rotor_inertia)
+            omega = 0.0 if new * direction < 0.0 else new   # friction stops, it does not reverse
+        theta = self._theta + omega * dt
+        low, high = self.x_c_min / self._metres_per_rad, self.x_c_max / self._metres_per_rad
+        if theta <= low:
+            theta, omega = low, 0.0
+        elif theta >= high:
+            theta, omega = high, 0.0
+        self._theta, self._omega = theta, omega
+        self._move_plate(theta * self._metres_per_rad)
+
+    def _chamber_area(self):
+        c = self.params.chamber
+        _, _, f = frustum_state(c, self._x_c)
+        return c._k * f
+
+    def _total_volume(self, p):
+        pr = self.params
+        return volume(pr.chamber, self._x_c, p) + volume(pr.spring, self._x_s, p) + pr.v_tube
+
+    def _spring_under_load(self, f_load):
+        x = self._x_s
+        amount = self._gas * self._temperature / self._t_amb
+        s = self.params.spring
+        for _ in range(20):
+            _, force, k = _forward(self.params, self._x_c, x, amount, math.exp)
+            step = (force - f_load) / k if k > 0.0 else 0.0
+            x = min(max(x - step, s.x_min), s.x_max)
+            if abs(step) < 1e-9:
+                break
+        return x
+
+    def _step_gas(self, dt):
+        # Volume at the new geometry (E_V at the last pressure; the Newton solve below is exact).
+        volume_new = self._total_volume(self._p)
+        if self._heat_tau:
+            t = self._temperature * (self._volume / volume_new) ** (self._gamma - 1.0)
+            self._temperature = self._t_amb + (t - self._t_amb) * self._exp_cache[3]
+        self._volume = volume_new
+        if self._leak:
+            self._gas -= dt * self._p * self._leak * (self._p - P_ATM) * self._t_amb / self._temperature
+        amount = self._gas * self._temperature / self._t_amb
+        self._p, self._f, self._k = _forward(self.params, self._x_c, self._x_s, amount, math.exp)
+
+    def _sample(self, dt):
+        n = self._noise
+        self._p_sensor += (self._p - self._p_sensor) * self._exp_cache[2]
+        p = self._p_sensor + (self._random.gauss(0.0, n['pressure_noise']) if n['pressure_noise'] else 0.0)
+        f = self._f + (self._random.gauss(0.0, n['force_noise']) if n['force_noise'] else 0.0)
+        if n['pressure_quantum']:
+            p = round(p / n['pressure_quantum']) * n['pressure_quantum']
+        if n['force_quantum']:
+            f = round(f / n['force_quantum']) * n['force_quantum']
+        nut = self._theta * self._metres_per_rad
+        counts = int(round(self._theta / (2.0 * math.pi) * self.counts_per_rev))
+        return ActuatorSample(self.t, counts, self._x_c, self._x_s, p, f,
+                              nut <= self.x_c_min, nut >= self.x_c_max)
+
+    def x_from_counts(self, counts):
+        """Chamber compression (m) the encoder reading stands for (nut position)."""
+        return counts / self.counts_per_rev * 2.0 * math.pi * self._metres_per_rad

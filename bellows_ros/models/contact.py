@@ -1,0 +1,97 @@
+"""Two-dimensional no-slip membrane contact between a bellows and its rib (paper A, eqs. 13, 20-28,
+Algorithm 1 of Appendix A).
+
+The material lying on the rib keeps the stretch it had when it touched down (no slip); only the free
+arc follows the current pressure and joint angle. That memory is why the same (p, Ψ) reached along two
+paths gives two contact lengths s̃_a and two actuator torques (the hysteresis of paper A, Fig. 10/11).
+
+Geometry of one chain (MODEL.md "Contact geometry"), lengths in m, angles in rad:
+    α = -½ σ_j ψ_4 with ψ_4 = Ψ/4 (13, MODEL.md [choice] sign and equal joints)
+    R = l0 + (s0 + s̃_a) tan α (20),   β = π/2 + α (21)
+    a = 1 - R β / (λ1 l0 π/2) (23-25), clamped to [0, 1)
+"""
+import math
+
+from bellows_ros.models.ogden import free_strain
+
+HALF_PI = 0.5 * math.pi
+
+
+def contact_angle(psi, sign):
+    """α_j = -½ σ_j ψ_4 with ψ_4 = Ψ/4 (13; MODEL.md [choice]: equal joints, sign from Fig. 10), rad."""
+    return -0.125 * sign * psi
+
+
+class StrainMemory:
+    """State of Algorithm 1 for one bellows chain: the sampled strain profile λ_s on the rib.
+
+    Parameters: l0, s0 (m), sa_max (m, rib size: s̃_a is clamped to [0, sa_max]), n_lambda (samples of
+    the profile over ā ∈ [0, 1]), Ogden mu (N/m) and gamma (two terms each, γ_k > 2).
+
+    The contact always covers a prefix of the profile (samples beyond n are released), so the state is
+    the prefix length `n`, the stored values, and their running sum `total` (kept instead of re-summing
+    the profile every step; re-summed exactly whenever the contact empties or every 65536 steps so
+    rounding cannot drift).
+    """
+
+    RESUM_EVERY = 65536
+
+    def __init__(self, l0, s0, sa_max, n_lambda, mu, gamma):
+        self.l0, self.s0, self.sa_max = float(l0), float(s0), float(sa_max)
+        self.n_lambda = int(n_lambda)
+        self.length0 = l0 * HALF_PI  # undeformed length of the bellows section, l0 π/2 (23)
+        self.sample_length = self.length0 / self.n_lambda  # (l0 π/2)/Nλ of (28)
+        (self.mu1, self.mu2), (self.gamma1, self.gamma2) = mu, gamma
+        self.reset()
+
+    def reset(self):
+        """Initial state of Algorithm 1: a = 0, empty profile."""
+        self.profile = [0.0] * self.n_lambda
+        self.n = 0
+        self.total = 0.0
+        self.lam1 = 1.0
+        self.a = 0.0
+        self.s_a = 0.0
+        self._steps = 0
+
+    def step(self, p_rel, alpha):
+        """One iteration of Algorithm 1 at relative pressure `p_rel` (Pa) and contact angle `alpha`
+        (rad); returns the contact length s̃_a (m) after the update.
+
+        1. s̃_a from the stored profile (28), clamped to [0, sa_max]; 2. R, β (20, 21);
+        3. λ1 of the free membrane (22); 4. a (25) and n = ceil(a Nλ) (MODEL.md [choice], 0-based);
+        5. release samples beyond n, give λ1 to empty samples ≤ n and to sample n (continuity, 26);
+        then s̃_a again from the updated profile (28). One iteration per time step (Appendix A/B).
+        """
+        s_a = self.sample_length * self.total
+        s_a = 0.0 if s_a < 0.0 else (self.sa_max if s_a > self.sa_max else s_a)
+        radius = self.l0 + (self.s0 + s_a) * math.tan(alpha)
+        lam1 = free_strain(p_rel * radius, self.mu1, self.mu2, self.gamma1, self.gamma2, self.lam1)
+        a = 1.0 - radius * (HALF_PI + alpha) / (lam1 * self.length0)
+        a = 0.0 if a < 0.0 else (a if a < 1.0 else 1.0 - 1e-12)
+        n = math.ceil(a * self.n_lambda)
+        profile, old = self.profile, self.n
+        if n < old:
+            if n == 0:
+                self.total = 0.0
+            else:
+                self.total -= math.fsum(profile[n:old])
+            for k in range(n, old):
+                profile[k] = 0.0
+        elif n > old:
+            for k in range(old, n):
+                profile[k] = lam1
+            self.total += (n - old) * lam1
+        if n > 0:  # the transition point carries the free strain (26)
+            self.total += lam1 - profile[n - 1]
+            profile[n - 1] = lam1
+        self.n, self.lam1, self.a = n, lam1, a
+        self._steps += 1
+        if self._steps >= self.RESUM_EVERY:
+            self._steps = 0
+            self.total = math.fsum(profile[:n])
+        s_a = self.sample_length * self.total
+        s_a = 0.0 if s_a < 0.0 else (self.sa_max if s_a > self.sa_max else s_a)
+        self.s_a = s_a
+        return s_a
+

@@ -1,0 +1,286 @@
+"""Driving torque of one arm segment (paper A): parameters, regressors, the stateful 1 kHz evaluator.
+
+τ_drive = τ_a + τ_s + τ_f (2), with
+- τ_a, actuator torque (29): Σ_j σ_j x_a,jᵀ θ_a, x_a,j = p_j [1, s_j, s_j², s_j p_j, s_j Ψ_j, s_j Ψ_j²,
+  p_j Ψ_j, Ψ_j²] (MODEL.md [choice] for the garbled regressor), s_j = s̃_a of chain j from the
+  no-slip strain memory (`bellows_ros.models.contact`, Algorithm 1);
+- τ_s, restoring torque (3, 4): Σ_j (Ψ - Ψ_j0)(k_s + k_s,p p_j), Ψ_j0 = σ_j c_Ψ0,p tanh(c_Ψ0 p_j);
+- τ_f, friction torque (5): tanh(c_vel Ψ̇)(c_f + c_f,p Σ_j p_j);
+- τ_prev, the previous model (34): τ_f + τ_s + Σ_j σ_j p_j [1, p_j, Ψ_j, p_j²] θ_prev (MODEL.md [choice]).
+Here p_j is the scaled pressure p_scl,j = (p_j - p0)/(p_max - p0), Ψ_j = σ_j Ψ, σ = (+1, -1)
+(mirrored chains, MODEL.md [choice]). τ_prev is, like τ_drive, a driving torque: on a quasi-static
+bench both predict -τ_ext.
+
+Two implementations of the same formulas exist on purpose: NumPy regressors (identification, batch)
+and the scalar `SegmentModel.step` (1 kHz loop, where NumPy's per-call overhead is larger than the
+whole step). `test_segment_model.py` checks that they agree.
+"""
+import math
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from bellows_ros import params as parameters
+from bellows_ros.errors import ParameterError
+from bellows_ros.models.contact import StrainMemory, contact_angle
+
+SIGNS = (1.0, -1.0)  # σ_j of chains 1 and 2 (MODEL.md [choice])
+OUTPUTS = ('sa1', 'sa2', 'tau_a', 'tau_s', 'tau_f', 'tau_drive', 'tau_prev')
+
+
+@dataclass(frozen=True)
+class SegmentParams:
+    """All parameters of `config/segment.yaml` (section `segment.`); field = dotted name with '_'.
+
+    Units: Pa, m, N/m (Ogden μ), N·m, N·m/rad, rad, s, kg·m². See the YAML for each meaning.
+    """
+    p0: float
+    p_max: float
+    geometry_l0: float
+    geometry_s0: float
+    geometry_sa_max: float
+    geometry_n_lambda: int
+    ogden_mu: tuple
+    ogden_gamma: tuple
+    restoring_k_s: float
+    restoring_k_sp: float
+    restoring_c_psi0: float
+    restoring_c_psi0_p: float
+    friction_c_f: float
+    friction_c_fp: float
+    friction_c_vel: float
+    actuator_theta: tuple
+    previous_theta: tuple
+    dynamics_inertia: float
+    dynamics_damping: float
+    dynamics_gravity: float
+    plant_valve_tau: float
+    plant_inertia: float
+    plant_damping: float
+    plant_gravity: float
+    plant_sensor_lag_tau: float
+    plant_noise_p: float
+    plant_noise_psi: float
+    plant_noise_psi_dot: float
+    plant_noise_tau: float
+
+    def replace(self, **changes):
+        """A copy with some fields changed (tuples for vectors)."""
+        values = {f.name: getattr(self, f.name) for f in fields(self)}
+        values.update(changes)
+        return SegmentParams(**values)
+
+    def flat(self):
+        """Flat ROS 2 parameter names (`segment.ogden.mu`, ...) -> values, for `params.write_file`."""
+        return {'segment.' + DOTTED[f.name]: _plain(getattr(self, f.name)) for f in fields(self)}
+
+
+def _plain(value):
+    return [float(v) for v in value] if isinstance(value, tuple) else value
+
+
+# Field name -> dotted YAML name below `segment.` (the YAML nests one level, see config/segment.yaml).
+DOTTED = {name: name for name in ('p0', 'p_max')}
+for _field in fields(SegmentParams):
+    if _field.name not in DOTTED:
+        _group, _, _rest = _field.name.partition('_')
+        if _group == 'plant' and _rest.startswith('noise_'):
+            DOTTED[_field.name] = 'plant.noise.' + _rest[len('noise_'):]
+        else:
+            DOTTED[_field.name] = f'{_group}.{_rest}'
+UNDOTTED = {dotted: name for name, dotted in DOTTED.items()}
+
+
+def load_segment_params(params_path=None):
+    """`config/segment.yaml` with `params_path` (if any) laid over it -> SegmentParams.
+
+    Unknown or missing names raise ParameterError (via `bellows_ros.params`); so do physically
+    inadmissible values (μ_k ≤ 0, γ_k ≤ 2, p_max ≤ p0, non-positive geometry).
+    """
+    flat = parameters.section(parameters.load('segment', params_path), 'segment')
+    source = params_path or parameters.default_file('segment')
+    mapping = {}
+    for name, value in flat.items():
+        if name not in UNDOTTED:
+            raise ParameterError(f"{source}: unknown parameter 'segment.{name}'")
+        mapping[UNDOTTED[name]] = value
+    result = parameters.build(SegmentParams, mapping, source)
+    check_params(result, source)
+    return result
+
+
+def check_params(p, source='parameters'):
+    """Raise ParameterError for values the model cannot use (names the parameter)."""
+
+    def fail(name, why):
+        raise ParameterError(f"{source}: parameter 'segment.{DOTTED[name]}' {why}")
+    if len(p.ogden_mu) != 2 or min(p.ogden_mu) <= 0:
+        fail('ogden_mu', 'needs two values > 0 (N/m)')
+    if len(p.ogden_gamma) != 2 or min(p.ogden_gamma) <= 2:
+        fail('ogden_gamma', 'needs two values > 2 (Appendix B convergence condition)')
+    if len(p.actuator_theta) != 8:
+        fail('actuator_theta', 'needs 8 values (29)')
+    if len(p.previous_theta) != 4:
+        fail('previous_theta', 'needs 4 values (34)')
+    if not p.p_max > p.p0 > 0:
+        fail('p_max', 'must exceed p0 > 0')
+    for name in ('geometry_l0', 'geometry_s0', 'geometry_sa_max', 'plant_valve_tau',
+                 'plant_inertia'):
+        if not getattr(p, name) > 0:
+            fail(name, 'must be > 0')
+    if int(p.geometry_n_lambda) != p.geometry_n_lambda or p.geometry_n_lambda < 1:
+        fail('geometry_n_lambda', 'must be a positive integer')
+    for name in ('plant_noise_p', 'plant_noise_psi', 'plant_noise_psi_dot', 'plant_noise_tau',
+                 'plant_sensor_lag_tau', 'plant_damping'):
+        if getattr(p, name) < 0:
+            fail(name, 'must be >= 0')
+
+
+def strain_memory(p):
+    """A fresh Algorithm-1 state for one chain of a segment with parameters `p`."""
+    return StrainMemory(p.geometry_l0, p.geometry_s0, p.geometry_sa_max, p.geometry_n_lambda,
+                        p.ogden_mu, p.ogden_gamma)
+
+
+# --- regressors (NumPy, one row per sample) -------------------------------------------------------
+
+def scaled_pressure(p, pressure):
+    """p_scl = (p - p0)/(p_max - p0), 1 (MODEL.md [choice] p_max)."""
+    return (np.asarray(pressure, float) - p.p0) / (p.p_max - p.p0)
+
+
+def actuator_regressor(psi, ps1, ps2, sa1, sa2):
+    """X_a (29a), shape (N, 8): Σ_j σ_j p_j [1, s_j, s_j², s_j p_j, s_j Ψ_j, s_j Ψ_j², p_j Ψ_j, Ψ_j²]."""
+    total = 0.0
+    for sign, ps, sa in zip(SIGNS, (ps1, ps2), (sa1, sa2)):
+        psi_j = sign * np.asarray(psi, float)
+        total = total + sign * ps[:, None] * np.column_stack(
+            [np.ones_like(sa), sa, sa * sa, sa * ps, sa * psi_j, sa * psi_j ** 2, ps * psi_j,
+             psi_j ** 2])
+    return total
+
+
+def natural_curvature(ps, sign, c_psi0, c_psi0_p):
+    """Ψ_j0(p) = σ_j c_Ψ0,p tanh(c_Ψ0 p_scl,j), rad (4; MODEL.md [choice], zero at ambient)."""
+    return sign * c_psi0_p * np.tanh(c_psi0 * ps)
+
+
+def restoring_regressor(psi, ps1, ps2, c_psi0, c_psi0_p):
+    """X_s (3b), shape (N, 2): Σ_j [(Ψ - Ψ_j0), p_j (Ψ - Ψ_j0)]."""
+    columns = 0.0
+    for sign, ps in zip(SIGNS, (ps1, ps2)):
+        bend = np.asarray(psi, float) - natural_curvature(ps, sign, c_psi0, c_psi0_p)
+        columns = columns + np.column_stack([bend, ps * bend])
+    return columns
+
+
+def friction_regressor(psi_dot, ps1, ps2, c_vel):
+    """X_f (5b), shape (N, 2): [tanh(c_vel Ψ̇), (p_1 + p_2) tanh(c_vel Ψ̇)]."""
+    slip = np.tanh(c_vel * np.asarray(psi_dot, float))
+    return np.column_stack([slip, (ps1 + ps2) * slip])
+
+
+def previous_regressor(psi, ps1, ps2):
+    """Pressure part of the previous model (34), shape (N, 4): Σ_j σ_j p_j [1, p_j, Ψ_j, p_j²]."""
+    total = 0.0
+    for sign, ps in zip(SIGNS, (ps1, ps2)):
+        psi_j = sign * np.asarray(psi, float)
+        total = total + sign * ps[:, None] * np.column_stack([np.ones_like(ps), ps, psi_j, ps * ps])
+    return total
+
+
+def contact_lengths(p, psi, pressure1, pressure2):
+    """s̃_a of both chains over a record (Algorithm 1 carried along the rows), m; two arrays."""
+    out = []
+    for sign, pressure in zip(SIGNS, (pressure1, pressure2)):
+        memory = strain_memory(p)
+        step = memory.step
+        p_rel = (np.asarray(pressure, float) - p.p0).tolist()
+        alpha = [contact_angle(x, sign) for x in np.asarray(psi, float).tolist()]
+        out.append(np.array([step(pr, al) for pr, al in zip(p_rel, alpha)]))
+    return out[0], out[1]
+
+
+def external_torque(p, psi, psi_dot, psi_ddot, tau_drive):
+    """τ_ext = M Ψ̈ + C Ψ̇ + N(Ψ) - τ_drive from (2), N·m; M, C, N of `segment.dynamics`
+    (quasi-static by default: M = C = N = 0, so τ_ext = -τ_drive). Works on scalars and arrays."""
+    return (p.dynamics_inertia * psi_ddot + p.dynamics_damping * psi_dot
+            + p.dynamics_gravity * np.sin(psi) - tau_drive)
+
+
+# --- the 1 kHz evaluator ---------------------------------------------------------------------------
+
+class SegmentModel:
+    """Stateful driving-torque model of one segment: one `step` per sample, both chains.
+
+    `step(psi, psi_dot, p1, p2)` (rad, rad/s, Pa abs, Pa abs) returns the floats
+    (sa1, sa2, tau_a, tau_s, tau_f, tau_drive, tau_prev) in m and N·m. It validates nothing: the
+    caller (the model node, `simulate`) checks finiteness and ranges first — a per-call check would
+    cost a noticeable part of the 20 µs budget. Everything that depends only on the parameters is
+    precomputed here. `reset()` returns the strain memories to Algorithm 1's initial state.
+    """
+
+    def __init__(self, params):
+        p = self.params = params
+        self.memory1, self.memory2 = strain_memory(p), strain_memory(p)
+        self._p0 = p.p0
+        self._inv_span = 1.0 / (p.p_max - p.p0)
+        self._theta_a = tuple(float(v) for v in p.actuator_theta)
+        self._theta_prev = tuple(float(v) for v in p.previous_theta)
+        self._spring = (p.restoring_k_s, p.restoring_k_sp, p.restoring_c_psi0, p.restoring_c_psi0_p)
+        self._friction = (p.friction_c_f, p.friction_c_fp, p.friction_c_vel)
+
+    def reset(self):
+        self.memory1.reset()
+        self.memory2.reset()
+
+    def step(self, psi, psi_dot, p1, p2):
+        p0, tanh = self._p0, math.tanh
+        # contact state of both chains, α_j = -σ_j Ψ/8 (13)
+        s1 = self.memory1.step(p1 - p0, -0.125 * psi)
+        s2 = self.memory2.step(p2 - p0, 0.125 * psi)
+        q1 = (p1 - p0) * self._inv_span
+        q2 = (p2 - p0) * self._inv_span
+        # actuator torque (29): chain 2 sees Ψ_2 = -Ψ and acts with σ_2 = -1
+        t0, t1, t2, t3, t4, t5, t6, t7 = self._theta_a
+        psi_sq = psi * psi
+        tau_a = (q1 * (t0 + s1 * (t1 + t2 * s1 + t3 * q1 + t4 * psi + t5 * psi_sq)
+                       + t6 * q1 * psi + t7 * psi_sq)
+                 - q2 * (t0 + s2 * (t1 + t2 * s2 + t3 * q2 - t4 * psi + t5 * psi_sq)
+                         - t6 * q2 * psi + t7 * psi_sq))
+        # restoring torque (3, 4)
+        k_s, k_sp, c_psi0, c_psi0_p = self._spring
+        bend1 = psi - c_psi0_p * tanh(c_psi0 * q1)
+        bend2 = psi + c_psi0_p * tanh(c_psi0 * q2)
+        tau_s = bend1 * (k_s + k_sp * q1) + bend2 * (k_s + k_sp * q2)
+        # friction torque (5)
+        c_f, c_fp, c_vel = self._friction
+        tau_f = tanh(c_vel * psi_dot) * (c_f + c_fp * (q1 + q2))
+        # previous model (34)
+        u0, u1, u2, u3 = self._theta_prev
+        tau_prev = (tau_f + tau_s + q1 * (u0 + q1 * (u1 + u3 * q1) + u2 * psi)
+                    - q2 * (u0 + q2 * (u1 + u3 * q2) - u2 * psi))
+        return s1, s2, tau_a, tau_s, tau_f, tau_a + tau_s + tau_f, tau_prev
+
+
+def simulate_model(params, psi, p1, p2, psi_dot):
+    """Run `SegmentModel` over a record (state carried from row to row, starting from reset).
+
+    Arrays in SI (rad, Pa abs, Pa abs, rad/s); returns {name: array} for the 7 `OUTPUTS`.
+    """
+    model = SegmentModel(params)
+    step = model.step
+    rows = [step(a, b, c, d) for a, b, c, d in zip(
+        np.asarray(psi, float).tolist(), np.asarray(psi_dot, float).tolist(),
+        np.asarray(p1, float).tolist(), np.asarray(p2, float).tolist())]
+    table = np.array(rows, float).reshape(-1, len(OUTPUTS))
+    return {name: table[:, k] for k, name in enumerate(OUTPUTS)}
+
+
+def velocity(t, psi):
+    """Ψ̇ from samples when the record has no `psi_dot` column: central differences, rad/s."""
+    t = np.asarray(t, float)
+    psi = np.asarray(psi, float)
+    if len(t) < 2:
+        return np.zeros_like(psi)
+    return np.gradient(psi, t)

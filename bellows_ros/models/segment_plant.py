@@ -1,0 +1,169 @@
+"""Simulated arm segment: the driving-torque physics plus dynamics, valves, sensors and switchable
+effects. The simulated hardware and the tests use it as "the real segment".
+
+With no effects the plant *is* the model doctor's baseline (DESIGN.md): the previous model (34) with
+constant friction (c_f only) and no natural curvature (Ψ_j0 = 0, k_s,p = 0). Each effect switches on
+one piece of missing physics (DESIGN.md segment vocabulary, `SEGMENT_EFFECTS`):
+
+- `contact_hysteresis`: the actuator torque is paper A's membrane-contact torque (29) with the no-slip
+  strain memory (Algorithm 1) instead of the pressure polynomial of (34). No parameters.
+- `pressure_friction`: friction grows with the bearing load, c_f,p (5). Parameter `c_fp` (N·m).
+- `natural_curvature`: Ψ_j0(p) (4) and k_s,p (3). Parameters `c_psi0`, `c_psi0_p` (rad), `k_sp` (N·m/rad).
+- `sensor_lag`: first-order lag of the measured pressures. Parameter `tau` (s).
+The full paper-A physics is the first three together. Unset effect parameters take the YAML values.
+
+Pressures follow the commands through a first-order valve/chamber lag (`segment.plant.valve_tau`).
+With an imposed angle (test bench) the force-torque sensor reads τ_ext = M Ψ̈ + C Ψ̇ + N(Ψ) - τ_drive
+(2); otherwise (2) is integrated (semi-implicit Euler) with `tau_load` as τ_ext, using the plant's own
+M, C, N (`segment.plant.inertia/damping/gravity`). Measured values carry Gaussian noise with the
+standard deviations of `segment.plant.noise` unless `noise` overrides them.
+"""
+import math
+from collections import namedtuple
+
+import numpy as np
+
+from bellows_ros.errors import ParameterError
+from bellows_ros.models.segment import SegmentModel
+
+SEGMENT_EFFECTS = ('contact_hysteresis', 'pressure_friction', 'natural_curvature', 'sensor_lag')
+FULL_MODEL = ('contact_hysteresis', 'pressure_friction', 'natural_curvature')
+
+# effect -> {effect parameter: SegmentParams field it sets}
+EFFECT_PARAMETERS = {
+    'contact_hysteresis': {},
+    'pressure_friction': {'c_fp': 'friction_c_fp'},
+    'natural_curvature': {'c_psi0': 'restoring_c_psi0', 'c_psi0_p': 'restoring_c_psi0_p',
+                          'k_sp': 'restoring_k_sp'},
+    'sensor_lag': {'tau': 'plant_sensor_lag_tau'},
+}
+NOISE_KEYS = ('p', 'psi', 'psi_dot', 'tau')
+NO_NOISE = {key: 0.0 for key in NOISE_KEYS}
+
+SegmentSample = namedtuple('SegmentSample', 't psi psi_dot p1 p2 tau_ext')
+SegmentSample.__doc__ = 'One sample: time s, Ψ rad, Ψ̇ rad/s, chain pressures Pa abs, τ_ext N·m.'
+
+
+def check_effects(effects):
+    """Validate an effects mapping {name: {param: float}} (or a sequence of names, all parameters
+    from the YAML); returns a normalised dict. Unknown names or parameters raise ParameterError.
+    """
+    if not isinstance(effects, dict):
+        effects = {name: {} for name in (effects or ())}
+    checked = {}
+    for name, options in effects.items():
+        if name not in EFFECT_PARAMETERS:
+            raise ParameterError(f"unknown segment effect '{name}' (known: {', '.join(SEGMENT_EFFECTS)})")
+        options = dict(options or {})
+        for key, value in options.items():
+            if key not in EFFECT_PARAMETERS[name]:
+                known = ', '.join(EFFECT_PARAMETERS[name]) or 'none'
+                raise ParameterError(f"segment effect '{name}': unknown parameter '{key}' (known: {known})")
+            if not math.isfinite(float(value)):
+                raise ParameterError(f"segment effect '{name}': parameter '{key}' is not finite")
+        checked[name] = {key: float(value) for key, value in options.items()}
+    if 'sensor_lag' in checked and checked['sensor_lag'].get('tau', 1.0) < 0:
+        raise ParameterError("segment effect 'sensor_lag': parameter 'tau' must be >= 0")
+    return checked
+
+
+def plant_physics(params, effects):
+    """SegmentParams of the true physics for the switched-on `effects` (validated mapping).
+
+    Missing physics is switched off: c_f,p = 0 without `pressure_friction`; c_Ψ0,p = k_s,p = 0
+    without `natural_curvature`. Effect parameters override the YAML values.
+    """
+    changes = {}
+    if 'pressure_friction' not in effects:
+        changes['friction_c_fp'] = 0.0
+    if 'natural_curvature' not in effects:
+        changes.update(restoring_c_psi0_p=0.0, restoring_k_sp=0.0)
+    for name, options in effects.items():
+        for key, value in options.items():
+            changes[EFFECT_PARAMETERS[name][key]] = value
+    return params.replace(**changes)
+
+
+class SegmentPlant:
+    """The simulated segment. `step(...)` advances it by `dt` and returns the measured SegmentSample.
+
+    True state: `t`, `psi`, `psi_dot`, `psi_ddot`, `p1`, `p2` (chamber pressures), `tau_ext`,
+    `tau_drive`, `tau_motion` (= M Ψ̈ + C Ψ̇ + N, true) and `outputs` (the model tuple of the last step).
+    """
+
+    def __init__(self, params, effects=None, noise=None, seed=None, psi0=0.0):
+        self.effects = check_effects(effects)
+        self.params = params
+        self.physics = plant_physics(params, self.effects)
+        self.hysteresis = 'contact_hysteresis' in self.effects
+        self.lag = (self.effects['sensor_lag'].get('tau', params.plant_sensor_lag_tau)
+                    if 'sensor_lag' in self.effects else 0.0)
+        sigma = {'p': params.plant_noise_p, 'psi': params.plant_noise_psi,
+                 'psi_dot': params.plant_noise_psi_dot, 'tau': params.plant_noise_tau}
+        for key, value in (noise or {}).items():
+            if key not in sigma:
+                raise ParameterError(f"segment plant noise: unknown key '{key}' (known: {', '.join(NOISE_KEYS)})")
+            if not value >= 0:
+                raise ParameterError(f"segment plant noise: '{key}' must be >= 0")
+            sigma[key] = float(value)
+        self.sigma = np.array([sigma['psi'], sigma['psi_dot'], sigma['p'], sigma['p'], sigma['tau']])
+        self.rng = np.random.default_rng(seed)
+        self.model = SegmentModel(self.physics)
+        self.reset(psi0)
+
+    def reset(self, psi0=0.0):
+        """Vented chambers, segment at rest at Ψ = psi0, empty strain memories."""
+        p0 = self.params.p0
+        self.t, self.psi, self.psi_dot, self.psi_ddot = 0.0, float(psi0), 0.0, 0.0
+        self.p1 = self.p2 = self.sensed1 = self.sensed2 = p0
+        self.tau_ext = self.tau_drive = self.tau_motion = 0.0
+        self.outputs = (0.0,) * 7
+        self.model.reset()
+        self._noise, self._next = np.zeros((0, 5)), 0
+
+    def _draw(self):
+        if self._next >= len(self._noise):
+            self._noise = self.rng.standard_normal((4096, 5)) * self.sigma
+            self._next = 0
+        row = self._noise[self._next]
+        self._next += 1
+        return row
+
+    def _drive(self):
+        self.outputs = self.model.step(self.psi, self.psi_dot, self.p1, self.p2)
+        # with contact_hysteresis: τ_drive of paper A; without: the previous model's torque (34)
+        return self.outputs[5] if self.hysteresis else self.outputs[6]
+
+    def step(self, dt, p_cmd1, p_cmd2, psi_imposed=None, tau_load=None):
+        """Advance by `dt` s with pressure commands (Pa abs); impose Ψ (rad) or apply `tau_load` (N·m)."""
+        p = self.physics
+        blend = 1.0 - math.exp(-dt / p.plant_valve_tau)
+        self.p1 += blend * (p_cmd1 - self.p1)
+        self.p2 += blend * (p_cmd2 - self.p2)
+        if psi_imposed is not None:
+            velocity = (psi_imposed - self.psi) / dt
+            self.psi_ddot = (velocity - self.psi_dot) / dt
+            self.psi, self.psi_dot = float(psi_imposed), velocity
+            self.tau_drive = self._drive()
+            self.tau_motion = (p.plant_inertia * self.psi_ddot + p.plant_damping * self.psi_dot
+                               + p.plant_gravity * math.sin(self.psi))
+            self.tau_ext = self.tau_motion - self.tau_drive
+        else:
+            self.tau_drive = self._drive()
+            self.tau_ext = 0.0 if tau_load is None else float(tau_load)
+            gravity = p.plant_gravity * math.sin(self.psi)
+            self.psi_ddot = (self.tau_ext + self.tau_drive - p.plant_damping * self.psi_dot
+                             - gravity) / p.plant_inertia
+            self.psi_dot += dt * self.psi_ddot
+            self.psi += dt * self.psi_dot
+            self.tau_motion = p.plant_inertia * self.psi_ddot + p.plant_damping * self.psi_dot + gravity
+        if self.lag > 0.0:
+            follow = 1.0 - math.exp(-dt / self.lag)
+            self.sensed1 += follow * (self.p1 - self.sensed1)
+            self.sensed2 += follow * (self.p2 - self.sensed2)
+        else:
+            self.sensed1, self.sensed2 = self.p1, self.p2
+        self.t += dt
+        n_psi, n_dot, n_p1, n_p2, n_tau = self._draw()
+        return SegmentSample(self.t, self.psi + n_psi, self.psi_dot + n_dot, self.sensed1 + n_p1,
+                             self.sensed2 + n_p2, self.tau_ext + n_tau)

@@ -1,0 +1,51 @@
+"""/diagnostics for every node: one DiagnosticStatus per loop or device group, about once a second.
+
+Reported per loop: achieved rate, loop compute time p50/p99, period p99, lateness p99, deadline misses
+(from `hardware.loop_timing.LoopStats`), plus whatever counters the node passes (link health,
+stale data, rejected samples). Level: ERROR when the link is down, WARN on new deadline misses or
+stale data since the last report, else OK.
+"""
+import time
+
+from bellows_ros.runtime import rt
+
+_S = rt.msg.DiagnosticStatus
+OK, WARN, ERROR, STALE = _S.OK, _S.WARN, _S.ERROR, _S.STALE
+PERIOD = 1.0  # s between reports
+
+
+class LoopReport:
+    """Turns a LoopStats into rate/timing key-values, remembering the previous report for rates."""
+
+    def __init__(self, stats):
+        self.stats = stats
+        self._count, self._misses, self._time = 0, 0, time.monotonic()
+
+    def values(self):
+        summary = self.stats.summary()
+        now = time.monotonic()
+        count, misses = int(summary['count']), int(summary['misses'])
+        rate = (count - self._count) / max(now - self._time, 1e-9)
+        new_misses = misses - self._misses
+        self._count, self._misses, self._time = count, misses, now
+        values = {'rate_hz': f'{rate:.1f}', 'samples': str(count), 'deadline_misses': str(misses),
+                  'new_deadline_misses': str(new_misses)}
+        for key in ('compute_p50', 'compute_p99', 'period_p99', 'lateness_p99'):
+            values[f'{key}_us'] = f'{summary[key] * 1e6:.1f}'
+        return values, rate, new_misses
+
+
+def status(name, values, level=OK, message='', hardware_id=''):
+    """A DiagnosticStatus with `values` (dict) as string key-values."""
+    if rt.USING_RCLPY:
+        level = bytes([level]) if isinstance(level, int) else level
+    return rt.msg.DiagnosticStatus(
+        level=level, name=name, message=message or ('OK' if level in (OK, bytes([0])) else ''),
+        hardware_id=hardware_id,
+        values=[rt.msg.KeyValue(key=str(k), value=str(v)) for k, v in values.items()])
+
+
+def publish(node, publisher, statuses):
+    array = rt.msg.DiagnosticArray(status=list(statuses))
+    array.header.stamp = node.get_clock().now().to_msg()
+    publisher.publish(array)

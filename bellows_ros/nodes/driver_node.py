@@ -1,0 +1,232 @@
+"""driver_node: the arm on CAN and/or the actuator on serial, wired to the topic contract.
+
+Publishes one message per device sample and group (DESIGN.md): `/joint_states`, `/bellows/chambers`,
+and for the actuator's load cell `/bellows/wrench` (frame `actuator`, force.z = spring force). The
+devices' 1 kHz sampling is the clock: messages go out from the drivers' reader threads as each
+sample arrives, stamped with the node clock at arrival; there is no ROS timer at 1 kHz.
+Commands (`/bellows/pressure_command`, `/actuator/motor_command`) pass through the hardware layer's
+safety limits (clamping, end stops, watchdogs).
+
+Parameters (config/nodes_*.yaml, section `driver_node`):
+  arm.enabled, actuator.enabled (bool): which device groups to run.
+  hardware_params (str): a hardware YAML laid over config/hardware.yaml ('' = defaults).
+  actuator.port (str): serial port ('' = hardware.actuator_board.port).
+  arm.interface, arm.channel (str): python-can bus ('' = hardware.arm_bus.*).
+  arm.n_segments (int): segments on the bus (0 = hardware.arm_bus.n_segments).
+  startup_timeout (s): a device with no sample by then is an error (exit status 2).
+"""
+import dataclasses
+import os
+import threading
+import time
+
+from bellows_ros.errors import BellowsError
+from bellows_ros.hardware import actuator_board, arm_bus
+from bellows_ros.hardware.loop_timing import LoopStats
+from bellows_ros.nodes import diagnostics
+from bellows_ros.runtime import rt
+from bellows_ros.runtime.topics import ACTUATOR_FRAME, SAMPLE_DEPTH
+
+
+class SampleClock:
+    """Timing of a device's sample stream, for /diagnostics: the samples are the loop ticks."""
+
+    def __init__(self, period):
+        self.period = period
+        self.stats = LoopStats()
+        self._last_time = None
+        self._last_index = None
+
+    def tick(self, index, arrival, compute):
+        if self._last_time is not None:
+            gap = index - self._last_index
+            if gap > 1:
+                self.stats.add_misses(gap - 1)
+            interval = arrival - self._last_time
+            self.stats.record(interval, max(0.0, interval - self.period * max(gap, 1)), compute)
+        self._last_time, self._last_index = arrival, index
+
+
+class DriverNode(rt.Node):
+
+    def __init__(self):
+        super().__init__('driver_node')
+        self.use_arm = self.declare_parameter('arm.enabled', False).value
+        self.use_actuator = self.declare_parameter('actuator.enabled', False).value
+        hardware_params = self.declare_parameter('hardware_params', '').value or None
+        port = self.declare_parameter('actuator.port', '').value
+        interface = self.declare_parameter('arm.interface', '').value
+        channel = self.declare_parameter('arm.channel', '').value
+        n_segments = self.declare_parameter('arm.n_segments', 0).value
+        self.startup_timeout = self.declare_parameter('startup_timeout', 2.0).value
+        rt.check_parameters(self)
+        if not (self.use_arm or self.use_actuator):
+            raise BellowsError('driver_node: neither arm.enabled nor actuator.enabled is set')
+
+        self.state_pub = self.create_publisher(rt.msg.JointState, '/joint_states', SAMPLE_DEPTH)
+        self.chamber_pub = self.create_publisher(rt.msg.JointState, '/bellows/chambers',
+                                                 SAMPLE_DEPTH)
+        self.wrench_pub = self.create_publisher(rt.msg.WrenchStamped, '/bellows/wrench',
+                                                SAMPLE_DEPTH)
+        self.diag_pub = self.create_publisher(rt.msg.DiagnosticArray, '/diagnostics', 10)
+        self._publish_lock = threading.Lock()  # both reader threads publish
+        self.arm = self.actuator = None
+        self.reports = {}
+        self.published = {'arm': 0, 'actuator': 0}
+        try:
+            if self.use_actuator:
+                self._open_actuator(actuator_board.load_config(hardware_params), port)
+            if self.use_arm:
+                self._open_arm(arm_bus.load_config(hardware_params), interface, channel,
+                               n_segments)
+            self._wait_for_samples()
+        except BaseException:
+            self.close()
+            raise
+        self.create_subscription(rt.msg.JointState, '/bellows/pressure_command',
+                                 self.on_pressure_command, 10)
+        self.create_subscription(rt.msg.Float64, '/actuator/motor_command',
+                                 self.on_motor_command, 10)
+        self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
+        self.get_logger().info(
+            'driving ' + ' and '.join(name for name, on in (('arm', self.use_arm),
+                                                            ('actuator', self.use_actuator)) if on))
+
+    # --- devices -----------------------------------------------------------------------------------
+    def _open_actuator(self, config, port):
+        if port:
+            config = dataclasses.replace(config, port=port)
+        if not os.path.exists(config.port):
+            raise BellowsError(f'driver_node: actuator board port {config.port} does not exist '
+                               '(device absent? set actuator.port)')
+        self.actuator_clock = SampleClock(1e-3)
+        self.reports['actuator'] = diagnostics.LoopReport(self.actuator_clock.stats)
+        self.actuator = actuator_board.ActuatorBoard(config, on_sample=self.on_actuator_sample)
+        self.actuator_port = config.port
+
+    def _open_arm(self, config, interface, channel, n_segments):
+        config = dataclasses.replace(config, interface=interface or config.interface,
+                                     channel=channel or config.channel,
+                                     n_segments=n_segments or config.n_segments)
+        self.arm_names = [f'segment_{i + 1}' for i in range(config.n_segments)]
+        self.chain_names = [f'{s}/chain_{j}' for s in self.arm_names for j in (1, 2)]
+        self.arm_clock = SampleClock(1e-3)
+        self.reports['arm'] = diagnostics.LoopReport(self.arm_clock.stats)
+        self._last_arm = None
+        self._psi_dot = [0.0] * config.n_segments
+        self.setpoints = dict.fromkeys(self.chain_names, config.pressure_min)  # vented
+        try:
+            bus = arm_bus.open_bus(config)
+        except Exception as exc:  # python-can raises OSError/CanError subclasses per interface
+            raise BellowsError(f'driver_node: cannot open CAN bus {config.interface}:'
+                               f'{config.channel} ({exc})') from None
+        self.arm = arm_bus.ArmBus(config, bus=bus, on_sample=self.on_arm_sample)
+        self.arm_link = f'{config.interface}:{config.channel}'
+
+    def _wait_for_samples(self):
+        end = time.monotonic() + self.startup_timeout
+        waiting = [(name, device) for name, device in (('actuator', self.actuator),
+                                                        ('arm', self.arm)) if device]
+        while waiting and time.monotonic() < end:
+            waiting = [(name, device) for name, device in waiting if device.latest() is None]
+            time.sleep(0.01)
+        if waiting:
+            name = waiting[0][0]
+            where = self.actuator_port if name == 'actuator' else self.arm_link
+            raise BellowsError(f'driver_node: no {name} samples on {where} within '
+                               f'{self.startup_timeout:g} s (device absent or not powered)')
+
+    def close(self):
+        devices = [(n, d) for n, d in (('actuator', self.actuator), ('arm', self.arm)) if d]
+        for _, device in devices:
+            device.close()
+        if devices and self.reports:
+            self.publish_diagnostics(final=True)  # the closing counts: nothing published after
+            time.sleep(0.3)  # let the reliable writer deliver it before the participant goes
+        self.actuator = self.arm = None
+
+    # --- samples -> topics (called from the drivers' reader threads) ----------------------------
+    def _header(self, msg, stamp, frame=''):
+        msg.header.stamp = stamp
+        msg.header.frame_id = frame
+        return msg
+
+    def on_actuator_sample(self, sample):
+        start = time.monotonic()
+        stamp = self.get_clock().now().to_msg()
+        state = self._header(rt.msg.JointState(name=['air_chamber', 'spring'],
+                                               position=[sample.x_c, sample.x_s]), stamp)
+        chambers = self._header(rt.msg.JointState(name=['actuator'], effort=[sample.p]), stamp)
+        wrench = self._header(rt.msg.WrenchStamped(), stamp, ACTUATOR_FRAME)
+        wrench.wrench.force.z = sample.f
+        with self._publish_lock:
+            self.state_pub.publish(state)
+            self.chamber_pub.publish(chambers)
+            self.wrench_pub.publish(wrench)
+            self.published['actuator'] += 1
+        self.actuator_clock.tick(sample.index, sample.t_receive, time.monotonic() - start)
+
+    def on_arm_sample(self, sample):
+        start = time.monotonic()
+        stamp = self.get_clock().now().to_msg()
+        previous = self._last_arm
+        if previous is not None and sample.t_device > previous.t_device:
+            # Backward difference of the measured angle; the encoder-less arm has no Ψ̇ sensor.
+            dt = sample.t_device - previous.t_device
+            self._psi_dot = [(a - b) / dt for a, b in zip(sample.psi, previous.psi)]
+        self._last_arm = sample
+        state = self._header(rt.msg.JointState(name=list(self.arm_names),
+                                               position=[float(v) for v in sample.psi],
+                                               velocity=list(self._psi_dot)), stamp)
+        chambers = self._header(rt.msg.JointState(name=list(self.chain_names),
+                                                  effort=[float(v) for v in sample.pressures]),
+                                stamp)
+        with self._publish_lock:
+            self.state_pub.publish(state)
+            self.chamber_pub.publish(chambers)
+            self.published['arm'] += 1
+        self.arm_clock.tick(sample.index, sample.t_receive, time.monotonic() - start)
+
+    # --- commands ------------------------------------------------------------------------------------
+    def on_pressure_command(self, msg):
+        if self.arm is None:
+            return
+        # A command may name some chambers only; the others keep their last set-point.
+        for name, value in zip(msg.name, msg.effort):
+            if name in self.setpoints:
+                self.setpoints[name] = value
+        self.arm.send_pressures([self.setpoints[name] for name in self.chain_names])
+
+    def on_motor_command(self, msg):
+        if self.actuator is not None:
+            self.actuator.send_duty(msg.data)
+
+    # --- diagnostics -----------------------------------------------------------------------------
+    def publish_diagnostics(self, final=False):
+        statuses = []
+        for name, device, link in (('actuator', self.actuator, getattr(self, 'actuator_port', '')),
+                                   ('arm', self.arm, getattr(self, 'arm_link', ''))):
+            if device is None:
+                continue
+            values, _, new_misses = self.reports[name].values()
+            values.update(device.counters())
+            values['published'] = str(self.published[name])
+            values['stale'] = str(device.stale)
+            level, message = diagnostics.OK, 'OK'
+            if final:
+                level, message = diagnostics.STALE, 'driver stopped'
+            elif device.stale:
+                level, message = diagnostics.ERROR, 'no data (link down or device stopped)'
+            elif new_misses:
+                level, message = diagnostics.WARN, f'{new_misses} samples missed'
+            statuses.append(diagnostics.status(f'driver_node: {name}', values, level, message,
+                                               hardware_id=link))
+        diagnostics.publish(self, self.diag_pub, statuses)
+
+
+def main(args=None):
+    return rt.main(DriverNode, args)
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

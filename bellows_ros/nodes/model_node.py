@@ -1,0 +1,148 @@
+"""model_node: paper A's driving torque for every sample of every configured segment.
+
+Event-driven (no timer): the driver publishes each sample as a `/joint_states` message (Ψ, Ψ̇) and a
+`/bellows/chambers` message (chain pressures) with the same stamp; when both halves of a stamp have
+arrived, every segment's `SegmentModel.step(psi, psi_dot, p1, p2)` runs once (its strain memory
+carries from sample to sample, Algorithm 1) and the node publishes
+
+  /bellows/driving_torque   effort = τ_drive per segment (2), N·m, stamped with the sample's stamp
+  /bellows/external_torque  effort = τ_ext = M Ψ̈ + C Ψ̇ + N(Ψ) − τ_drive (2), N·m (quasi-static
+                            unless segment.dynamics.* are set), same stamp.
+
+Parameters: segments (int array, which segments to evaluate), params_file (str: identified
+parameters from `bellows identify`, laid over config/segment.yaml; '' = defaults),
+max_pending (int: unmatched half-samples kept before the oldest is dropped and counted).
+A sample with a non-finite value or a pressure outside [0, 2 p_max] is rejected and counted.
+"""
+import math
+import time
+from collections import OrderedDict
+
+from bellows_ros.errors import BellowsError
+from bellows_ros.hardware.loop_timing import LoopStats
+from bellows_ros.models.segment import SegmentModel, external_torque, load_segment_params
+from bellows_ros.nodes import diagnostics
+from bellows_ros.runtime import rt
+from bellows_ros.runtime.topics import SAMPLE_DEPTH
+
+
+class ModelNode(rt.Node):
+
+    def __init__(self):
+        super().__init__('model_node')
+        segments = self.declare_parameter('segments', [1, 2, 3, 4]).value
+        params_file = self.declare_parameter('params_file', '').value or None
+        self.max_pending = self.declare_parameter('max_pending', 100).value
+        rt.check_parameters(self)
+        if not segments or any(s < 1 for s in segments):
+            raise BellowsError(f'model_node: parameter segments must list segment numbers >= 1, '
+                               f'got {list(segments)}')
+        self.params = load_segment_params(params_file)
+        self.names = [f'segment_{i}' for i in segments]
+        self.chains = [(f'{n}/chain_1', f'{n}/chain_2') for n in self.names]
+        self.models = [SegmentModel(self.params) for _ in segments]
+        self.previous_psi_dot = [None] * len(segments)
+        self.pending = OrderedDict()  # stamp (ns) -> [joint_state or None, chambers or None]
+        self.counts = dict.fromkeys(['evaluated', 'rejected', 'unmatched_dropped'], 0)
+        self.stats = LoopStats()
+        self.report = diagnostics.LoopReport(self.stats)
+        self.latency = []
+        self._last_stamp = None
+        self._p_limit = 2.0 * self.params.p_max
+
+        self.drive_pub = self.create_publisher(rt.msg.JointState, '/bellows/driving_torque',
+                                               SAMPLE_DEPTH)
+        self.external_pub = self.create_publisher(rt.msg.JointState, '/bellows/external_torque',
+                                                  SAMPLE_DEPTH)
+        self.diag_pub = self.create_publisher(rt.msg.DiagnosticArray, '/diagnostics', 10)
+        self.create_subscription(rt.msg.JointState, '/joint_states', self.on_joint_states,
+                                 SAMPLE_DEPTH)
+        self.create_subscription(rt.msg.JointState, '/bellows/chambers', self.on_chambers,
+                                 SAMPLE_DEPTH)
+        self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
+        self.get_logger().info(f"evaluating {', '.join(self.names)}"
+                               + (f' with {params_file}' if params_file else ''))
+
+    # --- pairing the two halves of a sample ------------------------------------------------------
+    def on_joint_states(self, msg):
+        if self.names[0] in msg.name:
+            self._half(msg, 0)
+
+    def on_chambers(self, msg):
+        if self.chains[0][0] in msg.name:
+            self._half(msg, 1)
+
+    def _half(self, msg, slot):
+        stamp = rt.stamp_ns(msg.header.stamp)
+        entry = self.pending.get(stamp)
+        if entry is None:
+            entry = self.pending[stamp] = [None, None]
+            while len(self.pending) > self.max_pending:
+                self.pending.popitem(last=False)
+                self.counts['unmatched_dropped'] += 1
+        entry[slot] = msg
+        if entry[0] is not None and entry[1] is not None:
+            del self.pending[stamp]
+            self.evaluate(stamp, *entry)
+
+    # --- the model ---------------------------------------------------------------------------------
+    def evaluate(self, stamp, joints, chambers):
+        start = time.perf_counter()
+        position = dict(zip(joints.name, joints.position))
+        velocity = dict(zip(joints.name, joints.velocity))
+        pressure = dict(zip(chambers.name, chambers.effort))
+        try:
+            inputs = [(position[n], velocity.get(n, 0.0), pressure[c1], pressure[c2])
+                      for n, (c1, c2) in zip(self.names, self.chains)]
+        except KeyError:
+            self.counts['rejected'] += 1
+            return
+        if not all(math.isfinite(v) for row in inputs for v in row) or \
+                not all(0.0 <= p <= self._p_limit for row in inputs for p in row[2:]):
+            self.counts['rejected'] += 1
+            return
+        dt = None if self._last_stamp is None else (stamp - self._last_stamp) * 1e-9
+        self._last_stamp = stamp
+        drive, external = [], []
+        for i, (model, (psi, psi_dot, p1, p2)) in enumerate(zip(self.models, inputs)):
+            tau_drive = model.step(psi, psi_dot, p1, p2)[5]
+            previous = self.previous_psi_dot[i]
+            psi_ddot = (psi_dot - previous) / dt if previous is not None and dt else 0.0
+            self.previous_psi_dot[i] = psi_dot
+            drive.append(tau_drive)
+            external.append(float(external_torque(self.params, psi, psi_dot, psi_ddot, tau_drive)))
+        out_drive = rt.msg.JointState(name=list(self.names), effort=drive)
+        out_external = rt.msg.JointState(name=list(self.names), effort=external)
+        out_drive.header = joints.header
+        out_external.header = joints.header
+        self.drive_pub.publish(out_drive)
+        self.external_pub.publish(out_external)
+        self.counts['evaluated'] += 1
+        compute = time.perf_counter() - start
+        # Latency from the sample's stamp to the torque's publication, on the node clock.
+        self.latency.append(self.get_clock().now().nanoseconds - stamp)
+        self.stats.record(dt or 0.0, 0.0, compute)
+
+    def publish_diagnostics(self):
+        values, rate, _ = self.report.values()
+        values.update({k: str(v) for k, v in self.counts.items()})
+        values['pending'] = str(len(self.pending))
+        if self.latency:
+            ordered = sorted(self.latency)
+            values['latency_p50_us'] = f'{ordered[len(ordered) // 2] * 1e-3:.1f}'
+            values['latency_p99_us'] = f'{ordered[int(0.99 * (len(ordered) - 1))] * 1e-3:.1f}'
+            self.latency = []
+        stale = rate == 0.0
+        level = diagnostics.WARN if stale or self.counts['rejected'] else diagnostics.OK
+        message = 'no samples (stale)' if stale else 'OK'
+        diagnostics.publish(self, self.diag_pub,
+                            [diagnostics.status('model_node: driving torque', values, level,
+                                                message)])
+
+
+def main(args=None):
+    return rt.main(ModelNode, args)
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

@@ -1,0 +1,190 @@
+"""scenario_node: a short scripted scenario on the running graph, printed and plotted.
+
+1. Stiffness step: set-point `stiffness_low` (1400 N/m; raised to 1 % above the bottom of the
+   actuator model's range when that is higher), then at `step_time` `stiffness_high` (1900 N/m).
+2. Segment excursion: chain 1 of `segment_1` ramps from ambient to `pressure_peak` (4 bar abs, paper
+   A's Fig. 10 pressure) and back, chain 2 stays vented; the angle follows the driving torque.
+
+Commands are published at 50 Hz (the driver vents the arm without set-points for 0.1 s). What
+comes back is recorded: /actuator/stiffness, /joint_states (segment_1 Ψ, air_chamber x_c),
+/bellows/chambers (segment_1 pressures), /bellows/driving_torque (segment_1 τ_drive). At the end it
+prints a summary (step settling time and overshoot, excursion extremes) and writes
+`output_dir/scenario.csv` and `output_dir/scenario.png`.
+
+Parameters: duration (s), step_time (s), stiffness_low, stiffness_high (N/m), pressure_peak (Pa),
+excursion_start, excursion_length (s), output_dir (str), actuator_params (str).
+"""
+import csv
+import math
+import sys
+import time
+from pathlib import Path
+
+from bellows_ros.errors import BellowsError
+from bellows_ros.models.actuator import load_actuator_params
+from bellows_ros.models.stiffness_map import stiffness_range
+from bellows_ros.runtime import rt
+
+P_AMBIENT = 101325.0
+
+
+class ScenarioNode(rt.Node):
+
+    def __init__(self):
+        super().__init__('scenario_node')
+        self.duration = self.declare_parameter('duration', 40.0).value
+        self.step_time = self.declare_parameter('step_time', 5.0).value
+        k_low = self.declare_parameter('stiffness_low', 1400.0).value
+        self.k_high = self.declare_parameter('stiffness_high', 1900.0).value
+        self.p_peak = self.declare_parameter('pressure_peak', 4.0e5).value
+        self.excursion_start = self.declare_parameter('excursion_start', 2.0).value
+        self.excursion_length = self.declare_parameter('excursion_length', 20.0).value
+        self.output_dir = Path(self.declare_parameter('output_dir', 'scenario_out').value)
+        actuator_params = self.declare_parameter('actuator_params', '').value or None
+        rt.check_parameters(self)
+        k_min, k_max = stiffness_range(load_actuator_params(actuator_params))
+        self.k_low = max(k_low, 1.01 * k_min)
+        if self.k_low != k_low:
+            self.get_logger().warn(f'stiffness_low {k_low:.0f} N/m is below the actuator range '
+                                   f'[{k_min:.0f}, {k_max:.0f}] N/m; using {self.k_low:.0f} N/m')
+        if not k_min <= self.k_high <= k_max:
+            raise BellowsError(f'scenario_node: stiffness_high {self.k_high:.0f} N/m is outside '
+                               f'the actuator range [{k_min:.0f}, {k_max:.0f}] N/m')
+        self.output_dir.mkdir(parents=True, exist_ok=True)
+        self.setpoint_pub = self.create_publisher(rt.msg.Float64, '/actuator/stiffness_setpoint', 10)
+        self.pressure_pub = self.create_publisher(rt.msg.JointState, '/bellows/pressure_command', 10)
+        self.series = {name: [] for name in ('stiffness', 'x_c', 'psi', 'p1', 'p2', 'tau_drive')}
+        self.create_subscription(rt.msg.Float64, '/actuator/stiffness',
+                                 lambda m: self._add('stiffness', m.data), 10)
+        self.create_subscription(rt.msg.JointState, '/joint_states', self.on_joint_states, 200)
+        self.create_subscription(rt.msg.JointState, '/bellows/chambers', self.on_chambers, 200)
+        self.create_subscription(rt.msg.JointState, '/bellows/driving_torque', self.on_torque, 200)
+        self.start = time.monotonic()
+        self.done = False
+        self._last_setpoint, self._ticks = None, 0
+        self.create_timer(0.02, self.command)
+
+    def elapsed(self):
+        return time.monotonic() - self.start
+
+    def _add(self, name, value):
+        self.series[name].append((self.elapsed(), value))
+
+    def on_joint_states(self, msg):
+        if 'segment_1' in msg.name:
+            self._add('psi', msg.position[msg.name.index('segment_1')])
+        if 'air_chamber' in msg.name:
+            self._add('x_c', msg.position[msg.name.index('air_chamber')])
+
+    def on_chambers(self, msg):
+        if 'segment_1/chain_1' in msg.name:
+            self._add('p1', msg.effort[msg.name.index('segment_1/chain_1')])
+            self._add('p2', msg.effort[msg.name.index('segment_1/chain_2')])
+
+    def on_torque(self, msg):
+        if 'segment_1' in msg.name:
+            self._add('tau_drive', msg.effort[msg.name.index('segment_1')])
+
+    def stiffness_setpoint(self, t):
+        return self.k_low if t < self.step_time else self.k_high
+
+    def chain_1_pressure(self, t):
+        """Raised-cosine excursion ambient -> p_peak -> ambient."""
+        phase = (t - self.excursion_start) / self.excursion_length
+        if not 0.0 <= phase <= 1.0:
+            return P_AMBIENT
+        return P_AMBIENT + (self.p_peak - P_AMBIENT) * 0.5 * (1 - math.cos(2 * math.pi * phase))
+
+    def command(self):
+        t = self.elapsed()
+        if t >= self.duration:
+            self.done = True
+            return
+        k = self.stiffness_setpoint(t)
+        if k != self._last_setpoint or self._ticks % 50 == 0:  # on change, and 1 Hz for late joiners
+            self.setpoint_pub.publish(rt.msg.Float64(data=k))
+            self._last_setpoint = k
+        self._ticks += 1
+        command = rt.msg.JointState(name=['segment_1/chain_1', 'segment_1/chain_2'],
+                                    effort=[self.chain_1_pressure(t), P_AMBIENT])
+        command.header.stamp = self.get_clock().now().to_msg()
+        self.pressure_pub.publish(command)
+
+    # --- results -----------------------------------------------------------------------------------
+    def summary(self):
+        lines = []
+        after = [(t - self.step_time, k) for t, k in self.series['stiffness'] if t >= self.step_time]
+        if after:
+            band = 0.02 * self.k_high
+            outside = [t for t, k in after if abs(k - self.k_high) > band]
+            settled = (outside[-1] if outside else 0.0) if abs(after[-1][1] - self.k_high) <= band \
+                else math.nan
+            overshoot = max(k for _, k in after) - self.k_high
+            lines.append(f'stiffness step {self.k_low:.0f} -> {self.k_high:.0f} N/m: within 2 % after '
+                         f'{settled:.2f} s, overshoot {max(0.0, overshoot):.1f} N/m, final '
+                         f'{after[-1][1]:.1f} N/m')
+        else:
+            lines.append('stiffness step: no /actuator/stiffness received')
+        for name, unit in (('p1', 'Pa'), ('psi', 'rad'), ('tau_drive', 'N·m'), ('x_c', 'm')):
+            values = [v for _, v in self.series[name]]
+            lines.append(f'{name}: {len(values)} samples' + (
+                f', min {min(values):.4g} {unit}, max {max(values):.4g} {unit}' if values else ''))
+        return lines
+
+    def write(self):
+        with open(self.output_dir / 'scenario.csv', 'w', newline='') as stream:
+            writer = csv.writer(stream)
+            writer.writerow(['series', 't', 'value'])
+            for name, points in self.series.items():
+                writer.writerows((name, f'{t:.4f}', repr(v)) for t, v in points)
+        import matplotlib
+        matplotlib.use('Agg')
+        import matplotlib.pyplot as plt
+        fig, axes = plt.subplots(3, 1, figsize=(9, 9), sharex=True)
+
+        def plot(ax, name, scale=1.0, **style):
+            points = self.series[name]
+            ax.plot([t for t, _ in points], [v * scale for _, v in points], **style)
+        plot(axes[0], 'stiffness', label='estimated stiffness')
+        ts = [t * 0.1 for t in range(int(self.duration * 10))]
+        axes[0].plot(ts, [self.stiffness_setpoint(t) for t in ts], 'k--', label='set-point')
+        axes[0].set_ylabel('stiffness (N/m)')
+        plot(axes[1], 'p1', 1e-5, label='segment_1 chain 1')
+        plot(axes[1], 'p2', 1e-5, label='segment_1 chain 2')
+        axes[1].set_ylabel('pressure (bar abs)')
+        plot(axes[2], 'psi', 180 / math.pi, label='Ψ segment_1 (deg)')
+        plot(axes[2], 'tau_drive', 1.0, label='τ_drive segment_1 (N·m)')
+        axes[2].set_xlabel('time (s)')
+        for ax in axes:
+            ax.grid(True)
+            ax.legend(loc='best')
+        fig.tight_layout()
+        fig.savefig(self.output_dir / 'scenario.png', dpi=100)
+        plt.close(fig)
+
+
+def main(args=None):
+    rt.init(args=args)
+    node = None
+    try:
+        node = ScenarioNode()
+        while not node.done:
+            rt.spin_once(node, timeout_sec=0.05)
+        for line in node.summary():
+            print(line, flush=True)
+        node.write()
+        print(f'wrote {node.output_dir / "scenario.png"} and {node.output_dir / "scenario.csv"}')
+    except BellowsError as exc:
+        print(f'scenario_node: error: {exc}', file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rt.shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

@@ -1,0 +1,102 @@
+"""sim_actuator_node: the simulated actuator board behind a pseudo-terminal.
+
+Runs paper B's actuator plant (`models.actuator_plant.ActuatorPlant`) inside the simulated board
+(`hardware.sim_actuator_board`), which speaks the board's serial protocol on a pty whose symlink is
+`port`. The driver opens that path exactly as it opens the real board's /dev/serial/by-id link.
+
+Parameters:
+  port (str): the symlink to create (the driver's actuator.port).
+  actuator_params (str): YAML laid over config/actuator.yaml ('' = defaults); also holds the
+      effects' parameters (actuator.effects.*).
+  hardware_params (str): YAML laid over config/hardware.yaml (encoder, end stops).
+  effects (string array): plant effects to switch on (air_leak, heat_exchange, wall_bulging,
+      sensor_lag, backlash); [''] = none.
+  seed (int): sensor noise seed.
+  x_c0 (m): initial chamber compression (design point when NaN).
+  spring.amplitude (m), spring.period (s): the spring is moved sinusoidally between 0 and
+      `amplitude` (a test machine); 0 = spring free at x_s = 0.
+  clock_rate (Hz): /clock publication rate when use_sim_time is on.
+With use_sim_time the node is the clock source: it publishes the plant's time on /clock.
+"""
+import math
+
+from bellows_ros.errors import BellowsError
+from bellows_ros.hardware import actuator_board
+from bellows_ros.hardware.sim_actuator_board import SimActuatorBoard
+from bellows_ros.models.actuator import load_actuator_params
+from bellows_ros.models.actuator_plant import ActuatorPlant
+from bellows_ros.nodes import diagnostics
+from bellows_ros.runtime import rt
+
+
+class SimActuatorNode(rt.Node):
+
+    def __init__(self):
+        super().__init__('sim_actuator_node')
+        port = self.declare_parameter('port', '/tmp/bellows_actuator').value
+        actuator_params = self.declare_parameter('actuator_params', '').value or None
+        hardware_params = self.declare_parameter('hardware_params', '').value or None
+        effects = [e for e in self.declare_parameter('effects', ['']).value if e]
+        seed = self.declare_parameter('seed', 1).value
+        x_c0 = self.declare_parameter('x_c0', math.nan).value
+        self.amplitude = self.declare_parameter('spring.amplitude', 0.0).value
+        self.spring_period = self.declare_parameter('spring.period', 4.0).value
+        clock_rate = self.declare_parameter('clock_rate', 100.0).value
+        rt.check_parameters(self)
+        if not port:
+            raise BellowsError('sim_actuator_node: parameter port is empty')
+        params = load_actuator_params(actuator_params)
+        self.plant = ActuatorPlant(params, effects=effects, seed=seed,
+                                   x_c0=None if math.isnan(x_c0) else x_c0)
+        self.sim_time = self.get_parameter('use_sim_time').value
+        if self.sim_time:
+            self.clock_pub = self.create_publisher(rt.msg.Clock, '/clock', 10)
+            self._clock_every = max(1, round(1.0 / (clock_rate * 1e-3)))
+        self._ticks = 0
+        self.end_stop_hits = 0
+        self.x_c_seen = [math.inf, -math.inf]
+        self.board = SimActuatorBoard(self.step, config=actuator_board.load_config(hardware_params),
+                                      link_path=port)
+        self.board.start()
+        self.diag_pub = self.create_publisher(rt.msg.DiagnosticArray, '/diagnostics', 10)
+        self.report = diagnostics.LoopReport(self.board.stats)
+        self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
+        self.get_logger().info(f'simulated actuator board on {self.board.port}, effects: '
+                               f"{', '.join(effects) or 'none'}")
+
+    def step(self, dt, duty):
+        """One plant step (called by the board's 1 kHz loop)."""
+        x_s = None
+        if self.amplitude > 0:
+            phase = 2 * math.pi * self.plant.t / self.spring_period
+            x_s = 0.5 * self.amplitude * (1 - math.cos(phase))
+        sample = self.plant.step(dt, duty, x_s_imposed=x_s)
+        self.end_stop_hits += sample.at_lower_stop or sample.at_upper_stop
+        self.x_c_seen = [min(self.x_c_seen[0], sample.x_c), max(self.x_c_seen[1], sample.x_c)]
+        self._ticks += 1
+        if self.sim_time and self._ticks % self._clock_every == 0:
+            self.clock_pub.publish(rt.msg.Clock(clock=rt.Time(seconds=self.plant.t).to_msg()))
+        return sample
+
+    def publish_diagnostics(self):
+        values, _, new_misses = self.report.values()
+        values.update(self.board.counters())
+        values.update(x_c=f'{self.plant.x_nut:.6f}', gas_p_ref=f'{self.plant.gas:.1f}',
+                      pressure=f'{self.plant.pressure:.1f}', duty=f'{self.board.duty:.3f}',
+                      x_c_min_seen=f'{self.x_c_seen[0]:.6f}', x_c_max_seen=f'{self.x_c_seen[1]:.6f}',
+                      end_stop_hits=str(self.end_stop_hits), t_plant=f'{self.plant.t:.3f}')
+        level = diagnostics.WARN if new_misses else diagnostics.OK
+        diagnostics.publish(self, self.diag_pub, [diagnostics.status(
+            'sim_actuator_node: plant', values, level,
+            f'{new_misses} ticks missed' if new_misses else 'OK', hardware_id=self.board.port)])
+
+    def close(self):
+        self.board.close()
+
+
+def main(args=None):
+    return rt.main(SimActuatorNode, args)
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

@@ -1,0 +1,92 @@
+"""sim_arm_node: the simulated soft arm on a CAN bus (python-can; udp_multicast between processes).
+
+Runs one paper-A segment plant per segment (`models.segment_plant.SegmentPlant`) inside the
+simulated arm (`hardware.sim_arm_bus`), which speaks the arm's CAN protocol (config/arm.dbc). The
+driver joins the same bus exactly as it joins the robot's.
+
+Parameters:
+  can.interface, can.channel (str): the python-can bus (udp_multicast + an IPv4 group for a
+      simulation across processes).
+  n_segments (int), segment_params (str: YAML over config/segment.yaml),
+  effects (string array): contact_hysteresis, pressure_friction, natural_curvature, sensor_lag
+      ([''] = the baseline plant), seed (int),
+  load_torque (N·m): constant external torque on every segment (0 = free).
+  clock_rate (Hz): /clock publication rate when use_sim_time is on (the node is then the clock).
+"""
+import can
+
+from bellows_ros.errors import BellowsError
+from bellows_ros.hardware.sim_arm_bus import SimArmBus
+from bellows_ros.models.segment import load_segment_params
+from bellows_ros.models.segment_plant import SegmentPlant
+from bellows_ros.nodes import diagnostics
+from bellows_ros.runtime import rt
+
+
+class SimArmNode(rt.Node):
+
+    def __init__(self):
+        super().__init__('sim_arm_node')
+        interface = self.declare_parameter('can.interface', 'udp_multicast').value
+        channel = self.declare_parameter('can.channel', '239.74.163.2').value
+        n_segments = self.declare_parameter('n_segments', 4).value
+        segment_params = self.declare_parameter('segment_params', '').value or None
+        effects = [e for e in self.declare_parameter('effects', ['']).value if e]
+        seed = self.declare_parameter('seed', 1).value
+        self.load_torque = self.declare_parameter('load_torque', 0.0).value
+        clock_rate = self.declare_parameter('clock_rate', 100.0).value
+        rt.check_parameters(self)
+        params = load_segment_params(segment_params)
+        self.plants = [SegmentPlant(params, effects=effects, seed=seed + i)
+                       for i in range(n_segments)]
+        self.sim_time = self.get_parameter('use_sim_time').value
+        if self.sim_time:
+            self.clock_pub = self.create_publisher(rt.msg.Clock, '/clock', 10)
+            self._clock_every = max(1, round(1.0 / (clock_rate * 1e-3)))
+        self._ticks = 0
+        try:
+            bus = can.Bus(interface=interface, channel=channel)
+        except Exception as exc:  # python-can raises interface-specific errors
+            raise BellowsError(f'sim_arm_node: cannot open CAN bus {interface}:{channel} ({exc})') \
+                from None
+        self.sim = SimArmBus(bus, self.step, n_segments=n_segments)
+        self.sim.start()
+        self.link = f'{interface}:{channel}'
+        self.diag_pub = self.create_publisher(rt.msg.DiagnosticArray, '/diagnostics', 10)
+        self.report = diagnostics.LoopReport(self.sim.stats)
+        self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
+        self.get_logger().info(f'simulated arm ({n_segments} segments) on {self.link}, effects: '
+                               f"{', '.join(effects) or 'none'}")
+
+    def step(self, dt, setpoints):
+        """One step of every segment plant with the valves' set-points (SimArmBus's 1 kHz loop)."""
+        measured = []
+        for i, plant in enumerate(self.plants):
+            sample = plant.step(dt, setpoints[2 * i], setpoints[2 * i + 1],
+                                tau_load=self.load_torque)
+            measured.append((sample.p1, sample.p2, sample.psi))
+        self._ticks += 1
+        if self.sim_time and self._ticks % self._clock_every == 0:
+            self.clock_pub.publish(rt.msg.Clock(clock=rt.Time(seconds=self.plants[0].t).to_msg()))
+        return measured
+
+    def publish_diagnostics(self):
+        values, _, new_misses = self.report.values()
+        values.update(self.sim.counters())
+        for i, plant in enumerate(self.plants):
+            values[f'segment_{i + 1}.psi'] = f'{plant.psi:.4f}'
+        level = diagnostics.WARN if new_misses else diagnostics.OK
+        diagnostics.publish(self, self.diag_pub, [diagnostics.status(
+            'sim_arm_node: plant', values, level,
+            f'{new_misses} ticks missed' if new_misses else 'OK', hardware_id=self.link)])
+
+    def close(self):
+        self.sim.close()
+
+
+def main(args=None):
+    return rt.main(SimArmNode, args)
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

@@ -1,0 +1,137 @@
+"""stiffness_controller_node: stiffness set-point -> chamber compression -> motor duty.
+
+Wiring only; the logic is in `control.stiffness` (set-point, gas-amount correction from the
+measured pressure) and `control.pd` (PD on the encoder position).
+
+  /actuator/stiffness_setpoint (Float64, N/m) -> target compression x_c*
+  /joint_states (air_chamber, spring) + /bellows/chambers (actuator pressure), every
+      `control_every`-th sample (200 Hz by default: the lead screw moves 2.3 mm/s at most, so a
+      faster loop gains nothing and costs a DDS message per sample):
+      PD(x_c*, x_c) -> /actuator/motor_command (Float64, duty -1..1)
+  /actuator/stiffness (Float64, N/m): present stiffness from the measured state, every
+      `publish_every`-th control step.
+
+Parameters: actuator_params (str: YAML over config/actuator.yaml), pd.kp (1/m), pd.kd (s/m),
+pd.velocity_cutoff (Hz), pd.duty_max, pd.deadband (m), gas_time_constant (s),
+control_every (samples per control step), target_every (control steps between re-computations
+of x_c* from the gas estimate), publish_every,
+initial_stiffness (N/m; 0 = hold still until the first set-point).
+"""
+import time
+
+from bellows_ros.errors import BellowsError
+from bellows_ros.control.pd import PDController, PDGains
+from bellows_ros.control.stiffness import StiffnessSetpoint
+from bellows_ros.hardware.loop_timing import LoopStats
+from bellows_ros.models.actuator import load_actuator_params
+from bellows_ros.nodes import diagnostics
+from bellows_ros.runtime import rt
+from bellows_ros.runtime.topics import SAMPLE_DEPTH
+
+
+class StiffnessControllerNode(rt.Node):
+
+    def __init__(self):
+        super().__init__('stiffness_controller_node')
+        actuator_params = self.declare_parameter('actuator_params', '').value or None
+        gains = PDGains(kp=self.declare_parameter('pd.kp', 400.0).value,
+                        kd=self.declare_parameter('pd.kd', 0.0).value,
+                        velocity_cutoff=self.declare_parameter('pd.velocity_cutoff', 50.0).value,
+                        duty_max=self.declare_parameter('pd.duty_max', 0.8).value,
+                        deadband=self.declare_parameter('pd.deadband', 2e-5).value)
+        gas_time_constant = self.declare_parameter('gas_time_constant', 2.0).value
+        self.control_every = self.declare_parameter('control_every', 5).value
+        self.target_every = self.declare_parameter('target_every', 4).value
+        self.publish_every = self.declare_parameter('publish_every', 2).value
+        initial = self.declare_parameter('initial_stiffness', 0.0).value
+        rt.check_parameters(self)
+        if not (0 < gains.duty_max <= 1 and gains.kp >= 0 and gains.kd >= 0):
+            raise BellowsError('stiffness_controller_node: need 0 < pd.duty_max <= 1, '
+                               'pd.kp >= 0, pd.kd >= 0')
+        self.setpoint = StiffnessSetpoint(load_actuator_params(actuator_params), gas_time_constant)
+        self.pd = PDController(gains)
+        if initial:
+            self.setpoint.set_stiffness(initial)
+        self.target = None
+        self.pressure = None
+        self.samples = 0
+        self._last_stamp = None
+        self._elapsed = 0.0  # s since the last control step
+        self.counts = dict.fromkeys(['rejected_setpoints', 'samples_without_pressure'], 0)
+        self.stats = LoopStats()
+        self.report = diagnostics.LoopReport(self.stats)
+
+        self.motor_pub = self.create_publisher(rt.msg.Float64, '/actuator/motor_command', 10)
+        self.stiffness_pub = self.create_publisher(rt.msg.Float64, '/actuator/stiffness', 10)
+        self.diag_pub = self.create_publisher(rt.msg.DiagnosticArray, '/diagnostics', 10)
+        self.create_subscription(rt.msg.Float64, '/actuator/stiffness_setpoint',
+                                 self.on_setpoint, 10)
+        self.create_subscription(rt.msg.JointState, '/bellows/chambers', self.on_chambers,
+                                 SAMPLE_DEPTH)
+        self.create_subscription(rt.msg.JointState, '/joint_states', self.on_joint_states,
+                                 SAMPLE_DEPTH)
+        self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
+
+    def on_setpoint(self, msg):
+        if msg.data == self.setpoint.k_target:
+            return  # set-points may be repeated; only a change does anything
+        try:
+            self.setpoint.set_stiffness(msg.data)
+        except BellowsError as exc:  # out of range: keep the previous target, say why
+            self.counts['rejected_setpoints'] += 1
+            self.get_logger().error(str(exc))
+            return
+        self.target = self.setpoint.target()
+        self.get_logger().info(f'stiffness set-point {msg.data:.1f} N/m -> x_c {self.target:.5f} m')
+
+    def on_chambers(self, msg):
+        if 'actuator' in msg.name:
+            self.pressure = msg.effort[msg.name.index('actuator')]
+
+    def on_joint_states(self, msg):
+        if 'air_chamber' not in msg.name:
+            return
+        start = time.perf_counter()
+        x_c = msg.position[msg.name.index('air_chamber')]
+        x_s = msg.position[msg.name.index('spring')]
+        stamp = rt.stamp_ns(msg.header.stamp)
+        dt = 1e-3 if self._last_stamp is None else max(1e-6, (stamp - self._last_stamp) * 1e-9)
+        self._last_stamp = stamp
+        if self.pressure is None:
+            self.counts['samples_without_pressure'] += 1
+            return
+        self.samples += 1
+        self._elapsed += dt
+        if self.samples % self.control_every:
+            return
+        dt, self._elapsed = self._elapsed, 0.0
+        step = self.samples // self.control_every
+        self.setpoint.update_measurement(x_c, x_s, self.pressure, dt)
+        if self.setpoint.k_target is not None and (self.target is None
+                                                   or step % self.target_every == 0):
+            self.target = self.setpoint.target()
+        duty = 0.0 if self.target is None else self.pd.update(self.target, x_c, dt)
+        self.motor_pub.publish(rt.msg.Float64(data=duty))
+        if step % self.publish_every == 0:
+            self.stiffness_pub.publish(rt.msg.Float64(data=self.setpoint.estimate()))
+        self.stats.record(dt, 0.0, time.perf_counter() - start)
+
+    def publish_diagnostics(self):
+        values, rate, new_misses = self.report.values()
+        values.update({k: str(v) for k, v in self.counts.items()})
+        values['gas_p_ref'] = f'{self.setpoint.gas:.1f}'
+        values['target_x_c'] = 'none' if self.target is None else f'{self.target:.6f}'
+        values['stiffness_setpoint'] = str(self.setpoint.k_target)
+        stale = rate == 0.0
+        level = diagnostics.WARN if stale else diagnostics.OK
+        diagnostics.publish(self, self.diag_pub, [diagnostics.status(
+            'stiffness_controller_node: control', values, level,
+            'no samples (stale)' if stale else 'OK')])
+
+
+def main(args=None):
+    return rt.main(StiffnessControllerNode, args)
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

@@ -1,0 +1,396 @@
+"""A node on plain Cyclone DDS with rclpy's interface, for machines without ROS 2.
+
+Only what the bellows nodes use: parameters (declared up front, from `--params-file` / `-p`),
+publishers and subscriptions with ROS 2's wire conventions, timers for low-rate work, a logger, and
+a clock that follows `/clock` when `use_sim_time` is set. One node per process.
+
+Wire conventions (what `rmw_cyclonedds_cpp` in Jazzy does, so ROS 2 nodes interoperate):
+- topic `/x` is DDS topic `rt/x`; type `pkg/msg/T` is `pkg::msg::dds_::T_` (see messages.py);
+- data representation XCDR1 (plain CDR, little endian), as the RMW requests;
+- participant USER_DATA `enclave=/;`; every reader and writer carries USER_DATA
+  `typehash=RIHS01_<sha256>;` (rmw_dds_common's `encode_type_hash_for_user_data_qos`);
+- default QoS: reliable, keep-last 10, volatile (rclpy's default profile).
+
+Execution model, like rclpy's single-threaded executor: subscription and timer callbacks run in
+the thread that calls `spin`/`spin_once`, one at a time. Publishing is allowed from any thread (the
+driver's 1 kHz sampling loop publishes from its own thread).
+"""
+import math
+import os
+import sys
+import threading
+import time
+from dataclasses import dataclass
+
+from cyclonedds.core import GuardCondition, Policy, Qos, ReadCondition, SampleState, ViewState, \
+    InstanceState, WaitSet
+from cyclonedds.domain import DomainParticipant
+from cyclonedds.pub import DataWriter
+from cyclonedds.sub import DataReader
+from cyclonedds.internal import InvalidSample
+from cyclonedds.topic import Topic
+from cyclonedds.util import duration
+
+from bellows_ros import params as params_module
+from bellows_ros.errors import ParameterError
+from bellows_ros.runtime import ros_args
+from bellows_ros.runtime.messages import message_class, type_hash
+
+# Longest time spin_once blocks in C: Python only handles SIGINT between bytecodes.
+_MAX_WAIT_S = 0.1
+
+
+class _Context:
+    """Process-wide state: the DDS participant and the parsed `--ros-args`."""
+
+    def __init__(self):
+        self.participant = None
+        self.args = ros_args.RosArgs()
+        self.shutdown = threading.Event()
+        self.topics = {}
+
+
+_context = _Context()
+
+
+def init(args=None):
+    """Parse `--ros-args` from `args` (default `sys.argv`) and join the DDS domain.
+
+    The domain is `$ROS_DOMAIN_ID` (default 0), as in ROS 2. Returns the non-ROS arguments.
+    """
+    argv = list(sys.argv if args is None else args)
+    _context.args, rest = ros_args.parse(argv)
+    domain_id = int(os.environ.get('ROS_DOMAIN_ID', '0'))
+    _context.participant = DomainParticipant(
+        domain_id, qos=Qos(Policy.Userdata(data=b'enclave=/;')))
+    _context.shutdown.clear()
+    _context.topics = {}
+    return rest
+
+
+def ok():
+    return _context.participant is not None and not _context.shutdown.is_set()
+
+
+def shutdown():
+    """Leave the domain (deletes every reader and writer of the process)."""
+    _context.shutdown.set()
+    _context.participant = None
+    _context.topics = {}
+
+
+# --- QoS -------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class QoSProfile:
+    """The QoS settings the nodes choose between (reliable or best effort, keep-last depth)."""
+    depth: int = 10
+    reliable: bool = True
+
+
+SENSOR_DATA = QoSProfile(depth=5, reliable=False)  # rclpy's qos_profile_sensor_data
+
+
+def _qos(profile, ros_type):
+    if isinstance(profile, int):
+        profile = QoSProfile(depth=profile)
+    reliability = (Policy.Reliability.Reliable(duration(milliseconds=100)) if profile.reliable
+                   else Policy.Reliability.BestEffort)
+    return Qos(reliability, Policy.History.KeepLast(profile.depth), Policy.Durability.Volatile,
+               Policy.DataRepresentation(use_cdrv0_representation=True),
+               Policy.Userdata(data=f'typehash={type_hash(ros_type)};'.encode()))
+
+
+# --- time ------------------------------------------------------------------------------------------
+
+class Time:
+    """A point in time, in nanoseconds (rclpy.time.Time's interface)."""
+
+    def __init__(self, nanoseconds=0, seconds=0.0):
+        self.nanoseconds = int(nanoseconds) + int(round(seconds * 1e9))
+
+    def to_msg(self):
+        sec, nanosec = divmod(self.nanoseconds, 1_000_000_000)
+        return message_class('builtin_interfaces/msg/Time')(sec=sec, nanosec=nanosec)
+
+    @classmethod
+    def from_msg(cls, stamp):
+        return cls(nanoseconds=stamp.sec * 1_000_000_000 + stamp.nanosec)
+
+    def seconds_nanoseconds(self):
+        return divmod(self.nanoseconds, 1_000_000_000)
+
+
+class Clock:
+    """System time, or the last `/clock` message when `use_sim_time` is on (0 before the first)."""
+
+    def __init__(self):
+        self.sim_time = None
+
+    def now(self):
+        if self.sim_time is not None:
+            return Time(nanoseconds=self.sim_time)
+        return Time(nanoseconds=time.time_ns())
+
+
+# --- logging ---------------------------------------------------------------------------------------
+
+class Logger:
+    """ROS 2's console format: `[LEVEL] [time] [node]: message`, on stderr."""
+    _ORDER = {level: i for i, level in enumerate(ros_args.LOG_LEVELS)}
+
+    def __init__(self, name, level):
+        self.name, self.level = name, self._ORDER[level]
+
+    def _log(self, level, message):
+        if self._ORDER[level] >= self.level:
+            stamp = time.time()
+            print(f'[{level.upper()}] [{stamp:.9f}] [{self.name}]: {message}', file=sys.stderr,
+                  flush=True)
+
+    def debug(self, message):
+        self._log('debug', message)
+
+    def info(self, message):
+        self._log('info', message)
+
+    def warn(self, message):
+        self._log('warn', message)
+
+    warning = warn
+
+    def error(self, message):
+        self._log('error', message)
+
+    def fatal(self, message):
+        self._log('fatal', message)
+
+
+# --- parameters ------------------------------------------------------------------------------------
+
+@dataclass
+class Parameter:
+    name: str
+    value: object
+
+
+def _coerce(name, default, value):
+    """Give an override the declared parameter's type, as rclpy's typed parameters do."""
+    if default is None or value is None:
+        return value
+    if isinstance(default, bool) or isinstance(value, bool):
+        if isinstance(default, bool) and isinstance(value, bool):
+            return value
+    elif isinstance(default, float) and isinstance(value, (int, float)):
+        return float(value)
+    elif isinstance(default, int) and isinstance(value, int):
+        return value
+    elif isinstance(default, str) and isinstance(value, str):
+        return value
+    elif isinstance(default, list) and isinstance(value, list):
+        if default and isinstance(default[0], float):
+            if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
+                return [float(v) for v in value]
+        elif all(type(v) is type(default[0]) for v in value) if default else True:
+            return value
+    raise ParameterError(f"parameter '{name}': expected {_type_name(default)}, "
+                         f"got {_type_name(value)} {value!r}")
+
+
+def _type_name(value):
+    if isinstance(value, bool):
+        return 'a bool'
+    if isinstance(value, int):
+        return 'an integer'
+    if isinstance(value, float):
+        return 'a double'
+    if isinstance(value, str):
+        return 'a string'
+    if isinstance(value, list):
+        return 'an array'
+    return type(value).__name__
+
+
+# --- entities --------------------------------------------------------------------------------------
+
+class Publisher:
+    def __init__(self, writer, topic_name):
+        self._writer, self.topic_name = writer, topic_name
+
+    def publish(self, msg):
+        self._writer.write(msg)
+
+    def get_subscription_count(self):
+        return self._writer.get_publication_matched_status().current_count
+
+
+class Subscription:
+    def __init__(self, reader, callback, topic_name):
+        self.reader, self.callback, self.topic_name = reader, callback, topic_name
+        self.condition = ReadCondition(reader, SampleState.NotRead | ViewState.Any
+                                       | InstanceState.Alive)
+
+    def get_publisher_count(self):
+        return self.reader.get_subscription_matched_status().current_count
+
+
+class Timer:
+    """Periodic callback on the steady clock (low-rate work only: diagnostics, set-points)."""
+
+    def __init__(self, period, callback):
+        self.period, self.callback = float(period), callback
+        self.next_due = time.monotonic() + self.period
+        self.cancelled = False
+
+    def cancel(self):
+        self.cancelled = True
+
+
+class Node:
+    """rclpy.node.Node's interface on Cyclone DDS (the subset the bellows nodes use)."""
+
+    def __init__(self, node_name, *, namespace=''):
+        if _context.participant is None:
+            raise RuntimeError('call init() before creating a node')
+        args = _context.args
+        self._name = args.node_name or node_name
+        self._namespace = args.namespace or (namespace if namespace.startswith('/')
+                                             else '/' + namespace if namespace else '/')
+        self._logger = Logger(self._name, args.log_level)
+        self._overrides = self._collect_overrides(args)
+        self._parameters = {}
+        self._subscriptions, self._timers, self._writers = [], [], []
+        self._waitset = WaitSet(_context.participant)
+        self._wakeup = GuardCondition(_context.participant)
+        self._waitset.attach(self._wakeup)
+        self._clock = Clock()
+        if self.declare_parameter('use_sim_time', False).value:
+            self._clock.sim_time = 0
+            self.create_subscription(message_class('rosgraph_msgs/msg/Clock'), '/clock',
+                                     self._on_clock, QoSProfile(depth=1, reliable=False))
+
+    def _collect_overrides(self, args):
+        overrides = {}
+        for path in args.params_files:
+            overrides.update({name: (value, path) for name, value in
+                              params_module.read_file(path, self._name).items()})
+        for node, name, value in args.params:
+            if node is None or node.lstrip('/') == self._name:
+                overrides[name] = (value, '-p')
+        return overrides
+
+    def _on_clock(self, msg):
+        self._clock.sim_time = msg.clock.sec * 1_000_000_000 + msg.clock.nanosec
+
+    # names
+    def get_name(self):
+        return self._name
+
+    def get_namespace(self):
+        return self._namespace
+
+    def resolve_topic_name(self, topic):
+        topic = _context.args.remaps.get(topic, topic)
+        if not topic.startswith('/'):
+            topic = self._namespace.rstrip('/') + '/' + topic
+        return _context.args.remaps.get(topic, topic)
+
+    # parameters
+    def declare_parameter(self, name, value=None, descriptor=None):
+        if name in self._parameters:
+            raise ParameterError(f"parameter '{name}' declared twice")
+        if name in self._overrides:
+            override, source = self._overrides[name]
+            try:
+                value = _coerce(name, value, override)
+            except ParameterError as exc:
+                raise ParameterError(f'{source}: {exc}') from None
+        self._parameters[name] = Parameter(name, value)
+        return self._parameters[name]
+
+    def declare_parameters(self, namespace, parameters):
+        prefix = f'{namespace}.' if namespace else ''
+        return [self.declare_parameter(prefix + name, value) for name, value in parameters]
+
+    def get_parameter(self, name):
+        if name not in self._parameters:
+            raise ParameterError(f"parameter '{name}' is not declared")
+        return self._parameters[name]
+
+    def has_parameter(self, name):
+        return name in self._parameters
+
+    def undeclared_overrides(self):
+        """(name, source) of every given parameter the node did not declare."""
+        return [(name, source) for name, (_, source) in self._overrides.items()
+                if name not in self._parameters]
+
+    # entities
+    def _topic(self, msg_type, topic):
+        resolved = self.resolve_topic_name(topic)
+        key = (resolved, msg_type.__ros_type__)
+        if key not in _context.topics:
+            _context.topics[key] = Topic(_context.participant, 'rt' + resolved, msg_type)
+        return resolved, _context.topics[key]
+
+    def create_publisher(self, msg_type, topic, qos_profile=10):
+        resolved, dds_topic = self._topic(msg_type, topic)
+        writer = DataWriter(_context.participant, dds_topic,
+                            qos=_qos(qos_profile, msg_type.__ros_type__))
+        self._writers.append(writer)
+        return Publisher(writer, resolved)
+
+    def create_subscription(self, msg_type, topic, callback, qos_profile=10):
+        resolved, dds_topic = self._topic(msg_type, topic)
+        reader = DataReader(_context.participant, dds_topic,
+                            qos=_qos(qos_profile, msg_type.__ros_type__))
+        subscription = Subscription(reader, callback, resolved)
+        self._waitset.attach(subscription.condition)
+        self._subscriptions.append(subscription)
+        return subscription
+
+    def create_timer(self, timer_period_sec, callback):
+        timer = Timer(timer_period_sec, callback)
+        self._timers.append(timer)
+        return timer
+
+    def get_logger(self):
+        return self._logger
+
+    def get_clock(self):
+        return self._clock
+
+    def destroy_node(self):
+        self._wakeup.set(True)
+        self._subscriptions, self._timers, self._writers = [], [], []
+
+    # execution
+    def _spin_once(self, timeout_sec):
+        now = time.monotonic()
+        wait = _MAX_WAIT_S if timeout_sec is None else min(timeout_sec, _MAX_WAIT_S)
+        timers = [t for t in self._timers if not t.cancelled]
+        if timers:
+            wait = min(wait, max(0.0, min(t.next_due for t in timers) - now))
+        if wait > 0:
+            self._waitset.wait(duration(seconds=wait))
+        for subscription in self._subscriptions:
+            for sample in subscription.reader.take(N=256, condition=subscription.condition):
+                if not isinstance(sample, InvalidSample):  # instance state changes carry no data
+                    subscription.callback(sample)
+        now = time.monotonic()
+        for timer in timers:
+            if now >= timer.next_due:
+                # Skip missed periods rather than bursting to catch up.
+                timer.next_due += timer.period * max(1, math.floor((now - timer.next_due)
+                                                                   / timer.period) + 1)
+                timer.callback()
+
+
+def spin_once(node, timeout_sec=None):
+    node._spin_once(timeout_sec)
+
+
+def spin(node):
+    """Run callbacks until `shutdown()` (or KeyboardInterrupt on SIGINT, as in rclpy)."""
+    while ok():
+        node._spin_once(None)

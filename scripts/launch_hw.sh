@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# The bellows graph against real hardware (no simulators).
+#
+#   scripts/launch_hw.sh [--actuator-port PORT | --no-actuator] [--can-channel CH | --no-arm]
+#                        [--can-interface IF] [--params FILE] [-- extra --ros-args]
+#
+# Ports default to config/hardware.yaml (the board's /dev/serial/by-id link, socketcan can0).
+# Starts driver_node, model_node and stiffness_controller_node in the background; Ctrl-C stops
+# all of them (trap). A node that cannot start (absent device, bad parameter) stops the launch
+# with its one-line error and exit status 2.
+set -euo pipefail
+top=$(cd "$(dirname "$0")/.." && pwd)
+venv="${BELLOWS_VENV:-$top/.venv}"
+bin="$venv/bin"
+[ -x "$bin/driver_node" ] || bin=$(dirname "$(command -v driver_node)")
+params="$top/config/nodes_hw.yaml"
+logs="$top/out/hw_logs"
+driver=()
+actuator=1
+arm=1
+extra=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --actuator-port) driver+=(-p "actuator.port:=$2"); shift ;;
+    --can-channel) driver+=(-p "arm.channel:=$2"); shift ;;
+    --can-interface) driver+=(-p "arm.interface:=$2"); shift ;;
+    --no-actuator) actuator=0 ;;
+    --no-arm) arm=0 ;;
+    --params) params="$2"; shift ;;
+    --) shift; extra=("$@"); break ;;
+    -h|--help) sed -n '2,11p' "$0"; exit 0 ;;
+    *) echo "launch_hw.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
+  esac
+  shift
+done
+[ "$actuator" = 1 ] || driver+=(-p actuator.enabled:=false)
+[ "$arm" = 1 ] || driver+=(-p arm.enabled:=false)
+mkdir -p "$logs"
+common=(--ros-args --params-file "$params")
+
+pids=()
+cleanup() {
+  trap - EXIT INT TERM
+  # SIGTERM, not SIGINT: a non-interactive shell starts background jobs with SIGINT ignored.
+  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
+  for pid in "${pids[@]}"; do
+    for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+    kill -KILL "$pid" 2>/dev/null || true
+  done
+  wait 2>/dev/null || true
+}
+trap cleanup EXIT
+trap 'exit 130' INT TERM
+
+start() {
+  local name=$1; shift
+  "$bin/$name" "${common[@]}" "$@" "${extra[@]}" >"$logs/$name.log" 2>&1 &
+  pids+=($!)
+  echo "launch_hw: $name (pid $!), log $logs/$name.log" >&2
+}
+
+start driver_node "${driver[@]}"
+# The driver exits within its startup_timeout when a device is absent: report that, not a hang.
+sleep 3
+if ! kill -0 "${pids[0]}" 2>/dev/null; then
+  cat "$logs/driver_node.log" >&2
+  exit 2
+fi
+[ "$arm" = 1 ] && start model_node
+[ "$actuator" = 1 ] && start stiffness_controller_node
+echo "launch_hw: graph running; Ctrl-C to stop" >&2
+wait -n "${pids[@]}" || true
+echo "launch_hw: a node exited; stopping the graph" >&2
+tail -n 3 "$logs"/*.log >&2
+exit 1

@@ -1,0 +1,92 @@
+#!/usr/bin/env bash
+# The whole bellows graph on simulated hardware, plus a short scripted scenario.
+#
+#   scripts/launch_sim.sh [--no-scenario] [--duration S] [--output DIR] [--params FILE]
+#                         [-- extra --ros-args for every node]
+#
+# Starts sim_arm_node (CAN over udp_multicast) and sim_actuator_node (serial on a pty), then
+# driver_node, model_node and stiffness_controller_node, all in the background with their logs in
+# DIR/logs. Then runs scenario_node (stiffness step 1400 -> 1900 N/m, segment_1 pressure
+# excursion to 4 bar): it prints a summary and writes DIR/scenario.png and DIR/scenario.csv, and the
+# graph is stopped. With --no-scenario the graph runs until Ctrl-C. Every process is stopped on
+# exit, Ctrl-C or error (trap). Uses rclpy when it is installed, Cyclone DDS otherwise.
+set -euo pipefail
+top=$(cd "$(dirname "$0")/.." && pwd)
+venv="${BELLOWS_VENV:-$top/.venv}"
+bin="$venv/bin"
+[ -x "$bin/driver_node" ] || bin=$(dirname "$(command -v driver_node)")   # colcon / pip install
+python="${PYTHON:-$venv/bin/python}"
+[ -x "$python" ] || python=python3
+params="$top/config/nodes_sim.yaml"
+output="$top/out/scenario"
+duration=40
+scenario=1
+extra=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --no-scenario) scenario=0 ;;
+    --duration) duration="$2"; shift ;;
+    --output) output="$2"; shift ;;
+    --params) params="$2"; shift ;;
+    --) shift; extra=("$@"); break ;;
+    -h|--help) sed -n '2,13p' "$0"; exit 0 ;;
+    *) echo "launch_sim.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
+  esac
+  shift
+done
+mkdir -p "$output/logs"
+# A private pty link and multicast group per run, so two launches on one machine do not collide.
+port="${TMPDIR:-/tmp}/bellows_sim_actuator_$$"
+group="239.74.163.$(( ($$ % 200) + 20 ))"
+common=(--ros-args --params-file "$params")
+
+pids=()
+cleanup() {
+  trap - EXIT INT TERM
+  # SIGTERM, not SIGINT: a non-interactive shell starts background jobs with SIGINT ignored.
+  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
+  for pid in "${pids[@]}"; do
+    for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+    kill -KILL "$pid" 2>/dev/null || true
+  done
+  wait 2>/dev/null || true
+  rm -f "$port"
+}
+trap cleanup EXIT
+trap 'exit 130' INT TERM
+
+start() {  # start NAME ARGS...: a node in the background, log in $output/logs/NAME.log
+  local name=$1; shift
+  "$bin/$name" "${common[@]}" "$@" "${extra[@]}" >"$output/logs/$name.log" 2>&1 &
+  pids+=($!)
+  echo "launch_sim: $name (pid $!)" >&2
+}
+alive() {  # fail early, naming the node, when one exited (bad parameters, absent device)
+  for pid in "${pids[@]}"; do
+    if ! kill -0 "$pid" 2>/dev/null; then
+      echo "launch_sim: a node exited; logs in $output/logs:" >&2
+      tail -n 3 "$output"/logs/*.log >&2
+      exit 2
+    fi
+  done
+}
+
+start sim_arm_node -p "can.channel:=$group"
+start sim_actuator_node -p "port:=$port"
+for _ in $(seq 50); do [ -e "$port" ] && break; sleep 0.1; done
+alive
+start driver_node -p "arm.channel:=$group" -p "actuator.port:=$port"
+start model_node
+start stiffness_controller_node
+sleep 3
+alive
+
+if [ "$scenario" = 1 ]; then
+  "$python" -m bellows_ros.nodes.scenario_node "${common[@]}" -p "duration:=$duration" \
+    -p "output_dir:=$output" "${extra[@]}"
+  alive
+else
+  echo "launch_sim: graph running; Ctrl-C to stop" >&2
+  wait -n "${pids[@]}"
+  alive
+fi

@@ -1,0 +1,115 @@
+"""Paper B model: geometry, gas law, force/stiffness, calibration against the paper's figures."""
+import math
+
+import numpy as np
+import pytest
+
+from bellows_ros.errors import ParameterError
+from bellows_ros.models.actuator import (estimate_gas, evaluate, evaluate_array, gas_amount,
+                                         load_actuator_params, pressure, rest_length_change,
+                                         stiffness, total_volume, without_bulging)
+from bellows_ros.models.actuator_geometry import P_ATM, volume_geo
+
+PARAMS = load_actuator_params()
+
+
+def test_geometric_volumes_at_rest_match_table_ii():
+    assert volume_geo(PARAMS.chamber, 0.0) * 1e6 == pytest.approx(56.9, abs=0.05)
+    assert volume_geo(PARAMS.spring, 0.0) * 1e6 == pytest.approx(46.0, abs=0.05)
+    # Compression (positive x) shrinks the volume over the working range.
+    assert volume_geo(PARAMS.chamber, 0.02) < volume_geo(PARAMS.chamber, 0.0) < volume_geo(PARAMS.chamber, -0.02)
+
+
+def test_design_point_is_atmospheric():
+    p = pressure(PARAMS, 0.020, 0.0)
+    assert p == pytest.approx(P_ATM, rel=0.002)
+
+
+@pytest.mark.parametrize('params', [PARAMS, without_bulging(PARAMS)], ids=['augmented', 'geometric'])
+def test_gas_law_holds_everywhere(params):
+    rng = np.random.default_rng(0)
+    x_c = rng.uniform(params.chamber.x_min, params.chamber.x_max, 200)
+    x_s = rng.uniform(-0.01, 0.03, 200)
+    gas = rng.uniform(90e3, 110e3, 200)
+    p, _, _ = evaluate_array(params, x_c, x_s, gas)
+    amount = gas_amount(params, gas)
+    assert np.allclose(p * total_volume(params, x_c, x_s, p), amount, rtol=1e-10)
+    # More compression of either bellows means higher pressure.
+    assert np.all(evaluate_array(params, x_c + 1e-3, x_s, gas)[0] > p)
+    assert np.all(evaluate_array(params, x_c, x_s + 1e-3, gas)[0] > p)
+
+
+def test_calibrated_stiffness_reproduces_measured_figures():
+    assert stiffness(PARAMS, -0.020) == pytest.approx(1483.0, rel=0.03)
+    assert stiffness(PARAMS, 0.020) == pytest.approx(1975.0, rel=0.03)
+
+
+def test_pressures_over_the_test_grid_stay_in_the_papers_band():
+    x_c, x_s = np.meshgrid(np.arange(-0.020, 0.0201, 0.005), np.linspace(0.0, 0.020, 21))
+    p, _, _ = evaluate_array(PARAMS, x_c, x_s)
+    assert p.min() > 87e3 and p.max() < 115e3
+
+
+@pytest.mark.parametrize('x_c,x_s', [(-0.02, 0.0), (0.0, 0.006), (0.02, 0.012), (0.045, 0.02)])
+def test_stiffness_is_the_exact_derivative_of_force(x_c, x_s):
+    _, _, k = evaluate(PARAMS, x_c, x_s)
+    h = 1e-7
+    numeric = (evaluate(PARAMS, x_c, x_s + h)[1] - evaluate(PARAMS, x_c, x_s - h)[1]) / (2 * h)
+    assert k == pytest.approx(numeric, rel=1e-5)
+
+
+def test_scalar_and_array_paths_agree():
+    rng = np.random.default_rng(1)
+    x_c = rng.uniform(-0.02, 0.048, 50)
+    x_s = rng.uniform(0.0, 0.03, 50)
+    arrays = np.array(evaluate_array(PARAMS, x_c, x_s, 98000.0))
+    scalars = np.array([evaluate(PARAMS, a, b, 98000.0) for a, b in zip(x_c, x_s)]).T
+    assert np.allclose(arrays, scalars, rtol=1e-12)
+
+
+def test_estimate_gas_recovers_the_amount_from_a_pressure_reading():
+    for gas in (92e3, 101325.0, 108e3):
+        p, _, _ = evaluate(PARAMS, 0.031, 0.007, gas)
+        assert estimate_gas(PARAMS, p, 0.031, 0.007) == pytest.approx(gas, rel=1e-9)
+
+
+def test_stiffness_grows_with_chamber_compression_and_with_gas():
+    x = np.linspace(PARAMS.chamber.x_min, PARAMS.chamber.x_max, 40)
+    k = [stiffness(PARAMS, v) for v in x]
+    assert all(b > a for a, b in zip(k, k[1:]))
+    assert stiffness(PARAMS, 0.0, 105e3) > stiffness(PARAMS, 0.0, 97e3)
+
+
+def test_rest_length_contracts_below_and_extends_above_atmospheric():
+    assert rest_length_change(PARAMS, 90e3) < 0.0 < rest_length_change(PARAMS, 112e3)
+    assert rest_length_change(PARAMS, 90e3) < rest_length_change(PARAMS, 100e3)
+
+
+def test_unknown_parameter_in_user_file_is_named(tmp_path):
+    path = tmp_path / 'p.yaml'
+    path.write_text('/**:\n  ros__parameters:\n    actuator:\n      gas:\n        v_tub: 1.0e-5\n')
+    with pytest.raises(ParameterError, match='v_tub'):
+        load_actuator_params(path)
+
+
+def test_overrides_are_laid_over_the_defaults(tmp_path):
+    path = tmp_path / 'p.yaml'
+    path.write_text('/**:\n  ros__parameters:\n    actuator:\n      gas:\n        v_tube: 3.0e-5\n')
+    params = load_actuator_params(path)
+    assert params.v_tube == 3.0e-5
+    assert params.chamber == PARAMS.chamber
+    # A larger dead volume softens the gas spring.
+    assert stiffness(params, 0.02) < stiffness(PARAMS, 0.02)
+    assert not math.isclose(stiffness(params, 0.02), stiffness(PARAMS, 0.02))
+
+
+def test_geometric_volume_slope_is_the_derivative_of_the_volume():
+    from bellows_ros.models.actuator_geometry import volume_geo_slope
+    for bellows in (PARAMS.chamber, PARAMS.spring):
+        for x in (-0.02, 0.0, 0.015, 0.03):
+            h = 1e-7
+            numeric = (volume_geo(bellows, x + h) - volume_geo(bellows, x - h)) / (2 * h)
+            assert volume_geo_slope(bellows, x) == pytest.approx(numeric, rel=1e-6)
+    # The chamber's end stop sits where its volume peaks: extending further would raise P again.
+    c = PARAMS.chamber
+    assert volume_geo_slope(c, c.x_min) == pytest.approx(0.0, abs=2e-5)

@@ -1,0 +1,51 @@
+"""Stiffness set-point -> compression, with the gas-amount correction (no ROS)."""
+import pytest
+
+from bellows_ros.control.pd import PDController, PDGains
+from bellows_ros.control.stiffness import StiffnessSetpoint
+from bellows_ros.errors import ParameterError
+from bellows_ros.models.actuator import load_actuator_params, stiffness
+from bellows_ros.models.actuator_plant import ActuatorPlant
+from bellows_ros.models.stiffness_map import stiffness_range
+
+PARAMS = load_actuator_params()
+
+
+def test_target_inverts_the_model():
+    k_min, k_max = stiffness_range(PARAMS)
+    k = 0.5 * (k_min + k_max)
+    setpoint = StiffnessSetpoint(PARAMS, gas_time_constant=1.0)
+    assert setpoint.target() is None
+    setpoint.set_stiffness(k)
+    assert stiffness(PARAMS, setpoint.target()) == pytest.approx(k, rel=1e-3)
+
+
+def test_unreachable_setpoint_names_the_range():
+    setpoint = StiffnessSetpoint(PARAMS, gas_time_constant=1.0)
+    with pytest.raises(ParameterError, match='outside the achievable range'):
+        setpoint.set_stiffness(50.0)
+    assert setpoint.k_target is None
+
+
+def test_leak_is_corrected_from_the_measured_pressure():
+    """With air_leak on, the corrected controller holds K; a fixed x_c would drift."""
+    # 3x the YAML's leak: a visible drift in 30 s. wall_bulging makes the plant's volumes those of
+    # the model the controller inverts (E_V on), as on the real actuator.
+    leak = {'air_leak': {'conductance': 3e-11}, 'wall_bulging': {}}
+    k_min, k_max = stiffness_range(PARAMS)
+    k_target = k_min + 0.4 * (k_max - k_min)
+    gains = PDGains(kp=400.0, kd=0.0, velocity_cutoff=50.0, duty_max=0.8, deadband=2e-5)
+    results = {}
+    for corrected in (True, False):
+        plant = ActuatorPlant(PARAMS, effects=leak, noise=False)
+        setpoint = StiffnessSetpoint(PARAMS, gas_time_constant=1.0 if corrected else 1e12)
+        setpoint.set_stiffness(k_target)
+        pd, dt, x = PDController(gains), 2e-3, plant.x_nut
+        for k in range(int(30.0 / dt)):
+            sample = plant.step(dt, pd.update(setpoint.target(), x, dt))
+            x = plant.x_from_counts(sample.encoder_counts)
+            if corrected:
+                setpoint.update_measurement(x, sample.x_s, sample.p, dt)
+        results[corrected] = stiffness(plant.params, plant.x_nut, plant.gas)
+    assert results[True] == pytest.approx(k_target, rel=0.01)
+    assert abs(results[False] - k_target) > 3 * abs(results[True] - k_target)

@@ -1,0 +1,70 @@
+"""The model doctor reads a rosbag2 recording with the DESIGN.md topics and names a hidden effect.
+
+The bag is written here with rosbags' own writer and the ROS 2 Jazzy type store: joint states
+(`air_chamber`, `spring`), chamber pressure (`actuator`) and the spring force (wrench, frame
+`actuator`), each message stamped with its sample time, as the driver node publishes them.
+"""
+import json
+
+import numpy as np
+from rosbags.rosbag2 import Writer
+from rosbags.typesys import Stores, get_typestore
+
+from bellows_ros.cli import main
+from bellows_ros.models.actuator import load_actuator_params
+from bellows_ros.models.actuator_experiments import actuator_record
+
+STORE = get_typestore(Stores.ROS2_JAZZY)
+JOINT_STATE = 'sensor_msgs/msg/JointState'
+WRENCH = 'geometry_msgs/msg/WrenchStamped'
+
+
+def header(t, frame=''):
+    ns = int(round(t * 1e9)) + 5 * 10 ** 9
+    Time = STORE.types['builtin_interfaces/msg/Time']
+    return STORE.types['std_msgs/msg/Header'](stamp=Time(sec=ns // 10 ** 9, nanosec=ns % 10 ** 9),
+                                              frame_id=frame)
+
+
+def joint_state(t, names, position=(), effort=()):
+    return STORE.types[JOINT_STATE](header=header(t), name=list(names),
+                                    position=np.array(position, float), velocity=np.array([], float),
+                                    effort=np.array(effort, float))
+
+
+def wrench(t, force_z):
+    types = STORE.types
+    vector = types['geometry_msgs/msg/Vector3']
+    body = types['geometry_msgs/msg/Wrench'](force=vector(x=0.0, y=0.0, z=force_z),
+                                             torque=vector(x=0.0, y=0.0, z=0.0))
+    return types[WRENCH](header=header(t, 'actuator'), wrench=body)
+
+
+def write_actuator_bag(path, record, every=4):
+    with Writer(path, version=8) as writer:
+        joints = writer.add_connection('/joint_states', JOINT_STATE, typestore=STORE)
+        chambers = writer.add_connection('/bellows/chambers', JOINT_STATE, typestore=STORE)
+        forces = writer.add_connection('/bellows/wrench', WRENCH, typestore=STORE)
+        for k in range(0, len(record['t']), every):
+            t = float(record['t'][k])
+            ns = int(round(t * 1e9)) + 5 * 10 ** 9
+            for connection, message, kind in (
+                    (joints, joint_state(t, ('air_chamber', 'spring'),
+                                         position=(record['x_c'][k], record['x_s'][k])), JOINT_STATE),
+                    (chambers, joint_state(t, ('actuator',), effort=(record['p'][k],)), JOINT_STATE),
+                    (forces, wrench(t, float(record['f'][k])), WRENCH)):
+                writer.write(connection, ns, STORE.serialize_cdr(message, kind))
+
+
+def test_names_a_hidden_effect_from_a_rosbag2(tmp_path):
+    params = load_actuator_params()
+    record = actuator_record(params, {'backlash': {'width': 4e-4}}, seed=41, duration=30.0)
+    bag = tmp_path / 'recording'
+    write_actuator_bag(bag, record)
+    report_dir = tmp_path / 'report'
+    assert main(['diagnose', 'actuator', str(bag), '--report', str(report_dir), '--quiet']) == 0
+    report = json.loads((report_dir / 'report.json').read_text())
+    assert report['cause'] == 'backlash'
+    assert report['gain'] >= 0.30
+    width = next(c for c in report['candidates'] if c['cause'] == 'backlash')['params']['width']
+    assert abs(width - 4e-4) < 1.5e-4

@@ -1,0 +1,63 @@
+"""Acceptance: a node started with a missing device, a bad YAML or an unknown parameter exits with
+status 2 and one line on stderr naming the problem."""
+import os
+import random
+import subprocess
+import sys
+from pathlib import Path
+
+
+BIN = Path(sys.executable).parent
+CONFIG = Path(__file__).resolve().parent.parent / 'config' / 'nodes_sim.yaml'
+
+
+def run(node, args, tmp_path):
+    env = dict(os.environ, ROS_DOMAIN_ID=str(random.randint(181, 200)), BELLOWS_RUNTIME='dds')
+    return subprocess.run([str(BIN / node), '--ros-args', *args], capture_output=True, text=True,
+                          timeout=60, env=env, cwd=tmp_path)
+
+
+def check(result, *fragments):
+    assert result.returncode == 2, result.stderr
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    for fragment in fragments:
+        assert fragment in lines[0], lines[0]
+
+
+def test_missing_serial_device(tmp_path):
+    port = tmp_path / 'no_such_board'
+    result = run('driver_node', ['-p', 'actuator.enabled:=true', '-p', f'actuator.port:={port}'],
+                 tmp_path)
+    check(result, 'driver_node: error:', f'actuator board port {port} does not exist')
+
+
+def test_silent_can_bus(tmp_path):
+    group = f'239.74.165.{random.randint(2, 250)}'  # nobody simulates an arm on this group
+    result = run('driver_node', ['-p', 'arm.enabled:=true', '-p', 'arm.interface:=udp_multicast',
+                                 '-p', f'arm.channel:={group}', '-p', 'startup_timeout:=0.5'],
+                 tmp_path)
+    check(result, f'no arm samples on udp_multicast:{group} within 0.5 s')
+
+
+def test_bad_yaml_names_file_and_line(tmp_path):
+    bad = tmp_path / 'bad.yaml'
+    bad.write_text('model_node:\n  ros__parameters:\n    segments: [1, 2\n')
+    check(run('model_node', ['--params-file', str(bad)], tmp_path), f'{bad}:')
+
+
+def test_unknown_parameter(tmp_path):
+    check(run('model_node', ['--params-file', str(CONFIG), '-p', 'segmnets:=[1]'], tmp_path),
+          "unknown parameter 'segmnets' for node 'model_node'")
+
+
+def test_unknown_parameter_in_the_node_section(tmp_path):
+    wrong = tmp_path / 'wrong.yaml'
+    wrong.write_text('stiffness_controller_node:\n  ros__parameters:\n    pd:\n      kq: 1.0\n')
+    check(run('stiffness_controller_node', ['--params-file', str(wrong)], tmp_path),
+          f"{wrong}: unknown parameter 'pd.kq'")
+
+
+def test_bad_identified_parameters_file(tmp_path):
+    check(run('model_node', ['-p', f'params_file:={tmp_path / "missing.yaml"}'], tmp_path),
+          'missing.yaml')

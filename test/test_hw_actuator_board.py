@@ -1,0 +1,201 @@
+"""Actuator-board driver against the simulated board over a real pty (pyserial on the slave side).
+
+These run real 1 kHz threads on a shared machine: they assert counts and ratios, never durations;
+every wait is bounded by `wait_for`.
+"""
+import dataclasses
+import logging
+import math
+import time
+
+import pytest
+import serial
+
+from bellows_ros.hardware import serial_protocol as sp
+from bellows_ros.hardware.actuator_board import ActuatorBoard, load_config
+from bellows_ros.hardware.faults import Faults
+from bellows_ros.hardware.sim_actuator_board import ActuatorState, SimActuatorBoard
+
+CONFIG = load_config()
+
+
+class Plant:
+    """A deterministic stand-in for the actuator plant: the chamber moves at 20 mm/s per unit duty;
+    pressure, spring position and force vary with time so that every frame carries new values."""
+
+    def __init__(self, x_c=0.0):
+        self.x_c, self.t = x_c, 0.0
+
+    def __call__(self, dt, duty):
+        self.t += dt
+        self.x_c += 0.02 * duty * dt
+        p = 101325.0 + 2e6 * self.x_c + 800.0 * math.sin(20 * self.t)
+        return ActuatorState(x_c=self.x_c, p=p,
+                             x_s=0.004 + 0.002 * math.sin(3 * self.t),
+                             f=6.0 + 3.0 * math.sin(3 * self.t))
+
+
+def wait_for(condition, timeout=5.0):
+    """Poll `condition` until true or `timeout` s (a bound, not an assertion about speed)."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if condition():
+            return True
+        time.sleep(0.005)
+    return condition()
+
+
+@pytest.fixture
+def rig(request):
+    made = []
+
+    def make(plant=None, faults=None, record=False, on_sample=None, driver=True, **config):
+        sim = SimActuatorBoard(plant or Plant(), config=CONFIG, faults=faults, record=record)
+        sim.start()
+        made.append(sim)
+        if not driver:
+            return sim, None
+        board = ActuatorBoard(dataclasses.replace(CONFIG, port=sim.port, **config), on_sample)
+        made.append(board)
+        assert wait_for(lambda: board.latest() is not None), 'no telemetry from the simulated board'
+        return sim, board
+
+    yield make
+    for thing in reversed(made):
+        thing.close()
+
+
+def test_ten_seconds_with_one_percent_corruption_delivers_only_true_values(rig):
+    received = []
+    sim, board = rig(faults=Faults(corrupt_rate=0.01, seed=4), record=True,
+                     on_sample=received.append)
+    # 10 s of telemetry: 10 000 frames, however long a loaded machine takes to send them.
+    assert wait_for(lambda: sim.stats.count >= 10000, timeout=60.0)
+    sim.stop()
+    time.sleep(0.2)  # let the driver read what is still in the pty
+    counts = board.counters()
+    first, last = received[0].index, received[-1].index
+    span = last - first + 1
+    wrong = 0
+    for sample in received:
+        sent = sim.sent.get(sample.index)
+        got = (sample.encoder_counts, sample.p, sample.x_s, sample.f, sample.status)
+        if sent is None or got != (sent.encoder_counts, float(sent.pressure_pa),
+                                   sent.spring_um * 1e-6, sent.force_mn * 1e-3, sent.status):
+            wrong += 1
+    assert span > 9000  # the driver listened from (almost) the first frame
+    assert wrong == 0
+    assert len(received) / span >= 0.98
+    assert counts['dropped'] == span - len(received)     # every missing frame shows as a gap
+    assert counts['crc_errors'] + counts['framing_errors'] > 0
+    corrupted = sim.counters()['corrupted']
+    assert counts['crc_errors'] + counts['framing_errors'] >= 0.5 * corrupted
+
+
+def test_port_vanishing_and_coming_back_reconnects_and_says_so(rig, caplog):
+    caplog.set_level(logging.INFO, logger='bellows_ros.hardware.actuator_board')
+    sim, board = rig()
+    sim.unplug()
+    assert wait_for(lambda: not board.connected)
+    assert wait_for(lambda: board.stale and board.latest() is None)
+    assert board.send_duty(0.5) == 0.0   # never drive blind
+    sim.replug()
+    assert wait_for(lambda: board.counters()['reconnects'] == 1 and board.latest() is not None)
+    assert board.connected
+    assert board.counters()['disconnects'] == 1
+    messages = [r.getMessage() for r in caplog.records]
+    assert any('lost' in m for m in messages)
+    assert any('reconnected' in m for m in messages)
+
+
+def test_watchdog_stops_the_motor_when_commands_stop(rig):
+    sim, board = rig()
+    end = time.monotonic() + 0.3
+    while time.monotonic() < end:
+        board.send_duty(0.3)
+        time.sleep(0.01)
+    assert sim.duty == pytest.approx(0.3, abs=1e-4)
+    assert board.counters()['watchdog_stops'] == 0
+    assert wait_for(lambda: sim.duty == 0.0)   # nobody commands any more
+    assert board.counters()['watchdog_stops'] == 1
+
+
+def test_duty_is_clamped_and_invalid_duty_stops(rig):
+    sim, board = rig()
+    assert board.send_duty(1.0) == CONFIG.duty_max
+    assert wait_for(lambda: sim.duty == pytest.approx(CONFIG.duty_max, abs=1e-4))
+    assert board.send_duty(-3.0) == -CONFIG.duty_max
+    assert board.send_duty(float('nan')) == 0.0
+    assert wait_for(lambda: sim.duty == 0.0)
+    counts = board.counters()
+    assert counts['duty_clamps'] == 2 and counts['duty_invalid'] == 1
+
+
+def test_motor_stops_at_the_end_stop_and_may_only_back_away(rig):
+    sim, board = rig(plant=Plant(x_c=CONFIG.x_c_max - 0.0005))  # 0.5 mm from the high stop
+    assert board.send_duty(0.5) == 0.5
+    assert wait_for(lambda: board.counters()['end_stop_stops'] >= 1)
+    assert wait_for(lambda: sim.duty == 0.0)
+    # The reported position is quantised to one encoder count.
+    assert board.latest().x_c >= CONFIG.x_c_max - CONFIG.metres_per_count
+    assert board.send_duty(0.5) == 0.0            # further into the stop: refused
+    assert board.send_duty(-0.5) == -0.5          # away from it: allowed
+
+
+def test_board_stops_on_its_own_when_heartbeats_stop(rig):
+    sim, _ = rig(driver=False)
+    port = serial.Serial(sim.port, timeout=0.05)
+    try:
+        port.write(sp.encode(sp.MotorCommand(1, sp.duty_to_q15(0.5))))
+        assert wait_for(lambda: sim.duty == pytest.approx(0.5, abs=1e-4))
+        assert wait_for(lambda: sim.duty == 0.0)   # no heartbeat follows
+        assert sim.counters()['heartbeat_stops'] == 1
+        decoder = sp.FrameDecoder()
+        port.reset_input_buffer()
+        frames = []
+        assert wait_for(lambda: frames.extend(decoder.feed(port.read(256))) or len(frames) > 3)
+        assert all(f.status & sp.HEARTBEAT_LOST for f in frames)
+    finally:
+        port.close()
+
+
+def test_silent_board_goes_stale_and_comes_back(rig):
+    sim, board = rig()
+    sim.faults.silent = True
+    assert wait_for(lambda: board.stale)
+    assert board.latest() is None
+    assert board.send_duty(0.2) == 0.0
+    assert board.counters()['stale_stops'] >= 1
+    sim.faults.silent = False
+    assert wait_for(lambda: board.latest() is not None)
+
+
+def test_stuck_sensor_repeats_its_value_while_the_rest_moves(rig):
+    received = []
+    sim, board = rig(on_sample=received.append)
+    sim.faults.stuck = True
+    time.sleep(0.05)
+    start = len(received)
+    assert wait_for(lambda: len(received) > start + 100)
+    window = received[start + 5:]
+    assert len({s.p for s in window}) == 1
+    assert len({s.f for s in window}) > 10
+
+
+def test_a_failing_callback_is_counted_and_reading_goes_on(rig):
+    def broken(sample):
+        raise RuntimeError('bug in the consumer')
+    sim, board = rig(on_sample=broken)
+    before = board.counters()['samples']
+    assert wait_for(lambda: board.counters()['samples'] > before + 50)
+    assert board.counters()['callback_errors'] > 50
+    assert board.latest() is not None
+
+
+def test_dropped_frames_show_as_sequence_gaps_not_as_errors(rig):
+    sim, board = rig(faults=Faults(drop_rate=0.05, seed=1))
+    assert wait_for(lambda: board.counters()['samples'] >= 1000, timeout=60.0)
+    counts = board.counters()
+    assert counts['dropped'] >= 0.5 * sim.counters()['dropped'] > 0
+    assert counts['dropped'] <= sim.counters()['dropped'] + sim.counters()['tx_overflow']
+    assert counts['crc_errors'] == counts['framing_errors'] == 0

@@ -1,0 +1,143 @@
+"""`bellows record` -> rosbag2 (MCAP) -> `data.read_table`, and the bag reader's alignment/errors."""
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from rosbags.rosbag2 import Reader, Writer
+from rosbags.typesys import Stores, get_typestore
+
+from bellows_ros.data import read_table
+from bellows_ros.errors import DataError
+from bellows_ros.runtime import dds_node
+from bellows_ros.runtime.messages import msg, to_typestore
+
+DOMAIN = '193'
+STORE = get_typestore(Stores.ROS2_JAZZY)
+BELLOWS = str(Path(sys.executable).with_name('bellows'))
+
+
+def stamp(ns):
+    return msg.Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+
+
+def segment_messages(k, t_ns):
+    """Sample k of a synthetic segment recording; values are simple functions of k."""
+    joints = msg.JointState(name=['segment_1'], position=[0.001 * k], velocity=[0.5])
+    chambers = msg.JointState(name=['segment_1/chain_1', 'segment_1/chain_2'],
+                              effort=[2e5 + k, 1e5])
+    wrench = msg.WrenchStamped()
+    wrench.wrench.torque.z = -0.01 * k
+    wrench.header.frame_id = 'segment_1'
+    for m in (joints, chambers, wrench):
+        m.header.stamp = stamp(t_ns)
+    return {'/joint_states': joints, '/bellows/chambers': chambers, '/bellows/wrench': wrench}
+
+
+def test_record_then_read_back(tmp_path, monkeypatch):
+    monkeypatch.setenv('ROS_DOMAIN_ID', DOMAIN)
+    output = tmp_path / 'bag'
+    recorder = subprocess.Popen(
+        [BELLOWS, 'record', '--output', str(output), '--duration', '4',
+         '--topics', '/joint_states', '/bellows/chambers', '/bellows/wrench'],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        env=dict(os.environ, ROS_DOMAIN_ID=DOMAIN))
+    try:
+        dds_node.init([])
+        node = dds_node.Node('synthetic_driver')
+        publishers = {topic: node.create_publisher(type(m), topic, 200)
+                      for topic, m in segment_messages(0, 0).items()}
+        end = time.monotonic() + 10
+        while any(p.get_subscription_count() == 0 for p in publishers.values()):
+            assert time.monotonic() < end, 'recorder never subscribed'
+            time.sleep(0.02)
+        start = 1_700_000_000 * 1_000_000_000
+        for k in range(300):
+            for topic, message in segment_messages(k, start + k * 1_000_000).items():
+                publishers[topic].publish(message)
+            time.sleep(0.001)
+        out, err = recorder.communicate(timeout=20)
+    finally:
+        dds_node.shutdown()
+        if recorder.poll() is None:
+            recorder.kill()
+    assert recorder.returncode == 0, err
+    assert '/joint_states: 300 messages' in out
+    assert list(output.glob('*.mcap'))
+    with Reader(output) as reader:
+        assert reader.message_count == 900
+    table = read_table(output, 'segment')
+    k = np.arange(300)
+    np.testing.assert_allclose(table['t'], k * 1e-3, atol=1e-12)
+    np.testing.assert_allclose(table['psi'], 0.001 * k)
+    np.testing.assert_allclose(table['psi_dot'], 0.5)
+    np.testing.assert_allclose(table['p1'], 2e5 + k)
+    np.testing.assert_allclose(table['p2'], 1e5)
+    np.testing.assert_allclose(table['tau_ext'], -0.01 * k)
+
+
+def write_bag(path, messages, storage='sqlite3'):
+    """messages: list of (topic, message). Written with rosbags' own writer (sqlite3 storage)."""
+    with Writer(path, version=8) as writer:
+        connections = {}
+        for i, (topic, message) in enumerate(messages):
+            ros_type = type(message).__ros_type__
+            if topic not in connections:
+                connections[topic] = writer.add_connection(topic, ros_type, typestore=STORE)
+            writer.write(connections[topic], i,
+                         STORE.serialize_cdr(to_typestore(message), ros_type))
+
+
+def test_actuator_zero_order_hold_on_sqlite3(tmp_path):
+    base = 10 * 1_000_000_000
+    messages = []
+    for k in range(10):  # joints at 1 kHz, pressure at 500 Hz, force at 250 Hz
+        joints = msg.JointState(name=['air_chamber', 'spring'], position=[0.02, 0.001 * k])
+        joints.header.stamp = stamp(base + k * 1_000_000)
+        messages.append(('/joint_states', joints))
+        # The arm's messages on the same topics must be ignored for the actuator table.
+        arm = msg.JointState(name=['segment_1'], position=[9.0])
+        arm.header.stamp = stamp(base + k * 1_000_000 + 10)
+        messages.append(('/joint_states', arm))
+        if k % 2 == 0:
+            chambers = msg.JointState(name=['actuator'], effort=[1e5 + k])
+            chambers.header.stamp = stamp(base + k * 1_000_000)
+            messages.append(('/bellows/chambers', chambers))
+        if k % 4 == 1:
+            wrench = msg.WrenchStamped()
+            wrench.header.frame_id, wrench.wrench.force.z = 'actuator', float(k)
+            wrench.header.stamp = stamp(base + k * 1_000_000)
+            messages.append(('/bellows/wrench', wrench))
+    write_bag(tmp_path / 'bag', messages)
+    table = read_table(tmp_path / 'bag', 'actuator')
+    assert len(table) == 10 and table.line(0) is None
+    np.testing.assert_allclose(table['x_s'], 0.001 * np.arange(10))
+    np.testing.assert_allclose(table['p'], 1e5 + np.array([0, 0, 2, 2, 4, 4, 6, 6, 8, 8]))
+    # force before its first message takes the first one (nearest), then holds.
+    np.testing.assert_allclose(table['f'], [1, 1, 1, 1, 1, 5, 5, 5, 5, 9])
+
+
+def test_missing_topic_is_a_clear_error(tmp_path):
+    joints = msg.JointState(name=['air_chamber', 'spring'], position=[0.0, 0.0])
+    chambers = msg.JointState(name=['actuator'], effort=[1e5])
+    write_bag(tmp_path / 'bag', [('/joint_states', joints), ('/bellows/chambers', chambers)])
+    with pytest.raises(DataError, match="no messages on /bellows/wrench with frame_id 'actuator'"):
+        read_table(tmp_path / 'bag', 'actuator')
+    with pytest.raises(DataError, match='no messages on /joint_states with joint\\(s\\) segment_1'):
+        read_table(tmp_path / 'bag', 'segment')
+
+
+def test_record_rejects_bad_arguments(tmp_path):
+    (tmp_path / 'exists').mkdir()
+    for args, message in ((['--output', str(tmp_path / 'exists')], 'already exists'),
+                          (['--output', str(tmp_path / 'b'), '--topics', '/nope'],
+                           "unknown topic '/nope'"),
+                          (['--output', str(tmp_path / 'b'), '--duration', '-1'],
+                           'must be positive')):
+        result = subprocess.run([BELLOWS, 'record', *args], capture_output=True, text=True,
+                                timeout=30)
+        assert result.returncode == 2 and message in result.stderr, result.stderr
+        assert len(result.stderr.strip().splitlines()) == 1

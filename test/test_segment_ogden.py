@@ -1,0 +1,95 @@
+"""Ogden material (14, 15) and the free-membrane strain solve (22) against a 60-digit reference.
+
+Reference: bisection on e = λ1 - 1 in Python's `decimal` at 60 significant digits (mpmath is not
+installed in .venv), 240 halvings of a bracket [0, load/Σμ] that is valid because T(λ) ≥ Σμ(λ - 1/λ)
+... ≥ Σμ (λ - 1) for γ ≥ 2 — so the reference is exact to far below 1e-15 relative.
+"""
+import math
+from decimal import Decimal, localcontext
+
+import pytest
+
+from bellows_ros.models.ogden import energy, free_strain, stress, stress_slope
+
+
+def reference_strain(load, mu, gamma):
+    with localcontext() as ctx:
+        ctx.prec = 60
+        load = Decimal(load)
+        mu = [Decimal(m) for m in mu]
+        gamma = [Decimal(g) for g in gamma]
+
+        def residual(e):
+            log_lam = (1 + e).ln()
+            return sum(m * (((g - 1) * log_lam).exp() - ((-g - 1) * log_lam).exp())
+                       for m, g in zip(mu, gamma)) - load
+        lo, hi = Decimal(0), load / sum(mu)
+        assert residual(hi) >= 0
+        for _ in range(240):
+            mid = (lo + hi) / 2
+            if residual(mid) > 0:
+                hi = mid
+            else:
+                lo = mid
+        return (lo + hi) / 2  # λ1 - 1
+
+
+MATERIALS = [((4000.0, 400.0), (2.5, 6.0)), ((2.0e4, 10.0), (2.000001, 11.5)),
+             ((1.0, 1.0e5), (3.0, 2.0000001))]
+LOADS = [1e-12, 1e-6, 1.0, 350.0, 2.6e4, 1e7, 1e12, 6.5e5 * 1e3]  # N/m: tiny to huge radii
+
+
+@pytest.mark.parametrize('mu, gamma', MATERIALS)
+@pytest.mark.parametrize('load', LOADS)
+def test_free_strain_matches_high_precision_reference(load, mu, gamma):
+    exact = reference_strain(load, mu, gamma)
+    lam = free_strain(load, mu[0], mu[1], gamma[0], gamma[1])
+    assert lam == pytest.approx(1.0 + float(exact), rel=1e-10)
+    # the answer satisfies (22) (checked where T's own cancellation near λ = 1 allows it)
+    if lam > 1.01:
+        assert stress(lam, mu, gamma) == pytest.approx(load, rel=1e-9)
+
+
+@pytest.mark.parametrize('guess', [1.0, 1.0000001, 1.3, 50.0, 1e9])
+def test_free_strain_independent_of_warm_start(guess):
+    mu, gamma = (4000.0, 400.0), (2.5, 6.0)
+    cold = free_strain(2.6e4, *mu, *gamma)
+    assert free_strain(2.6e4, *mu, *gamma, guess=guess) == pytest.approx(cold, rel=1e-13)
+
+
+@pytest.mark.parametrize('mu, gamma', MATERIALS)
+@pytest.mark.parametrize('load', [1e-12, 1e-6, 1.0, 350.0])
+def test_stretch_minus_one_is_accurate_too(load, mu, gamma):
+    # the solver works in ln λ1 with expm1, so λ1 - 1 keeps its relative precision for tiny loads;
+    # λ1 - 1 is recovered from the returned λ1 only to ~1e-16/(λ1 - 1), hence the tolerance
+    exact = float(reference_strain(load, mu, gamma))
+    lam = free_strain(load, mu[0], mu[1], gamma[0], gamma[1])
+    assert lam - 1.0 == pytest.approx(exact, rel=max(1e-10, 4e-16 / exact))
+
+
+def test_tiny_loads_keep_relative_precision_of_the_stretch():
+    mu, gamma = (4000.0, 400.0), (2.5, 6.0)
+    load = 1e-9
+    slope_at_one = 2.0 * sum(m * g for m, g in zip(mu, gamma))  # T'(1)
+    assert free_strain(load, *mu, *gamma) - 1.0 == pytest.approx(load / slope_at_one, rel=1e-6)
+    assert float(reference_strain(load, mu, gamma)) == pytest.approx(load / slope_at_one, rel=1e-6)
+
+
+@pytest.mark.parametrize('load', [0.0, -1.0, -6.5e5 * 0.05, -1e300])
+def test_vented_or_sucked_membrane_is_unstretched(load):
+    assert free_strain(load, 4000.0, 400.0, 2.5, 6.0) == 1.0
+
+
+def test_nan_load_gives_nan_not_a_number():
+    assert math.isnan(free_strain(float('nan'), 4000.0, 400.0, 2.5, 6.0))
+
+
+def test_stress_is_the_derivative_of_the_energy_and_slope_its_derivative():
+    mu, gamma = (4000.0, 400.0), (2.5, 6.0)
+    for lam in (1.0, 1.05, 1.4, 2.5):
+        h = 1e-6
+        assert stress(lam, mu, gamma) == pytest.approx(
+            (energy(lam + h, mu, gamma) - energy(lam - h, mu, gamma)) / (2 * h), rel=1e-6, abs=1e-6)
+        assert stress_slope(lam, mu, gamma) == pytest.approx(
+            (stress(lam + h, mu, gamma) - stress(lam - h, mu, gamma)) / (2 * h), rel=1e-6)
+    assert energy(1.0, mu, gamma) == 0.0 and stress(1.0, mu, gamma) == 0.0
