@@ -12,6 +12,8 @@
 # exit, Ctrl-C or error (trap). Uses rclpy when it is installed, Cyclone DDS otherwise.
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
+# From a checkout, set up first (idempotent: a no-op once done). A colcon install has no setup.py.
+if [ -f "$top/setup.py" ]; then "$top/scripts/setup.sh"; fi
 venv="${BELLOWS_VENV:-$top/.venv}"
 bin="$venv/bin"
 [ -x "$bin/driver_node" ] || bin=$(dirname "$(command -v driver_node)")   # colcon / pip install

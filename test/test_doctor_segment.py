@@ -26,7 +26,7 @@ EFFECTS = {
 }
 # Held-out gain each hidden effect must reach (see docs/doctor.md for natural_curvature's).
 MIN_GAIN = {'contact_hysteresis': 0.30, 'pressure_friction': 0.30, 'sensor_lag': 0.30,
-            'natural_curvature': 0.05}
+            'natural_curvature': 0.20}
 
 
 def random_params(rng):

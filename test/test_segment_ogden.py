@@ -93,3 +93,16 @@ def test_stress_is_the_derivative_of_the_energy_and_slope_its_derivative():
         assert stress_slope(lam, mu, gamma) == pytest.approx(
             (stress(lam + h, mu, gamma) - stress(lam - h, mu, gamma)) / (2 * h), rel=1e-6)
     assert energy(1.0, mu, gamma) == 0.0 and stress(1.0, mu, gamma) == 0.0
+
+
+from hypothesis import given, settings, strategies as st  # noqa: E402
+
+
+@settings(max_examples=30, deadline=None)
+@given(log_load=st.floats(-12.0, 12.0), log_mu1=st.floats(0.0, 5.0), log_mu2=st.floats(0.0, 5.0),
+       gamma1=st.floats(2.0, 12.0, exclude_min=True), gamma2=st.floats(2.0, 12.0, exclude_min=True))
+def test_any_admissible_input_is_solved_to_1e10(log_load, log_mu1, log_mu2, gamma1, gamma2):
+    load, mu = 10.0 ** log_load, (10.0 ** log_mu1, 10.0 ** log_mu2)
+    lam = free_strain(load, mu[0], mu[1], gamma1, gamma2)
+    assert math.isfinite(lam) and lam >= 1.0
+    assert lam == pytest.approx(1.0 + float(reference_strain(load, mu, (gamma1, gamma2))), rel=1e-10)

@@ -12,7 +12,7 @@ from bellows_ros.models.segment import SegmentModel, load_segment_params
 TARGET = 20e-6
 
 
-def _inputs(params, count=4000):
+def _inputs(count=4000):
     """One cycle of (psi, psi_dot, p1, p2): chain 1 at 4 bar, chain 2 at 1.5 bar, Ψ swinging ±1.3 rad."""
     rows = []
     for k in range(count):
@@ -54,7 +54,7 @@ def _cycling(step, rows):
 
 def run(quick=False):
     params = load_segment_params()
-    rows = _inputs(params)
+    rows = _inputs()
     calls = 20_000 if quick else 200_000
     model = SegmentModel(params)
     reference = timing('segment: previous model (34) step', _cycling(previous_step(params), rows), calls)

@@ -13,7 +13,7 @@ import numpy as np
 
 from bellows_ros import data
 from bellows_ros.errors import DataError
-from bellows_ros.identify.segment import fit_segment
+from bellows_ros.identify.segment import MIN_RATE_PER_CUTOFF, fit_segment
 from bellows_ros.models.segment import load_segment_params, simulate_model, velocity
 from bellows_ros.models.segment_plant import SegmentPlant, check_effects
 
@@ -73,6 +73,18 @@ def _run_plant(params, effects, table):
     return outputs
 
 
+def _filter_summary(fit, params):
+    """One line: which input low-pass the fit (and the fitted model's prediction) used."""
+    wanted = params.identify_input_cutoff
+    if fit.input_cutoff is not None:
+        return (f'inputs p1, p2, psi, psi_dot low-passed at {fit.input_cutoff:g} Hz (zero-phase '
+                f'Butterworth, data at {fit.rate:.4g} Hz); tau_ext not filtered')
+    if not wanted:
+        return 'inputs not filtered (segment.identify.input_cutoff = 0)'
+    return (f'inputs NOT filtered: data at {fit.rate:.4g} Hz is below {MIN_RATE_PER_CUTOFF:g} x the '
+            f'segment.identify.input_cutoff of {wanted:g} Hz')
+
+
 def identify(args):
     """Fit paper A's model to DATA, write the parameters, print held-out errors of both models."""
     params = load_segment_params(args.params)
@@ -84,14 +96,17 @@ def identify(args):
     fit = fit_segment(params, record, seed=args.seed, progress=not args.quiet)
     header = (f'bellows identify segment {args.data}\n'
               f'held-out RMSE {fit.heldout["model"][0]:.4g} N·m (previous model '
-              f'{fit.heldout["previous"][0]:.4g} N·m) on the last {fit.heldout_rows} rows')
+              f'{fit.heldout["previous"][0]:.4g} N·m) on the last {fit.heldout_rows} rows; '
+              f'{_filter_summary(fit, params)}')
     from bellows_ros.params import write_file
     write_file(args.output, fit.params.flat(), header=header)
     mu, gamma = fit.params.ogden_mu, fit.params.ogden_gamma
     print(f'fitted: mu = [{mu[0]:.6g}, {mu[1]:.6g}] N/m, gamma = [{gamma[0]:.4g}, {gamma[1]:.4g}], '
           f'c_psi0 = {fit.params.restoring_c_psi0:.4g}, c_psi0_p = {fit.params.restoring_c_psi0_p:.4g} rad '
           f'({fit.evaluations} evaluations)')
-    print(f'held-out error on the last {fit.heldout_rows} of {fit.train_rows + fit.heldout_rows} rows:')
+    print(_filter_summary(fit, params))
+    print(f'held-out error on the last {fit.heldout_rows} of {fit.train_rows + fit.heldout_rows} rows '
+          f'(against the raw measured tau_ext):')
     print(f'  {"model":<34} {"RMSE N·m":>10} {"MAE N·m":>10}')
     print(f'  {"paper A (29) with strain memory":<34} {fit.heldout["model"][0]:10.4f} {fit.heldout["model"][1]:10.4f}')
     print(f'  {"previous model (34), refitted":<34} {fit.heldout["previous"][0]:10.4f} {fit.heldout["previous"][1]:10.4f}')

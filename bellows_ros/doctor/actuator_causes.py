@@ -83,10 +83,18 @@ def bulged(params, e):
                                spring=dataclasses.replace(params.spring, e_v=tuple(spring)))
 
 
-def predict(params, causes, values, x_c, x_s, dt):
+def geometric_volumes(params, x_c, x_s):
+    """V_geo,c(x_c), V_geo,s(x_s) (arrays) and V_geo at the design point (4), m³: everything of the
+    volume that the fitted parameters do not change, computed once per record."""
+    design = volume_geo(params.chamber, params.x_c_ref) + volume_geo(params.spring, 0.0)
+    return volume_geo(params.chamber, x_c), volume_geo(params.spring, x_s), design
+
+
+def predict(params, causes, values, x_c, x_s, dt, geometry=None):
     """Pressure the extended model predicts at the sensor (Pa) over a record.
 
-    `values`: physical parameters {cause: {name: value}} plus 'baseline': {'p_ref', 'v_tube'}.
+    `values`: physical parameters {cause: {name: value}} plus 'baseline': {'p_ref', 'v_tube'};
+    `geometry`: `geometric_volumes(params, x_c, x_s)` if already computed.
     Only the inputs x_c, x_s enter: no measured pressure, so nothing of the held-out output leaks in.
     """
     base = values['baseline']
@@ -95,36 +103,32 @@ def predict(params, causes, values, x_c, x_s, dt):
         e = values['wall_bulging']
         model = bulged(model, [e['e_q'], e['e_dq_chamber'], e['e_dq_spring'], e['e_dd_chamber'],
                                e['e_dd_spring']])
+    v_c, v_s, design = geometry or geometric_volumes(params, x_c, x_s)
     if 'backlash' in causes:
         x_c = play(x_c, values['backlash']['width'])
+        v_c = volume_geo(params.chamber, x_c)
+    volume = v_c + v_s + model.v_tube
+    n0 = model.p_ref * (design + model.v_tube)   # gas amount N = P V of the sealed gas (17)
     gas = np.ones(len(x_c))  # gas amount (times temperature), relative to the sealed amount
     if 'heat_exchange' in causes or 'air_leak' in causes:
-        volume = total_geometric_volume(model, x_c, x_s, model.v_tube)
         temperature = np.ones(len(x_c))
         if 'heat_exchange' in causes:
             h = values['heat_exchange']
             temperature = np.exp(relax(-(h['gamma'] - 1.0) * np.log(volume), dt, h['time_constant']))
         gas = temperature
         if 'air_leak' in causes:
-            # N_{k+1} = N_k - dt C P_k (N_k T_k / V_k - P_atm), with N relative to N_0
-            # The flow's pressure factor is taken from the sealed gas (second order in the leak).
-            n0 = model.p_ref * total_geometric_volume(model, model.x_c_ref, 0.0, model.v_tube)
+            # N_{k+1} = N_k - dt C P_k (N_k T_k / V_k - P_atm), with N relative to N_0; the flow's
+            # pressure factor P_k is taken from the sealed gas (second order in the leak).
             flow = dt * values['air_leak']['conductance'] * n0 * temperature / volume
             amount = recurrence(1.0 - flow * temperature / volume, flow * P_ATM / n0, 1.0)
             gas = temperature * amount
     if 'wall_bulging' in causes:
         p = pressure(model, x_c, x_s, gas=model.p_ref * gas)
     else:
-        p = _pressure_geometric(model, x_c, x_s, gas)
+        p = n0 * gas / volume
     if 'sensor_lag' in causes:
         p = lag(p, dt, values['sensor_lag']['time_constant'])
     return p
-
-
-def _pressure_geometric(model, x_c, x_s, gas):
-    """(17) without E_V: P = N / V, the gas amount N scaled by `gas`."""
-    n0 = model.p_ref * total_geometric_volume(model, model.x_c_ref, 0.0, model.v_tube)
-    return n0 * gas / total_geometric_volume(model, x_c, x_s, model.v_tube)
 
 
 def physical(causes, theta):
@@ -183,9 +187,10 @@ def build_model(record, params, causes, warm=None):
             cold = [guess[name] for name, *_ in SPECS['baseline']]
             starts.append(cold + x0[len(cold):])
     x_c, x_s, dt = record['x_c'], record['x_s'], record.dt
+    geometry = geometric_volumes(params, x_c, x_s)
 
     def run(theta, train):
-        return predict(params, causes, physical(causes, theta), x_c, x_s, dt), {}
+        return predict(params, causes, physical(causes, theta), x_c, x_s, dt, geometry), {}
 
     return Model(causes, names, x0, lower, upper, run, lambda theta, linear: physical(causes, theta),
                  n_linear=0, starts=starts)

@@ -150,9 +150,12 @@ def identifiability(record, noise):
         reasons['air_leak'] = (None if offset > 300 and record.duration >= 10 else
                                f'the pressure stays within {offset:.0f} Pa of ambient (or the record is '
                                'shorter than 10 s), so no air would flow through a leak')
-        reasons['heat_exchange'] = (None if 0.02 < moving < 0.98 else
-                                    'the bellows never both move and hold still, so a temperature '
-                                    'relaxation after compression cannot be seen')
+        # Any compression heats the gas; the relaxation is separable from the static gas law as
+        # soon as the volume changes at different rates (ramps that start and stop, steps, holds).
+        rate_change = np.ptp(rate_c) > 1e-4 or np.ptp(rate_s) > 1e-3
+        reasons['heat_exchange'] = (None if moving > 0.01 and rate_change and np.ptp(p) > 30 * noise else
+                                    'the volume never changes at varying rates, so the heating by '
+                                    'compression and its relaxation cannot be told from the gas law')
         reasons['sensor_lag'] = (None if np.ptp(p) > 30 * noise and moving > 0.02 else
                                  'the pressure hardly changes, so a lag of the sensor cannot be seen')
         reasons['backlash'] = (None if turns >= 1 else

@@ -5,7 +5,8 @@
    dynamics of every cause are slower than that, and averaging also lowers the noise.
 3. Score the baseline on held-out blocks of time.
 4. Greedy forward selection: try every identifiable cause as an extension of the current model,
-   keep the best if it *pays* (`scoring.pays`), refit, repeat with the remaining causes.
+   keep the best whose physical parameters are not at the edge of their range if it *pays*
+   (`scoring.pays`), refit, repeat with the remaining causes.
 5. Look at what is left: if the final held-out residual is still well above the noise floor and
    correlated in time, the record holds structure that no candidate explains (`unexplained`).
 """
@@ -34,6 +35,7 @@ class Candidate:
     extends: tuple = ()
     gain: float = None
     pays: bool = False
+    note: str = None
 
 
 @dataclass
@@ -104,14 +106,14 @@ def diagnose(system, path, params_path=None, progress=False, causes=None):
     y = module.measured(record)
     reasons = checks.identifiability(record, noise / np.sqrt(record.factor))
     timings = {'load': time.perf_counter() - started}
-    bar = _progress(progress, total=1 + 2 * len(module.CAUSES if causes is None else causes))
+    bar = _progress(progress, total=1 + len(module.CAUSES if causes is None else causes))
     extra = {}
     if system == 'segment':
-        from bellows_ros.doctor.segment_causes import _Contact
-        extra['contact'] = _Contact(params, record)
+        # Algorithm 1 over the record does not depend on any fitted parameter: run it once.
+        extra['contact'] = module.ContactLengths(params, record)
 
-    def score(causes, warm=None):
-        model = module.build_model(record, params, causes, warm=warm, **extra)
+    def score(switched_on, warm=None):
+        model = module.build_model(record, params, switched_on, warm=warm, **extra)
         result = scoring.score(model, y)
         bar.update(1)
         return result
@@ -132,13 +134,22 @@ def diagnose(system, path, params_path=None, progress=False, causes=None):
             candidate = candidates[cause]
             candidate.score, candidate.extends = result, tuple(chosen)
             candidate.gain = scoring.gain(result.rmse, current.rmse)
-        best = min(round_scores, key=lambda c: round_scores[c].rmse)
+        for cause, result in round_scores.items():
+            edge = scoring.at_edge(result, cause)
+            if edge:
+                candidates[cause].note = f'fitted {", ".join(edge)} at the edge of its physical range'
+        credible = [c for c in round_scores if not scoring.at_edge(round_scores[c], c)]
+        if not credible:
+            break
+        best = min(credible, key=lambda c: round_scores[c].rmse)
         if not scoring.pays(round_scores[best], current):
             break
         candidates[best].pays = True
         chosen.append(best)
         remaining.remove(best)
         current = round_scores[best]
+        bar.total += len(remaining)  # the next round's fits
+        bar.refresh()
     bar.close()
     timings['fit'] = time.perf_counter() - started
     evidence = residual_evidence(record, current.heldout, noise / np.sqrt(record.factor), system)

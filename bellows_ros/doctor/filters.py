@@ -1,7 +1,7 @@
 """Vectorised dynamic operators the candidate causes are built from (pure functions on arrays).
 
-- `lag`: first-order low pass (a sensor with time constant tau), exact discretisation, via
-  `scipy.signal.lfilter`.
+- `lag`: first-order low pass (a sensor with time constant tau), first-order-hold discretisation,
+  via `scipy.signal.lfilter`.
 - `relax`: the response of a first-order relaxation to the increments of a driving signal
   (temperature after a compression, relaxing to ambient with a time constant).
 - `play`: the backlash (play) operator of width `width`, computed as a prefix scan of clamps so
@@ -12,12 +12,19 @@ from scipy.signal import lfilter
 
 
 def lag(x, dt, tau):
-    """y' = (x - y) / tau with y(0) = x(0), sampled every dt (zero-order hold on x)."""
+    """y' = (x - y) / tau with y(0) = x(0), sampled every dt.
+
+    First-order-hold discretisation (x linear between samples): exact for ramps, and right for
+    block-averaged records, whose samples are the moving average of the signal at the block centres;
+    the zero-order hold would add a delay of dt/2 that a coarse fitting rate cannot afford.
+    """
     x = np.asarray(x, float)
     if tau <= 0:
         return x.copy()
     a = np.exp(-dt / tau)
-    y, _ = lfilter([1.0 - a], [1.0, -a], x, zi=[a * x[0]])
+    c = tau / dt * (1.0 - a)
+    b0, b1 = 1.0 - c, c - a
+    y, _ = lfilter([b0, b1], [1.0, -a], x, zi=[(1.0 - b0) * x[0]])
     return y
 
 

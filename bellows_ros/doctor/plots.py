@@ -62,7 +62,7 @@ def _residuals(d):
     axes[1, 0].boxplot(data, showfliers=False)
     axes[1, 0].set_xticks(range(1, len(ticks) + 1), ticks, fontsize=7)
     axes[0, 0].set(xlabel='time (s)', title='held-out residual against time')
-    axes[0, 1].set(xlabel=f'rate of {position_label}', title='against rate')
+    axes[0, 1].set(xlabel=f'rate of {position_label} per s', title='against rate')
     axes[1, 0].set(title='against direction of motion')
     axes[1, 1].set(xlabel=pressure_label, title='against pressure')
     for axis in axes.flat:

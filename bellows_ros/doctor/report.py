@@ -63,7 +63,7 @@ def details_dict(d):
     for cause, c in d.candidates.items():
         candidates[cause] = {'identifiable': c.identifiable, 'reason': c.reason,
                              'extends': list(c.extends), 'gain_over_extended_model': c.gain,
-                             'pays': c.pays,
+                             'pays': c.pays, 'note': c.note,
                              'heldout_rmse': c.score.rmse if c.score else None}
     return {
         'data': d.path,
@@ -122,7 +122,8 @@ def markdown(d, plots):
               f'{ev["ljung_box_q"]:.4g} over {ev["ljung_box_lags"]} lags (p = {ev["ljung_box_p"]:.2g}); '
               f'lag-1 autocorrelation {ev["autocorrelation_lag1"]:.2f}; correlation with rate '
               f'{ev["correlation_with_rate"]:.2f}, position {ev["correlation_with_position"]:.2f}, '
-              f'pressure {ev["correlation_with_pressure"]:.2f}, direction {ev["correlation_with_direction"]:.2f}.', '']
+              f'pressure {ev["correlation_with_pressure"]:.2f}, '
+              f'direction {ev["correlation_with_direction"]:.2f}.', '']
     if d.unexplained:
         lines.append('**Unexplained structure remains**: the residual is more than '
                      f'{engine.UNEXPLAINED_RATIO:g} × the noise floor and correlated in time, and no '
@@ -138,8 +139,9 @@ def markdown(d, plots):
             lines.append(f'| `{cause}` | no: {c.reason} | | | | no |')
             continue
         extends = ' + '.join(('baseline',) + c.extends)
+        verdict = 'yes' if c.pays else ('no: ' + c.note if c.note else 'no')
         lines.append(f'| `{cause}` | yes | {extends} | {c.score.rmse:.4g} {d.unit} | '
-                     f'{100 * c.gain:.1f} % | {"yes" if c.pays else "no"} |')
+                     f'{100 * c.gain:.1f} % | {verdict} |')
     lines += ['', '## Fitted parameters of the extended model (SI)', '']
     for part, values in d.values.items():
         if values:
@@ -150,14 +152,21 @@ def markdown(d, plots):
               f'    bellows simulate {d.system} --input IN.csv --output OUT.csv --params {EXTENDED_FILE}'
               + ''.join(f' --effect {c}' for c in d.causes if c in _PLANT_ONLY.get(d.system, ())),
               f'    ros2 run bellows_ros <node> --ros-args --params-file {EXTENDED_FILE}', '']
+    if d.system == 'segment':
+        output, name = (('tau_drive', 'membrane-contact torque (29)') if 'contact_hysteresis' in d.causes
+                        else ('tau_prev', 'previous model (34)'))
+        lines.append(f'The extended segment model\'s driving torque is the `{output}` output of '
+                     f'`bellows simulate segment` and of the model node ({name}).')
     plant_only = [c for c in d.causes if c in _PLANT_ONLY.get(d.system, ())]
     if plant_only:
-        lines.append(f'{", ".join(plant_only)} {"is a dynamic effect" if len(plant_only) == 1 else "are dynamic effects"}'
-                     ' of the plant: the fitted values are its `--effect` defaults in the file, so '
+        verb = 'is a dynamic effect' if len(plant_only) == 1 else 'are dynamic effects'
+        lines.append(f'{", ".join(plant_only)} {verb} of the plant: the fitted values are its `--effect` '
+                     'defaults in the file, so '
                      '`--effect NAME` switches it on with them.')
     lines += ['', '## How the doctor decided', '',
-              f'The record was cut into {scoring.BLOCKS} contiguous blocks of time; every model was '
-              'fitted on the other blocks and scored on the block it did not see. A cause pays when it '
+              f'The record was cut into {scoring.BLOCKS} contiguous blocks of time, dealt into '
+              f'{scoring.FOLDS} folds; every model was refitted without each fold and scored on the '
+              'blocks it did not see. A cause pays when it '
               f'cuts the held-out RMSE of the current model by at least {100 * scoring.MIN_GAIN:.0f} % '
               'and its held-out BIC (n ln MSE + k ln n) decreases; the best paying cause is added and the '
               'search repeats (see docs/doctor.md).', '', '## Plots', '']

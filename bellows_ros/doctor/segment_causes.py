@@ -35,16 +35,12 @@ UNIT = 'N·m'
 
 # Nonlinear parameters: (name, start, lower, upper); alternative starts for multi-start.
 SPECS = {
-    'natural_curvature': [('c_psi0', 3.0, 0.1, 30.0), ('c_psi0_p', 0.3, -1.5, 1.5)],
-    'sensor_lag': [('log10_tau', -1.5, -3.0, 0.0)],
+    'natural_curvature': [('c_psi0', 3.0, 0.1, 30.0), ('c_psi0_p', 0.3, 0.0, 1.5)],
+    'sensor_lag': [('log10_tau', -1.5, -2.5, 0.0)],
 }
 STARTS = {
-    'natural_curvature': [[1.0, -0.3], [10.0, 0.6], [20.0, 0.8], [20.0, -0.8]],
+    'natural_curvature': [[1.0, 0.1], [10.0, 0.6], [20.0, 0.8]],
     'sensor_lag': [[-2.3], [-0.8]],
-}
-LINEAR_NAMES = {
-    'previous': ['previous.theta'] * 4,
-    'contact': ['actuator.theta'] * 8,
 }
 
 
@@ -67,7 +63,7 @@ def measured(record):
     return record['y']
 
 
-class _Contact:
+class ContactLengths:
     """s̃_a of both chains over the record, computed once (Algorithm 1 is sequential and costly)."""
 
     def __init__(self, params, record):
@@ -98,7 +94,7 @@ def least_squares_solution(x, y):
 def build_model(record, params, causes, warm=None, contact=None):
     """The baseline plus `causes` on `record` (with `add_columns` applied), as a `scoring.Model`."""
     causes = tuple(causes)
-    contact = contact or _Contact(params, record)
+    contact = contact or ContactLengths(params, record)
     psi, psi_dot, dt = record['psi'], record['psi_dot'], record.dt
     y = record['y']
     nonlinear = [c for c in causes if c in SPECS]

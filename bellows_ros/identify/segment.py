@@ -11,13 +11,20 @@ starts (the problem has local minima; see `fit_segment`). The previous model (34
 
 Held-out error: the fit uses the first `1 - holdout` of the rows; RMSE and MAE are reported on the rest.
 The strain memory always runs over the whole record (its state needs the history).
+
+Errors in variables: the measured inputs (p1, p2, Ψ, Ψ̇) carry white sensor noise over the whole
+0..f_s/2 band, while the signals themselves are band-limited (valve/chamber lag, imposed motion), and the
+torque is steep in the pressure (~0.05 N·m per kPa). Both the fit and the prediction pipeline of the
+fitted model therefore first low-pass the inputs with a zero-phase Butterworth filter
+(`segment.identify.input_cutoff`, `filter_inputs`). The measured torque τ_ext (the target) is never
+filtered: errors are against the raw measurement.
 """
 import math
 import sys
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import optimize, stats
+from scipy import optimize, signal, stats
 
 from bellows_ros.models.segment import (actuator_regressor, contact_lengths, friction_regressor,
                                         previous_regressor, restoring_regressor, scaled_pressure,
@@ -26,7 +33,10 @@ from bellows_ros.models.segment import (actuator_regressor, contact_lengths, fri
 # Outer (nonlinear) parameters: name, SegmentParams field, bounds; μ searched in log space.
 NONLINEAR = (('mu1', (100.0, 1e5)), ('mu2', (10.0, 1e5)), ('gamma1', (2.05, 12.0)),
              ('gamma2', (2.05, 12.0)), ('c_psi0', (0.1, 20.0)), ('c_psi0_p', (-1.5, 1.5)))
-SEARCH_ROWS = 2000  # the outer search runs on at most this many (evenly strided) training rows
+SEARCH_ROWS = 6000  # the outer search runs on at most this many (evenly strided) training rows
+INPUT_FILTER_ORDER = 4  # Butterworth order of the input low-pass (applied forward and backward)
+MIN_RATE_PER_CUTOFF = 5.0  # below this sampling rate / cutoff the inputs are left unfiltered
+FILTERED_INPUTS = ('p1', 'p2', 'psi', 'psi_dot')
 
 
 @dataclass
@@ -38,6 +48,36 @@ class Fit:
     heldout_rows: int
     cost: float           # inner residual RMS on the training rows, N·m
     evaluations: int
+    input_cutoff: object = None  # input low-pass cutoff applied, Hz (None: inputs not filtered)
+    rate: float = 0.0     # sampling rate of the record (1 / median step), Hz
+
+
+def filter_inputs(record, cutoff):
+    """Zero-phase low-pass of the measured inputs p1, p2, Ψ, Ψ̇ (those present) of `record`.
+
+    Butterworth of order INPUT_FILTER_ORDER at `cutoff` Hz, run forward and backward
+    (`scipy.signal.sosfiltfilt`: no delay, so the contact state and friction sign stay aligned with
+    the torque), at the rate 1 / median time step. τ_ext, τ_motion and t are passed through unchanged.
+    Returns (filtered copy of the record, cutoff applied in Hz or None, rate in Hz); the inputs are left
+    as measured (cutoff None) when `cutoff` is 0/None, when the rate is below MIN_RATE_PER_CUTOFF ×
+    cutoff (the filter would cut into the signal band), or when the record is too short to pad.
+    """
+    filtered = dict(record)
+    t = np.asarray(record['t'], float)
+    rate = 1.0 / float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    if not cutoff or cutoff <= 0 or rate < MIN_RATE_PER_CUTOFF * cutoff:
+        return filtered, None, rate
+    sos = signal.butter(INPUT_FILTER_ORDER, cutoff, fs=rate, output='sos')
+    if len(t) <= 3 * (2 * len(sos) + 1):  # sosfiltfilt's default edge padding
+        return filtered, None, rate
+    for name in FILTERED_INPUTS:
+        if name in record:
+            filtered[name] = signal.sosfiltfilt(sos, np.asarray(record[name], float))
+    return filtered, float(cutoff), rate
+
+
+def _cutoff(params, input_cutoff):
+    return params.identify_input_cutoff if input_cutoff is None else input_cutoff
 
 
 def target(params, record):
@@ -123,11 +163,11 @@ def _bounds():
     return optimize.Bounds(lows, highs)
 
 
-def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=80, screen=32,
-                progress=True):
+def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=150, screen=32,
+                progress=True, input_cutoff=None, search_rows=SEARCH_ROWS):
     """Fit paper A's model to `record` (dict of arrays, DESIGN.md segment columns); returns a `Fit`.
 
-    `params` gives the fixed geometry and one candidate start. Search, on at most SEARCH_ROWS evenly
+    `params` gives the fixed geometry and one candidate start. Search, on at most `search_rows` evenly
     strided rows of the training part:
     1. screening: `screen` points of a scrambled Sobol design over the material bounds (plus the
        given material), each scored by the residual of (32);
@@ -136,19 +176,22 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=8
     3. (c_Ψ0, c_Ψ0,p), which only enter X_s, by least squares for the best material — no forward
        runs — and a shorter Nelder-Mead polish of the material with them.
     The two Ogden terms are interchangeable, so (μ1, γ1) and (μ2, γ2) may come out swapped.
+    Before all of it the inputs are low-pass filtered (`filter_inputs`) at `input_cutoff` Hz
+    (None: `params.identify_input_cutoff`; 0: off); `Fit.input_cutoff` says what was applied.
     """
     from tqdm import tqdm
 
+    record, applied_cutoff, rate = filter_inputs(record, _cutoff(params, input_cutoff))
     y_all = target(params, record)
     n = len(y_all)
     n_train = max(2, int(round(n * (1.0 - holdout))))
     train = slice(0, n_train)
-    stride = max(1, math.ceil(n_train / SEARCH_ROWS))
-    search_rows = slice(0, n_train, stride)
-    y_search = y_all[search_rows]
-    psi_s = np.asarray(record['psi'], float)[search_rows]
-    q1_s = scaled_pressure(params, np.asarray(record['p1'], float)[search_rows])
-    q2_s = scaled_pressure(params, np.asarray(record['p2'], float)[search_rows])
+    stride = max(1, math.ceil(n_train / search_rows))
+    searched = slice(0, n_train, stride)
+    y_search = y_all[searched]
+    psi_s = np.asarray(record['psi'], float)[searched]
+    q1_s = scaled_pressure(params, np.asarray(record['p1'], float)[searched])
+    q2_s = scaled_pressure(params, np.asarray(record['p2'], float)[searched])
     bounds = _bounds()
     material_bounds = optimize.Bounds(bounds.lb[:4], bounds.ub[:4])
     curvature = np.clip(_to_vector(params), bounds.lb, bounds.ub)[4:]
@@ -162,7 +205,7 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=8
         evaluations += 1
         bar.update(1)
         trial = _from_vector(params, np.concatenate([z_material, curvature]))
-        return regressors(trial, record, search_rows)
+        return regressors(trial, record, searched)
 
     def cost(z_material):
         return float(np.sum(solve_linear(blocks_for(z_material), y_search)[1] ** 2))
@@ -204,7 +247,26 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=8
     held = slice(n_train, n)
     heldout = {'model': errors(y_all[held] - _predict(fitted, blocks, held)),
                'previous': errors(y_all[held] - _predict_previous(fitted, blocks, held))}
-    return Fit(fitted, heldout, n_train, n - n_train, errors(residual_train)[0], evaluations)
+    return Fit(fitted, heldout, n_train, n - n_train, errors(residual_train)[0], evaluations,
+               applied_cutoff, rate)
+
+
+def predict(params, record, input_cutoff=None):
+    """The fitted model's prediction pipeline on a measured record: the same input filter as the fit
+    (`filter_inputs` at `input_cutoff` Hz, None: `params.identify_input_cutoff`), then the regressors
+    (31) with θ of `params`. Returns (Ŷ of paper A's model, Ŷ of the previous model (34), Y measured)
+    in N·m, Y = τ_motion - τ_ext (30) with the raw measured τ_ext."""
+    filtered = filter_inputs(record, _cutoff(params, input_cutoff))[0]
+    blocks = regressors(params, filtered)
+    rows = slice(None)
+    return _predict(params, blocks, rows), _predict_previous(params, blocks, rows), target(params, filtered)
+
+
+def prediction_errors(params, record, input_cutoff=None):
+    """(RMSE, MAE) in N·m of `predict` against the raw measured torque:
+    {'model': ..., 'previous': ...}."""
+    model, previous, y = predict(params, record, input_cutoff)
+    return {'model': errors(y - model), 'previous': errors(y - previous)}
 
 
 def _predict(params, blocks, rows):

@@ -58,11 +58,14 @@ class SegmentParams:
     plant_inertia: float
     plant_damping: float
     plant_gravity: float
+    plant_psi_limit: float
+    plant_stop_stiffness: float
     plant_sensor_lag_tau: float
     plant_noise_p: float
     plant_noise_psi: float
     plant_noise_psi_dot: float
     plant_noise_tau: float
+    identify_input_cutoff: float
 
     def replace(self, **changes):
         """A copy with some fields changed (tuples for vectors)."""
@@ -125,13 +128,13 @@ def check_params(p, source='parameters'):
     if not p.p_max > p.p0 > 0:
         fail('p_max', 'must exceed p0 > 0')
     for name in ('geometry_l0', 'geometry_s0', 'geometry_sa_max', 'plant_valve_tau',
-                 'plant_inertia'):
+                 'plant_inertia', 'plant_psi_limit', 'plant_stop_stiffness'):
         if not getattr(p, name) > 0:
             fail(name, 'must be > 0')
     if int(p.geometry_n_lambda) != p.geometry_n_lambda or p.geometry_n_lambda < 1:
         fail('geometry_n_lambda', 'must be a positive integer')
     for name in ('plant_noise_p', 'plant_noise_psi', 'plant_noise_psi_dot', 'plant_noise_tau',
-                 'plant_sensor_lag_tau', 'plant_damping'):
+                 'plant_sensor_lag_tau', 'plant_damping', 'identify_input_cutoff'):
         if getattr(p, name) < 0:
             fail(name, 'must be >= 0')
 

@@ -15,7 +15,7 @@ The full paper-A physics is the first three together. Unset effect parameters ta
 Pressures follow the commands through a first-order valve/chamber lag (`segment.plant.valve_tau`).
 With an imposed angle (test bench) the force-torque sensor reads τ_ext = M Ψ̈ + C Ψ̇ + N(Ψ) - τ_drive
 (2); otherwise (2) is integrated (semi-implicit Euler) with `tau_load` as τ_ext, using the plant's own
-M, C, N (`segment.plant.inertia/damping/gravity`). Measured values carry Gaussian noise with the
+M, C, N (`segment.plant.inertia/damping/gravity`) and end stops at |Ψ| = `segment.plant.psi_limit`. Measured values carry Gaussian noise with the
 standard deviations of `segment.plant.noise` unless `noise` overrides them.
 """
 import math
@@ -134,6 +134,18 @@ class SegmentPlant:
         # with contact_hysteresis: τ_drive of paper A; without: the previous model's torque (34)
         return self.outputs[5] if self.hysteresis else self.outputs[6]
 
+    def _end_stop(self):
+        """Torque of the end stops beyond |Ψ| = psi_limit: stiff spring, damping ratio 0.8, N·m.
+
+        Needed because one pressurised chain alone has no equilibrium inside the range: its actuator
+        torque grows with Ψ faster than the restoring torque falls."""
+        p = self.physics
+        over = abs(self.psi) - p.plant_psi_limit
+        if over <= 0.0:
+            return 0.0
+        damping = 1.6 * math.sqrt(p.plant_stop_stiffness * p.plant_inertia)
+        return -math.copysign(p.plant_stop_stiffness * over, self.psi) - damping * self.psi_dot
+
     def step(self, dt, p_cmd1, p_cmd2, psi_imposed=None, tau_load=None):
         """Advance by `dt` s with pressure commands (Pa abs); impose Ψ (rad) or apply `tau_load` (N·m)."""
         p = self.physics
@@ -152,8 +164,8 @@ class SegmentPlant:
             self.tau_drive = self._drive()
             self.tau_ext = 0.0 if tau_load is None else float(tau_load)
             gravity = p.plant_gravity * math.sin(self.psi)
-            self.psi_ddot = (self.tau_ext + self.tau_drive - p.plant_damping * self.psi_dot
-                             - gravity) / p.plant_inertia
+            self.psi_ddot = (self.tau_ext + self.tau_drive + self._end_stop()
+                             - p.plant_damping * self.psi_dot - gravity) / p.plant_inertia
             self.psi_dot += dt * self.psi_ddot
             self.psi += dt * self.psi_dot
             self.tau_motion = p.plant_inertia * self.psi_ddot + p.plant_damping * self.psi_dot + gravity

@@ -1,0 +1,79 @@
+"""Identification (30-33) recovers a known segment from noisy quasi-static + dynamic bench records.
+
+Truth: config/segment.yaml, full paper-A physics. Records at 1 kHz with the issue's noise: pressure
+1 kPa, angle 1e-3 rad, torque 0.05 N·m (std; Ψ̇ 5e-3 rad/s). The search starts from a wrong material.
+Judged as the issue states it: held-out torque RMSE against the raw measured τ_ext on records the fit
+never saw ≤ 1.2 σ_τ, and the Fig. 10 hysteresis from the fitted parameters.
+"""
+import numpy as np
+import pytest
+
+from bellows_ros.identify.segment import fig10_torques, fit_segment, predict, prediction_errors
+from bellows_ros.models.ogden import free_strain
+from bellows_ros.models.segment import load_segment_params
+from bellows_ros.models.segment_experiments import dynamic_record, fig10_record, quasi_static_record
+from bellows_ros.models.segment_plant import FULL_MODEL, NO_NOISE
+
+NOISE = {'p': 1000.0, 'psi': 1e-3, 'psi_dot': 5e-3, 'tau': 0.05}
+DT = 1e-3  # 1 kHz, like the segment's sensors
+DURATION = (90.0, 30.0)  # s of quasi-static and dynamic record
+FIG10 = (6.7, 9.1)  # paper A's measured |τ_ext| before / after the excursion, N·m
+
+
+def bench_records(truth, noise, seeds):
+    quasi = quasi_static_record(truth, FULL_MODEL, noise, seed=seeds[0], duration=DURATION[0], dt=DT)
+    dynamic = dynamic_record(truth, FULL_MODEL, noise, seed=seeds[1], duration=DURATION[1], dt=DT)
+    offset = {'t': quasi['t'][-1]}
+    return {k: np.concatenate([quasi[k], dynamic[k] + offset.get(k, 0.0)]) for k in quasi}
+
+
+@pytest.fixture(scope='module')
+def fitted():
+    truth = load_segment_params()
+    start = truth.replace(ogden_mu=(9000.0, 150.0), ogden_gamma=(3.5, 4.0), restoring_c_psi0=1.0,
+                          restoring_c_psi0_p=0.2, actuator_theta=(0.0,) * 8)
+    fit = fit_segment(start, bench_records(truth, NOISE, (11, 12)), seed=1, starts=2,
+                      max_evaluations=150, progress=False)
+    return truth, fit
+
+
+def test_fitted_model_is_within_the_noise_on_unseen_records(fitted):
+    truth, fit = fitted
+    sigma = NOISE['tau']
+    assert fit.input_cutoff == truth.identify_input_cutoff and fit.rate == pytest.approx(1 / DT)
+    # the issue's criterion: unseen noisy 1 kHz records (quasi-static + dynamic), the fitted model's
+    # prediction pipeline (input filter + model) against the raw measured torque
+    noisy = bench_records(truth, NOISE, (31, 32))
+    achieved = prediction_errors(fit.params, noisy)
+    assert achieved['model'][0] <= 1.2 * sigma
+    # ... and the last 30 % of the fitted record (rows the fit did not see)
+    assert fit.heldout['model'][0] <= 1.2 * sigma
+    # the input filter is what makes this possible: unfiltered, even the true parameters miss it
+    assert prediction_errors(truth, noisy, input_cutoff=0.0)['model'][0] > 1.4 * sigma
+    # the filter costs little on noise-free records (its own bias, well under the noise)
+    clean = bench_records(truth, NO_NOISE, (21, 22))
+    assert prediction_errors(truth, clean, input_cutoff=0.0)['model'][0] < 1e-9  # exact yardstick
+    assert prediction_errors(truth, clean)['model'][0] < 0.4 * sigma
+    assert prediction_errors(fit.params, clean)['model'][0] < 0.6 * sigma
+    # the paper's comparison: the refitted previous model is far worse on the held-out rows
+    assert fit.heldout['previous'][0] > 5 * fit.heldout['model'][0]
+
+
+def test_fit_reproduces_the_fig10_hysteresis(fitted):
+    truth, fit = fitted
+    fit_before, fit_after, prev_before, prev_after = fig10_torques(fit.params)
+    assert fit_after >= 1.1 * fit_before
+    assert fit_before == pytest.approx(FIG10[0], rel=0.1) and fit_after == pytest.approx(FIG10[1], rel=0.1)
+    assert prev_before == prev_after  # the previous model has no memory
+    # the prediction pipeline (filtered noisy inputs) does not smear it: a noisy Fig. 10 record
+    record, before, after = fig10_record(truth, FULL_MODEL, NOISE, seed=5)
+    model = predict(fit.params, record)[0]
+    assert model[after] >= 1.1 * model[before]
+    assert model[before] == pytest.approx(FIG10[0], rel=0.1) and model[after] == pytest.approx(FIG10[1], rel=0.1)
+    # the material is identified where the data can see it: the stretch-load curve of (22) over the
+    # loads p_rel·R met in the records (the four Ogden constants themselves trade off, and the two
+    # terms may swap)
+    assert min(fit.params.ogden_gamma) > 2.0
+    for load in (2e3, 5e3, 1e4, 2e4, 3e4):
+        assert free_strain(load, *fit.params.ogden_mu, *fit.params.ogden_gamma) == pytest.approx(
+            free_strain(load, *truth.ogden_mu, *truth.ogden_gamma), rel=0.02)

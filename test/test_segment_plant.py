@@ -1,0 +1,140 @@
+"""The simulated segment: effects (DESIGN.md vocabulary), valve lag, sensor lag, noise, free motion."""
+import math
+
+import numpy as np
+import pytest
+
+from bellows_ros.errors import ParameterError
+from bellows_ros.models.segment import SegmentModel, load_segment_params
+from bellows_ros.models.segment_experiments import fig10_record, quasi_static_record, run_plant
+from bellows_ros.models.segment_plant import (FULL_MODEL, NO_NOISE, SEGMENT_EFFECTS, SegmentPlant,
+                                              plant_physics)
+
+
+@pytest.fixture(scope='module')
+def params():
+    return load_segment_params()
+
+
+def test_effect_vocabulary_matches_design():
+    assert SEGMENT_EFFECTS == ('contact_hysteresis', 'pressure_friction', 'natural_curvature', 'sensor_lag')
+
+
+@pytest.mark.parametrize('effects, message', [
+    ({'air_leak': {}}, "unknown segment effect 'air_leak'"),
+    ({'sensor_lag': {'tau_s': 0.1}}, "'sensor_lag': unknown parameter 'tau_s'"),
+    ({'contact_hysteresis': {'gain': 1.0}}, "'contact_hysteresis': unknown parameter 'gain'"),
+    ({'pressure_friction': {'c_fp': float('nan')}}, "'c_fp' is not finite"),
+])
+def test_unknown_effects_and_parameters_are_named(params, effects, message):
+    with pytest.raises(ParameterError, match=message.replace('(', r'\(')):
+        SegmentPlant(params, effects)
+
+
+def test_unknown_noise_key_is_named(params):
+    with pytest.raises(ParameterError, match="'torque'"):
+        SegmentPlant(params, noise={'torque': 0.1})
+
+
+def _bench(params, effects, n=6000, dt=1e-3):
+    t = np.arange(1, n + 1) * dt
+    psi = 1.0 * np.sin(2 * np.pi * 0.25 * t)
+    cmd1 = np.where(t > 0.5, 4.5e5, params.p0)
+    cmd2 = np.where(t > 3.0, 2.5e5, params.p0)
+    return run_plant(SegmentPlant(params, effects, NO_NOISE), dt, cmd1, cmd2, psi)
+
+
+def test_baseline_plant_is_the_previous_model_without_the_missing_physics(params):
+    record = _bench(params, {})
+    physics = params.replace(friction_c_fp=0.0, restoring_k_sp=0.0, restoring_c_psi0_p=0.0)
+    model = SegmentModel(physics)
+    expected = [model.step(a, b, c, d)[6] for a, b, c, d in
+                zip(record['psi'], record['psi_dot'], record['p1'], record['p2'])]
+    np.testing.assert_allclose(record['tau_motion'] - record['tau_ext'], expected, atol=1e-9)
+
+
+def test_each_effect_changes_the_measured_torque_and_full_model_is_paper_a(params):
+    base = _bench(params, {})
+    for name in FULL_MODEL:
+        changed = _bench(params, {name: {}})
+        assert np.max(np.abs(changed['tau_ext'] - base['tau_ext'])) > 0.2, name
+    full = _bench(params, FULL_MODEL)
+    model = SegmentModel(params)
+    expected = [model.step(a, b, c, d)[5] for a, b, c, d in
+                zip(full['psi'], full['psi_dot'], full['p1'], full['p2'])]
+    np.testing.assert_allclose(full['tau_motion'] - full['tau_ext'], expected, atol=1e-9)
+
+
+def test_effect_parameters_override_the_yaml(params):
+    physics = plant_physics(params, {'pressure_friction': {'c_fp': 2.5}, 'natural_curvature': {'k_sp': -3.0}})
+    assert physics.friction_c_fp == 2.5 and physics.restoring_k_sp == -3.0
+    assert physics.restoring_c_psi0_p == params.restoring_c_psi0_p
+    assert plant_physics(params, {}).restoring_c_psi0_p == 0.0
+
+
+def test_pressures_follow_commands_through_the_valve_lag(params):
+    plant = SegmentPlant(params, noise=NO_NOISE)
+    tau = params.plant_valve_tau
+    samples = [plant.step(1e-3, 5e5, params.p0, psi_imposed=0.0) for _ in range(int(round(tau / 1e-3)))]
+    # after one time constant: 1 - 1/e of the step
+    assert samples[-1].p1 == pytest.approx(params.p0 + (5e5 - params.p0) * (1 - math.exp(-1)), rel=1e-3)
+    for _ in range(int(10 * tau / 1e-3)):
+        sample = plant.step(1e-3, 5e5, params.p0, psi_imposed=0.0)
+    assert sample.p1 == pytest.approx(5e5, rel=1e-4)
+
+
+def test_sensor_lag_delays_only_the_measured_pressure(params):
+    lagged = SegmentPlant(params, {'sensor_lag': {'tau': 0.2}}, NO_NOISE)
+    plain = SegmentPlant(params, {}, NO_NOISE)
+    for _ in range(100):
+        a = lagged.step(1e-3, 5e5, params.p0, psi_imposed=0.3)
+        b = plain.step(1e-3, 5e5, params.p0, psi_imposed=0.3)
+    assert lagged.p1 == pytest.approx(plain.p1)  # the chamber itself is the same
+    assert a.p1 < b.p1 - 5e4  # the sensor still reads far below it
+    assert a.tau_ext == pytest.approx(b.tau_ext)
+
+
+def test_noise_has_the_configured_spread_and_seed_repeats(params):
+    def run(seed):
+        plant = SegmentPlant(params, seed=seed)
+        return np.array([plant.step(1e-3, params.p0, params.p0, psi_imposed=0.0) for _ in range(4000)])
+    first, again, other = run(3), run(3), run(4)
+    np.testing.assert_array_equal(first, again)
+    assert not np.array_equal(first, other)
+    std = first.std(axis=0)  # columns t psi psi_dot p1 p2 tau_ext
+    assert std[1] == pytest.approx(params.plant_noise_psi, rel=0.1)
+    assert std[3] == pytest.approx(params.plant_noise_p, rel=0.1)
+    assert std[5] == pytest.approx(params.plant_noise_tau, rel=0.1)
+
+
+def test_free_motion_settles_where_the_torques_balance(params):
+    # vented chains: τ_drive = τ_s = 2 k_s Ψ, so a load of 1 N·m holds Ψ = -1/(2 k_s)
+    plant = SegmentPlant(params, FULL_MODEL, NO_NOISE)
+    for _ in range(20000):  # friction (c_f < 0) slows the creep near rest: time constant ≈ 1.7 s
+        sample = plant.step(1e-3, params.p0, params.p0, tau_load=1.0)
+    assert abs(sample.psi_dot) < 1e-5
+    assert sample.psi == pytest.approx(-1.0 / (2 * params.restoring_k_s), rel=1e-3)
+
+
+def test_free_pressurised_segment_is_stable_and_rests_on_its_end_stop(params):
+    plant = SegmentPlant(params, FULL_MODEL, NO_NOISE)
+    for _ in range(8000):
+        sample = plant.step(1e-3, 4e5, params.p0, tau_load=0.0)
+    assert math.isfinite(sample.psi) and abs(sample.psi_dot) < 1e-3
+    # chain 1 bends the segment towards positive Ψ until the end stop carries τ_drive
+    assert params.plant_psi_limit < sample.psi < params.plant_psi_limit + 0.1
+
+
+def test_fig10_record_shows_the_hysteresis_only_with_contact_hysteresis(params):
+    record, before, after = fig10_record(params, FULL_MODEL, NO_NOISE)
+    assert record['psi'][before] == pytest.approx(record['psi'][after], abs=1e-12)
+    assert -record['tau_ext'][after] > 1.1 * -record['tau_ext'][before]
+    baseline, before, after = fig10_record(params, {}, NO_NOISE)
+    assert baseline['tau_ext'][after] == pytest.approx(baseline['tau_ext'][before], abs=1e-9)
+
+
+def test_quasi_static_record_has_the_design_columns_and_is_cheap(params):
+    record = quasi_static_record(params, FULL_MODEL, None, seed=2, duration=10.0)
+    assert set(record) >= {'t', 'psi', 'p1', 'p2', 'tau_ext', 'psi_dot'}
+    assert len(record['t']) == 10000 and np.all(np.diff(record['t']) > 0)
+    assert record['p1'].max() <= params.p_max and record['psi'].std() > 0.1
