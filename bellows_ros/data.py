@@ -61,6 +61,10 @@ def read_csv(path, required, optional=()):
         stream = open(path, newline='')
     except OSError as exc:
         raise DataError(path, f'cannot read file ({exc.strerror})') from None
+    fast = _read_numeric(path, required, optional)
+    if fast is not None:
+        stream.close()
+        return fast
     with stream:
         reader = csv.reader(stream)
         header = next(reader, None)
@@ -91,6 +95,30 @@ def read_csv(path, required, optional=()):
         else:
             extras[name] = cells
     return Table(str(path), header, values, extras, lines)
+
+
+def _read_numeric(path, required, optional):
+    """Fast path for the common file: every column wanted, all finite numbers, no blank lines.
+
+    NumPy's C parser reads a 600 000-row record several times faster than the csv module. Anything
+    unusual returns None, and the careful reader above finds and names the problem.
+    """
+    with open(path, 'rb') as stream:
+        raw = stream.read()
+    first, _, body = raw.partition(b'\n')
+    header = [name.strip() for name in first.decode(errors='replace').split(',')]
+    if any(name not in required and name not in optional for name in header) \
+            or any(name not in header for name in required):
+        return None
+    rows = body.rstrip(b'\r\n').count(b'\n') + 1 if body.strip() else 0
+    try:
+        array = np.loadtxt(path, delimiter=',', skiprows=1, dtype=float, ndmin=2)
+    except ValueError:
+        return None
+    if rows == 0 or array.shape != (rows, len(header)) or not np.isfinite(array).all():
+        return None
+    values = {name: np.ascontiguousarray(array[:, i]) for i, name in enumerate(header)}
+    return Table(str(path), header, values, {}, list(range(2, rows + 2)))
 
 
 def _parse_column(path, name, cells, lines):

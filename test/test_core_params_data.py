@@ -82,3 +82,17 @@ def test_cli_turns_user_error_into_one_line_and_status_2(tmp_path, capsys):
     err = capsys.readouterr().err
     assert status == 2
     assert err.count('\n') == 1 and 'Traceback' not in err
+
+
+def test_fast_and_careful_readers_agree(tmp_path):
+    rows = '\n'.join(f'{i * 1e-3!r},{i * 0.5!r},{-i / 7!r}' for i in range(200))
+    plain = write(tmp_path / 'plain.csv', 't,a,b\n' + rows + '\n')
+    # An extra text column sends the reader down the careful (csv module) path.
+    labelled = write(tmp_path / 'labelled.csv', 't,a,b,note\n'
+                     + '\n'.join(f'{line},x' for line in rows.splitlines()) + '\n')
+    fast = data.read_csv(plain, ('t', 'a', 'b'))
+    careful = data.read_csv(labelled, ('t', 'a', 'b'))
+    assert fast.extras == {} and careful.extras['note'][0] == 'x'
+    for name in ('t', 'a', 'b'):
+        np.testing.assert_array_equal(fast[name], careful[name])
+    assert fast.line(199) == careful.line(199) == 201

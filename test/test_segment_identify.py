@@ -17,14 +17,19 @@ from bellows_ros.models.segment_plant import FULL_MODEL, NO_NOISE
 NOISE = {'p': 1000.0, 'psi': 1e-3, 'psi_dot': 5e-3, 'tau': 0.05}
 DT = 1e-3  # 1 kHz, like the segment's sensors
 DURATION = (90.0, 30.0)  # s of quasi-static and dynamic record
+SEARCH_ROWS, REFINE_ROWS = 4000, 12000  # rows of the outer search and its refinement (~50 and ~140 Hz of
+# the training part; keeps the fit ~1 min)
 FIG10 = (6.7, 9.1)  # paper A's measured |τ_ext| before / after the excursion, N·m
 
 
 def bench_records(truth, noise, seeds):
-    quasi = quasi_static_record(truth, FULL_MODEL, noise, seed=seeds[0], duration=DURATION[0], dt=DT)
+    """A dynamic and a quasi-static record joined with a 1 s time gap (separate runs: the input filter
+    treats them apart). Dynamic first, so that the fit's training part (first 70 %) has both kinds of
+    motion and its held-out part is the end of the quasi-static run."""
     dynamic = dynamic_record(truth, FULL_MODEL, noise, seed=seeds[1], duration=DURATION[1], dt=DT)
-    offset = {'t': quasi['t'][-1]}
-    return {k: np.concatenate([quasi[k], dynamic[k] + offset.get(k, 0.0)]) for k in quasi}
+    quasi = quasi_static_record(truth, FULL_MODEL, noise, seed=seeds[0], duration=DURATION[0], dt=DT)
+    offset = {'t': dynamic['t'][-1] + 1.0}
+    return {k: np.concatenate([dynamic[k], quasi[k] + offset.get(k, 0.0)]) for k in quasi}
 
 
 @pytest.fixture(scope='module')
@@ -33,7 +38,7 @@ def fitted():
     start = truth.replace(ogden_mu=(9000.0, 150.0), ogden_gamma=(3.5, 4.0), restoring_c_psi0=1.0,
                           restoring_c_psi0_p=0.2, actuator_theta=(0.0,) * 8)
     fit = fit_segment(start, bench_records(truth, NOISE, (11, 12)), seed=1, starts=2,
-                      max_evaluations=150, progress=False)
+                      max_evaluations=150, progress=False, search_rows=SEARCH_ROWS, refine_rows=REFINE_ROWS)
     return truth, fit
 
 

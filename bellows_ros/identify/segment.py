@@ -34,9 +34,11 @@ from bellows_ros.models.segment import (actuator_regressor, contact_lengths, fri
 NONLINEAR = (('mu1', (100.0, 1e5)), ('mu2', (10.0, 1e5)), ('gamma1', (2.05, 12.0)),
              ('gamma2', (2.05, 12.0)), ('c_psi0', (0.1, 20.0)), ('c_psi0_p', (-1.5, 1.5)))
 SEARCH_ROWS = 6000  # the outer search runs on at most this many (evenly strided) training rows
+REFINE_ROWS = 18000  # ... and its final refinement (step 3) on at most this many
 INPUT_FILTER_ORDER = 4  # Butterworth order of the input low-pass (applied forward and backward)
 MIN_RATE_PER_CUTOFF = 5.0  # below this sampling rate / cutoff the inputs are left unfiltered
 FILTERED_INPUTS = ('p1', 'p2', 'psi', 'psi_dot')
+GAP_STEPS = 10.0  # a time step longer than this many median steps separates joined records
 
 
 @dataclass
@@ -57,22 +59,31 @@ def filter_inputs(record, cutoff):
 
     Butterworth of order INPUT_FILTER_ORDER at `cutoff` Hz, run forward and backward
     (`scipy.signal.sosfiltfilt`: no delay, so the contact state and friction sign stay aligned with
-    the torque), at the rate 1 / median time step. τ_ext, τ_motion and t are passed through unchanged.
-    Returns (filtered copy of the record, cutoff applied in Hz or None, rate in Hz); the inputs are left
-    as measured (cutoff None) when `cutoff` is 0/None, when the rate is below MIN_RATE_PER_CUTOFF ×
-    cutoff (the filter would cut into the signal band), or when the record is too short to pad.
+    the torque), at the rate 1 / median time step. A time step over GAP_STEPS median steps marks
+    records joined end to end: each piece is filtered on its own (filtering across the join would
+    smear the jump between unrelated records into both); pieces too short to pad stay unfiltered.
+    τ_ext, τ_motion and t are passed through unchanged. Returns (filtered copy of the record, cutoff
+    applied in Hz or None, rate in Hz); the inputs are left as measured (cutoff None) when `cutoff` is
+    0/None or when the rate is below MIN_RATE_PER_CUTOFF × cutoff (the filter would cut into the
+    signal band).
     """
     filtered = dict(record)
     t = np.asarray(record['t'], float)
-    rate = 1.0 / float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    steps = np.diff(t)
+    rate = 1.0 / float(np.median(steps)) if len(t) > 1 else 0.0
     if not cutoff or cutoff <= 0 or rate < MIN_RATE_PER_CUTOFF * cutoff:
         return filtered, None, rate
     sos = signal.butter(INPUT_FILTER_ORDER, cutoff, fs=rate, output='sos')
-    if len(t) <= 3 * (2 * len(sos) + 1):  # sosfiltfilt's default edge padding
+    joins = np.flatnonzero(steps > GAP_STEPS / rate) + 1
+    pieces = [piece for piece in np.split(np.arange(len(t)), joins)
+              if len(piece) > 3 * (2 * len(sos) + 1)]  # sosfiltfilt's default edge padding
+    if not pieces:
         return filtered, None, rate
     for name in FILTERED_INPUTS:
         if name in record:
-            filtered[name] = signal.sosfiltfilt(sos, np.asarray(record[name], float))
+            filtered[name] = np.array(record[name], float)
+            for piece in pieces:
+                filtered[name][piece] = signal.sosfiltfilt(sos, filtered[name][piece])
     return filtered, float(cutoff), rate
 
 
@@ -164,7 +175,7 @@ def _bounds():
 
 
 def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=150, screen=32,
-                progress=True, input_cutoff=None, search_rows=SEARCH_ROWS):
+                progress=True, input_cutoff=None, search_rows=SEARCH_ROWS, refine_rows=REFINE_ROWS):
     """Fit paper A's model to `record` (dict of arrays, DESIGN.md segment columns); returns a `Fit`.
 
     `params` gives the fixed geometry and one candidate start. Search, on at most `search_rows` evenly
@@ -173,8 +184,10 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=1
        given material), each scored by the residual of (32);
     2. bounded Nelder-Mead (derivative-free: the ceil() of Algorithm 1 makes the residual piecewise
        constant at fine scale) over (ln μ1, ln μ2, γ1, γ2) from the `starts` best points;
-    3. (c_Ψ0, c_Ψ0,p), which only enter X_s, by least squares for the best material — no forward
-       runs — and a shorter Nelder-Mead polish of the material with them.
+    3. on at most `refine_rows` rows (a finer stride: Algorithm 1 run with coarse steps biases the
+       residual, enough to move its minimum on 1 kHz data — see docs/segment.md): (c_Ψ0, c_Ψ0,p),
+       which only enter X_s, by least squares for the best material — no forward runs — and a
+       shorter Nelder-Mead polish of the material with them, twice.
     The two Ogden terms are interchangeable, so (μ1, γ1) and (μ2, γ2) may come out swapped.
     Before all of it the inputs are low-pass filtered (`filter_inputs`) at `input_cutoff` Hz
     (None: `params.identify_input_cutoff`; 0: off); `Fit.input_cutoff` says what was applied.
@@ -186,12 +199,8 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=1
     n = len(y_all)
     n_train = max(2, int(round(n * (1.0 - holdout))))
     train = slice(0, n_train)
-    stride = max(1, math.ceil(n_train / search_rows))
-    searched = slice(0, n_train, stride)
+    searched = slice(0, n_train, max(1, math.ceil(n_train / search_rows)))
     y_search = y_all[searched]
-    psi_s = np.asarray(record['psi'], float)[searched]
-    q1_s = scaled_pressure(params, np.asarray(record['p1'], float)[searched])
-    q2_s = scaled_pressure(params, np.asarray(record['p2'], float)[searched])
     bounds = _bounds()
     material_bounds = optimize.Bounds(bounds.lb[:4], bounds.ub[:4])
     curvature = np.clip(_to_vector(params), bounds.lb, bounds.ub)[4:]
@@ -226,6 +235,11 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=1
             z, value = local(candidates[k], max_evaluations)
             if value < best_cost:
                 best_z, best_cost = z, value
+        searched = slice(0, n_train, max(1, math.ceil(n_train / max(refine_rows, search_rows))))
+        y_search = y_all[searched]
+        psi_s = np.asarray(record['psi'], float)[searched]
+        q1_s = scaled_pressure(params, np.asarray(record['p1'], float)[searched])
+        q2_s = scaled_pressure(params, np.asarray(record['p2'], float)[searched])
         for _ in range(2):  # alternate: curvature constants for this material, then re-polish
             blocks = blocks_for(best_z)
 
