@@ -4,6 +4,7 @@ bounded."""
 import dataclasses
 import json
 import os
+import random
 import subprocess
 import sys
 import time
@@ -12,7 +13,7 @@ import can
 import pytest
 
 from bellows_ros.hardware import can_protocol as cp
-from bellows_ros.hardware.arm_bus import ArmBus, load_config, open_bus
+from bellows_ros.hardware.arm_bus import ArmBus, load_config, open_bus, open_can
 from bellows_ros.hardware.faults import Faults
 from bellows_ros.hardware.sim_arm_bus import SimArmBus
 
@@ -221,3 +222,19 @@ def test_four_segments_at_1khz_between_two_processes_over_udp_multicast():
     assert len(received) / report['ticks'] >= 0.98, (len(received), report, arm.counters())
     assert report['setpoints'] == [2e5] * (2 * N)   # the other direction worked too
     assert report['counters']['rx_accepted'] > 0
+
+
+def test_a_bus_hears_only_its_own_multicast_group():
+    """Linux delivers every joined group on a port to a wildcard-bound socket unless told not to."""
+    port = 43000 + random.randint(0, 999)
+    talker = open_can('udp_multicast', '239.74.166.10', port=port)
+    listener = open_can('udp_multicast', '239.74.166.11', port=port)
+    other = open_can('udp_multicast', '239.74.166.10', port=port)
+    try:
+        message = can.Message(arbitration_id=0x123, data=b'\x01', is_extended_id=False)
+        talker.send(message)
+        assert other.recv(timeout=2.0) is not None     # the group works...
+        assert listener.recv(timeout=0.5) is None      # ...and does not leak into another group
+    finally:
+        for bus in (talker, listener, other):
+            bus.shutdown()

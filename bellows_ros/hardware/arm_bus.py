@@ -21,6 +21,8 @@ API
 """
 import dataclasses
 import logging
+import socket
+import sys
 import threading
 import time
 
@@ -60,10 +62,28 @@ def load_config(params_path=None, segment_params_path=None):
     return params.build(ArmBusConfig, flat, params_path or 'config/hardware.yaml')
 
 
+# Linux's IP_MULTICAST_ALL (linux/in.h); Python's socket module does not export it.
+_IP_MULTICAST_ALL = 49
+
+
 def open_bus(config, **kwargs):
     """The python-can bus named by the config; `kwargs` go to the interface (e.g. udp_multicast
     port)."""
-    return can.Bus(interface=config.interface, channel=config.channel, **kwargs)
+    return open_can(config.interface, config.channel, **kwargs)
+
+
+def open_can(interface, channel, **kwargs):
+    """`can.Bus(interface=..., channel=...)`, kept to its own group when it is udp_multicast.
+
+    A udp_multicast socket is bound to the wildcard address, and Linux then delivers to it every
+    group that any process on the host joined on that port: two simulated arms on one machine
+    would hear each other. IP_MULTICAST_ALL = 0 limits the socket to its own group.
+    """
+    bus = can.Bus(interface=interface, channel=channel, **kwargs)
+    sock = getattr(getattr(bus, '_multicast', None), '_socket', None)
+    if sock is not None and sock.family == socket.AF_INET and sys.platform.startswith('linux'):
+        sock.setsockopt(socket.IPPROTO_IP, _IP_MULTICAST_ALL, 0)
+    return bus
 
 
 @dataclasses.dataclass(frozen=True)

@@ -206,7 +206,7 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=1
     curvature = np.clip(_to_vector(params), bounds.lb, bounds.ub)[4:]
     evaluations = 0
     polish = max_evaluations // 2
-    bar = tqdm(total=screen + 1 + starts * max_evaluations + polish + 2, desc='identify segment',
+    bar = tqdm(total=screen + 1 + starts * max_evaluations + 2 * polish + 2, desc='identify segment',
                unit='run', disable=not progress, file=sys.stderr, leave=False)
 
     def blocks_for(z_material):
@@ -248,7 +248,7 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=1
                 return solve_linear(blocks, y_search)[1]
             curvature = optimize.least_squares(curvature_residual, curvature,
                                                bounds=(bounds.lb[4:], bounds.ub[4:]), diff_step=1e-4).x
-            best_z, best_cost = local(best_z, polish // 2)
+            best_z, best_cost = local(best_z, polish)
         bar.set_postfix(rms=f'{math.sqrt(best_cost / len(y_search)):.4g} N·m')
     best_z = np.concatenate([best_z, curvature])
     fitted = _from_vector(params, best_z)

@@ -207,8 +207,11 @@ def contact_lengths(p, psi, pressure1, pressure2):
 def external_torque(p, psi, psi_dot, psi_ddot, tau_drive):
     """τ_ext = M Ψ̈ + C Ψ̇ + N(Ψ) - τ_drive from (2), N·m; M, C, N of `segment.dynamics`
     (quasi-static by default: M = C = N = 0, so τ_ext = -τ_drive). Works on scalars and arrays."""
+    # math.sin for a plain float: the model node calls this per segment per sample, where
+    # NumPy's scalar overhead is most of the cost.
+    sin = math.sin if isinstance(psi, float) else np.sin
     return (p.dynamics_inertia * psi_ddot + p.dynamics_damping * psi_dot
-            + p.dynamics_gravity * np.sin(psi) - tau_drive)
+            + p.dynamics_gravity * sin(psi) - tau_drive)
 
 
 # --- the 1 kHz evaluator ---------------------------------------------------------------------------

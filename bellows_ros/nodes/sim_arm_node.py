@@ -13,9 +13,9 @@ Parameters:
   load_torque (N·m): constant external torque on every segment (0 = free).
   clock_rate (Hz): /clock publication rate when use_sim_time is on (the node is then the clock).
 """
-import can
 
 from bellows_ros.errors import BellowsError
+from bellows_ros.hardware.arm_bus import open_can
 from bellows_ros.hardware.sim_arm_bus import SimArmBus
 from bellows_ros.models.segment import load_segment_params
 from bellows_ros.models.segment_plant import SegmentPlant
@@ -45,7 +45,7 @@ class SimArmNode(rt.Node):
             self._clock_every = max(1, round(1.0 / (clock_rate * 1e-3)))
         self._ticks = 0
         try:
-            bus = can.Bus(interface=interface, channel=channel)
+            bus = open_can(interface, channel)
         except Exception as exc:  # python-can raises interface-specific errors
             raise BellowsError(f'sim_arm_node: cannot open CAN bus {interface}:{channel} ({exc})') \
                 from None

@@ -104,7 +104,8 @@ def main(node_class, args=None):
         check_parameters(node)
         rt.spin(node)
     except BellowsError as exc:
-        print(f'{program}: error: {exc}', file=sys.stderr, flush=True)
+        message = str(exc).removeprefix(f'{program}: ')  # node errors often name the node already
+        print(f'{program}: error: {message}', file=sys.stderr, flush=True)
         return 2
     except rt.Interrupted:
         pass
