@@ -138,3 +138,20 @@ def test_quasi_static_record_has_the_design_columns_and_is_cheap(params):
     assert set(record) >= {'t', 'psi', 'p1', 'p2', 'tau_ext', 'psi_dot'}
     assert len(record['t']) == 10000 and np.all(np.diff(record['t']) > 0)
     assert record['p1'].max() <= params.p_max and record['psi'].std() > 0.1
+
+
+def test_a_late_real_time_caller_gets_the_same_motion(params):
+    """A simulator starved of CPU passes one long dt; the stiff end stop must not make it bounce."""
+    on_time = SegmentPlant(params, effects=FULL_MODEL, noise=NO_NOISE)
+    late = SegmentPlant(params, effects=FULL_MODEL, noise=NO_NOISE)
+    for _ in range(1000):      # pressurise chain 1 and let the segment run onto its end stop
+        on_time.step(1e-3, 4e5, 101325.0)
+        late.step(1e-3, 4e5, 101325.0)
+    worst = 0.0
+    for _ in range(200):       # then 4 s at 20 ms a call, against 1 ms a call
+        for _ in range(20):
+            on_time.step(1e-3, 4e5, 101325.0)
+        late.step(20e-3, 4e5, 101325.0)
+        worst = max(worst, abs(late.psi - on_time.psi))
+    assert abs(late.psi) <= params.plant_psi_limit + 0.05
+    assert worst < 1e-6

@@ -35,6 +35,8 @@ NONLINEAR = (('mu1', (100.0, 1e5)), ('mu2', (10.0, 1e5)), ('gamma1', (2.05, 12.0
              ('gamma2', (2.05, 12.0)), ('c_psi0', (0.1, 20.0)), ('c_psi0_p', (-1.5, 1.5)))
 SEARCH_ROWS = 6000  # the outer search runs on at most this many (evenly strided) training rows
 REFINE_ROWS = 18000  # ... and its final refinement (step 3) on at most this many
+POLISH_EVALUATIONS = 40  # full-rate forward runs of the final polish (step 4), ~0.5-1.8 s each
+POLISH_STEP = 0.02  # initial simplex edge of the polish, in ln μ and γ
 INPUT_FILTER_ORDER = 4  # Butterworth order of the input low-pass (applied forward and backward)
 MIN_RATE_PER_CUTOFF = 5.0  # below this sampling rate / cutoff the inputs are left unfiltered
 FILTERED_INPUTS = ('p1', 'p2', 'psi', 'psi_dot')
@@ -175,7 +177,8 @@ def _bounds():
 
 
 def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=150, screen=32,
-                progress=True, input_cutoff=None, search_rows=SEARCH_ROWS, refine_rows=REFINE_ROWS):
+                progress=True, input_cutoff=None, search_rows=SEARCH_ROWS, refine_rows=REFINE_ROWS,
+                polish_evaluations=POLISH_EVALUATIONS):
     """Fit paper A's model to `record` (dict of arrays, DESIGN.md segment columns); returns a `Fit`.
 
     `params` gives the fixed geometry and one candidate start. Search, on at most `search_rows` evenly
@@ -187,7 +190,11 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=1
     3. on at most `refine_rows` rows (a finer stride: Algorithm 1 run with coarse steps biases the
        residual, enough to move its minimum on 1 kHz data — see docs/segment.md): (c_Ψ0, c_Ψ0,p),
        which only enter X_s, by least squares for the best material — no forward runs — and a
-       shorter Nelder-Mead polish of the material with them, twice.
+       shorter Nelder-Mead polish of the material with them, twice;
+    4. on every training row (full rate: any stride shifts the optimum, docs/segment.md): the curvature
+       constants by least squares again, a Nelder-Mead polish of the material from a small simplex
+       (edge POLISH_STEP) of at most `polish_evaluations` forward runs, and the curvature constants once
+       more (0: skip the step).
     The two Ogden terms are interchangeable, so (μ1, γ1) and (μ2, γ2) may come out swapped.
     Before all of it the inputs are low-pass filtered (`filter_inputs`) at `input_cutoff` Hz
     (None: `params.identify_input_cutoff`; 0: off); `Fit.input_cutoff` says what was applied.
@@ -206,7 +213,8 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=1
     curvature = np.clip(_to_vector(params), bounds.lb, bounds.ub)[4:]
     evaluations = 0
     polish = max_evaluations // 2
-    bar = tqdm(total=screen + 1 + starts * max_evaluations + 2 * polish + 2, desc='identify segment',
+    bar = tqdm(total=screen + 1 + starts * max_evaluations + 2 * polish + 2
+               + (polish_evaluations + 2 if polish_evaluations > 0 else 0), desc='identify segment',
                unit='run', disable=not progress, file=sys.stderr, leave=False)
 
     def blocks_for(z_material):
@@ -240,15 +248,35 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=1
         psi_s = np.asarray(record['psi'], float)[searched]
         q1_s = scaled_pressure(params, np.asarray(record['p1'], float)[searched])
         q2_s = scaled_pressure(params, np.asarray(record['p2'], float)[searched])
-        for _ in range(2):  # alternate: curvature constants for this material, then re-polish
-            blocks = blocks_for(best_z)
+
+        def fit_curvature(z_material):
+            # (c_Ψ0, c_Ψ0,p) only enter X_s: one forward run, then least squares without any
+            blocks = blocks_for(z_material)
 
             def curvature_residual(c):
                 blocks['X_s'] = restoring_regressor(psi_s, q1_s, q2_s, c[0], c[1])
                 return solve_linear(blocks, y_search)[1]
-            curvature = optimize.least_squares(curvature_residual, curvature,
-                                               bounds=(bounds.lb[4:], bounds.ub[4:]), diff_step=1e-4).x
+            return optimize.least_squares(curvature_residual, curvature,
+                                          bounds=(bounds.lb[4:], bounds.ub[4:]), diff_step=1e-4).x
+
+        for _ in range(2):  # alternate: curvature constants for this material, then re-polish
+            curvature = fit_curvature(best_z)
             best_z, best_cost = local(best_z, polish)
+        if polish_evaluations > 0:
+            searched = train
+            y_search = y_all[train]
+            psi_s = np.asarray(record['psi'], float)[train]
+            q1_s = scaled_pressure(params, np.asarray(record['p1'], float)[train])
+            q2_s = scaled_pressure(params, np.asarray(record['p2'], float)[train])
+            curvature = fit_curvature(best_z)
+            simplex = best_z + np.vstack([np.zeros(4), POLISH_STEP * np.eye(4)])
+            result = optimize.minimize(cost, best_z, method='Nelder-Mead', bounds=material_bounds,
+                                       options={'maxfev': polish_evaluations, 'xatol': 1e-4,
+                                                'fatol': 1e-9,
+                                                'initial_simplex': np.clip(simplex, material_bounds.lb,
+                                                                           material_bounds.ub)})
+            best_z, best_cost = result.x, result.fun
+            curvature = fit_curvature(best_z)
         bar.set_postfix(rms=f'{math.sqrt(best_cost / len(y_search)):.4g} N·m')
     best_z = np.concatenate([best_z, curvature])
     fitted = _from_vector(params, best_z)

@@ -39,6 +39,8 @@ EFFECT_PARAMETERS = {
 }
 NOISE_KEYS = ('p', 'psi', 'psi_dot', 'tau')
 NO_NOISE = {key: 0.0 for key in NOISE_KEYS}
+# Longest step of the free-motion integration, s (a numerical setting, not physics: see `step`).
+MAX_STEP = 1e-3
 
 SegmentSample = namedtuple('SegmentSample', 't psi psi_dot p1 p2 tau_ext')
 SegmentSample.__doc__ = 'One sample: time s, Ψ rad, Ψ̇ rad/s, chain pressures Pa abs, τ_ext N·m.'
@@ -147,7 +149,20 @@ class SegmentPlant:
         return -math.copysign(p.plant_stop_stiffness * over, self.psi) - damping * self.psi_dot
 
     def step(self, dt, p_cmd1, p_cmd2, psi_imposed=None, tau_load=None):
-        """Advance by `dt` s with pressure commands (Pa abs); impose Ψ (rad) or apply `tau_load` (N·m)."""
+        """Advance by `dt` s with pressure commands (Pa abs); impose Ψ (rad) or apply `tau_load` (N·m).
+
+        A real-time caller that falls behind passes a long `dt`; the free motion is then integrated
+        in equal sub-steps of at most MAX_STEP, because the explicit update of the stiff, damped end
+        stop is stable only for steps well under 7 ms. An imposed angle is reached in one step.
+        """
+        substeps = 1 if psi_imposed is not None else max(1, math.ceil(dt / MAX_STEP - 1e-9))
+        for _ in range(substeps):
+            self._advance(dt / substeps, p_cmd1, p_cmd2, psi_imposed, tau_load)
+        n_psi, n_dot, n_p1, n_p2, n_tau = self._draw()
+        return SegmentSample(self.t, self.psi + n_psi, self.psi_dot + n_dot, self.sensed1 + n_p1,
+                             self.sensed2 + n_p2, self.tau_ext + n_tau)
+
+    def _advance(self, dt, p_cmd1, p_cmd2, psi_imposed, tau_load):
         p = self.physics
         blend = 1.0 - math.exp(-dt / p.plant_valve_tau)
         self.p1 += blend * (p_cmd1 - self.p1)
@@ -176,6 +191,3 @@ class SegmentPlant:
         else:
             self.sensed1, self.sensed2 = self.p1, self.p2
         self.t += dt
-        n_psi, n_dot, n_p1, n_p2, n_tau = self._draw()
-        return SegmentSample(self.t, self.psi + n_psi, self.psi_dot + n_dot, self.sensed1 + n_p1,
-                             self.sensed2 + n_p2, self.tau_ext + n_tau)
