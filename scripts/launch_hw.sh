@@ -38,25 +38,15 @@ done
 mkdir -p "$logs"
 common=(--ros-args --params-file "$params")
 
-pids=()
-cleanup() {
-  trap - EXIT INT TERM
-  # SIGTERM, not SIGINT: a non-interactive shell starts background jobs with SIGINT ignored.
-  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
-  for pid in "${pids[@]}"; do
-    for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
-    kill -KILL "$pid" 2>/dev/null || true
-  done
-  wait 2>/dev/null || true
-}
-trap cleanup EXIT
+node_logs="$logs"
+# shellcheck source=scripts/node_processes.sh
+source "$top/scripts/node_processes.sh"
+trap stop_nodes EXIT
 trap 'exit 130' INT TERM
 
 start() {
-  local name=$1; shift
-  "$bin/$name" "${common[@]}" "$@" "${extra[@]}" >"$logs/$name.log" 2>&1 &
-  pids+=($!)
-  echo "launch_hw: $name (pid $!), log $logs/$name.log" >&2
+  start_node "$@"
+  echo "launch_hw: $1 (pid $!), log $logs/$1.log" >&2
 }
 
 start driver_node "${driver[@]}"

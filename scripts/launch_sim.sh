@@ -42,26 +42,19 @@ port="${TMPDIR:-/tmp}/bellows_sim_actuator_$$"
 group="239.74.163.$(( ($$ % 200) + 20 ))"
 common=(--ros-args --params-file "$params")
 
-pids=()
+node_logs="$output/logs"
+# shellcheck source=scripts/node_processes.sh
+source "$top/scripts/node_processes.sh"
 cleanup() {
-  trap - EXIT INT TERM
-  # SIGTERM, not SIGINT: a non-interactive shell starts background jobs with SIGINT ignored.
-  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
-  for pid in "${pids[@]}"; do
-    for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
-    kill -KILL "$pid" 2>/dev/null || true
-  done
-  wait 2>/dev/null || true
+  stop_nodes
   rm -f "$port"
 }
 trap cleanup EXIT
 trap 'exit 130' INT TERM
 
 start() {  # start NAME ARGS...: a node in the background, log in $output/logs/NAME.log
-  local name=$1; shift
-  "$bin/$name" "${common[@]}" "$@" "${extra[@]}" >"$output/logs/$name.log" 2>&1 &
-  pids+=($!)
-  echo "launch_sim: $name (pid $!)" >&2
+  start_node "$@"
+  echo "launch_sim: $1 (pid $!)" >&2
 }
 alive() {  # fail early, naming the node, when one exited (bad parameters, absent device)
   for pid in "${pids[@]}"; do

@@ -18,38 +18,12 @@ import pytest
 from bellows_ros.runtime import dds_node
 from bellows_ros.runtime.messages import msg
 
+from plain_cyclone import JOINT_STATE_SUBSCRIBER
+
 BIN = Path(sys.executable).parent
 CONFIG = Path(__file__).resolve().parent.parent / 'config' / 'nodes_sim.yaml'
 
-PLAIN_SUBSCRIBER = textwrap.dedent('''
-    import sys, time
-    from dataclasses import dataclass
-    from cyclonedds.core import Qos, Policy
-    from cyclonedds.domain import DomainParticipant
-    from cyclonedds.idl import IdlStruct
-    from cyclonedds.idl.types import int32, uint32, float64, sequence
-    from cyclonedds.sub import DataReader
-    from cyclonedds.topic import Topic
-
-    @dataclass
-    class Time(IdlStruct, typename='builtin_interfaces::msg::dds_::Time_'):
-        sec: int32
-        nanosec: uint32
-
-    @dataclass
-    class Header(IdlStruct, typename='std_msgs::msg::dds_::Header_'):
-        stamp: Time
-        frame_id: str
-
-    @dataclass
-    class JointState(IdlStruct, typename='sensor_msgs::msg::dds_::JointState_'):
-        header: Header
-        name: sequence[str]
-        position: sequence[float64]
-        velocity: sequence[float64]
-        effort: sequence[float64]
-
-    participant = DomainParticipant(int(sys.argv[1]))
+PLAIN_SUBSCRIBER = JOINT_STATE_SUBSCRIBER + textwrap.dedent('''\
     qos = Qos(Policy.Reliability.Reliable(0), Policy.History.KeepLast(50))
     readers = {t: DataReader(participant, Topic(participant, 'rt' + t, JointState), qos=qos)
                for t in sys.argv[2:]}

@@ -16,6 +16,8 @@ from bellows_ros.hardware.actuator_board import ActuatorBoard, load_config
 from bellows_ros.hardware.faults import Faults
 from bellows_ros.hardware.sim_actuator_board import ActuatorState, SimActuatorBoard
 
+from polling import wait_for
+
 CONFIG = load_config()
 
 
@@ -33,16 +35,6 @@ class Plant:
         return ActuatorState(x_c=self.x_c, p=p,
                              x_s=0.004 + 0.002 * math.sin(3 * self.t),
                              f=6.0 + 3.0 * math.sin(3 * self.t))
-
-
-def wait_for(condition, timeout=5.0):
-    """Poll `condition` until true or `timeout` s (a bound, not an assertion about speed)."""
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if condition():
-            return True
-        time.sleep(0.005)
-    return condition()
 
 
 @pytest.fixture

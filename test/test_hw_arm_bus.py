@@ -17,6 +17,8 @@ from bellows_ros.hardware.arm_bus import ArmBus, load_config, open_bus, open_can
 from bellows_ros.hardware.faults import Faults
 from bellows_ros.hardware.sim_arm_bus import SimArmBus
 
+from polling import wait_for
+
 CONFIG = load_config()
 N = CONFIG.n_segments
 
@@ -58,15 +60,6 @@ def check_stream(received):
     for item in bad[:5]:
         print('wrong:', item)
     return len(bad)
-
-
-def wait_for(condition, timeout=5.0):
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if condition():
-            return True
-        time.sleep(0.005)
-    return condition()
 
 
 @pytest.fixture

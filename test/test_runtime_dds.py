@@ -10,6 +10,8 @@ import pytest
 from bellows_ros.runtime import dds_node
 from bellows_ros.runtime.messages import msg
 
+from plain_cyclone import JOINT_STATE_SUBSCRIBER
+
 DOMAIN = '191'
 
 TALKER = textwrap.dedent('''
@@ -38,35 +40,7 @@ TALKER = textwrap.dedent('''
 # with the ROS 2 type names. It prints the last position it received and the type name and USER_DATA
 # of the matched writer (from discovery). (Reading the builtin DCPSPublication topic crashes
 # cyclonedds-python 11.0.1, so the matched-publication data is used instead.)
-INDEPENDENT = textwrap.dedent('''
-    import sys, time
-    from dataclasses import dataclass
-    from cyclonedds.core import Qos, Policy
-    from cyclonedds.domain import DomainParticipant
-    from cyclonedds.idl import IdlStruct
-    from cyclonedds.idl.types import int32, uint32, float64, sequence
-    from cyclonedds.sub import DataReader
-    from cyclonedds.topic import Topic
-
-    @dataclass
-    class Time(IdlStruct, typename='builtin_interfaces::msg::dds_::Time_'):
-        sec: int32
-        nanosec: uint32
-
-    @dataclass
-    class Header(IdlStruct, typename='std_msgs::msg::dds_::Header_'):
-        stamp: Time
-        frame_id: str
-
-    @dataclass
-    class JointState(IdlStruct, typename='sensor_msgs::msg::dds_::JointState_'):
-        header: Header
-        name: sequence[str]
-        position: sequence[float64]
-        velocity: sequence[float64]
-        effort: sequence[float64]
-
-    participant = DomainParticipant(int(sys.argv[1]))
+INDEPENDENT = JOINT_STATE_SUBSCRIBER + textwrap.dedent('''\
     topic = Topic(participant, 'rt/' + sys.argv[2].lstrip('/'), JointState)
     reader = DataReader(participant, topic, qos=Qos(Policy.Reliability.Reliable(0),
                                                      Policy.History.KeepLast(10)))

@@ -30,6 +30,7 @@ import serial
 
 from bellows_ros import params
 from bellows_ros.hardware import serial_protocol as sp
+from bellows_ros.hardware.sample_delivery import deliver, fresh
 from bellows_ros.hardware.safety import Watchdog, limit_duty
 from bellows_ros.models.actuator import load_actuator_params
 
@@ -122,10 +123,7 @@ class ActuatorBoard:
         return self.latest() is None
 
     def latest(self):
-        sample = self._latest
-        if sample is None or time.monotonic() - sample.t_receive > self.config.stale_timeout:
-            return None
-        return sample
+        return fresh(self._latest, self.config.stale_timeout)
 
     def counters(self):
         d = self._decoder
@@ -267,14 +265,7 @@ class ActuatorBoard:
                 self._counts['end_stop_stops'] += 1
                 self._duty = 0.0
                 self._send(lambda seq: sp.MotorCommand(seq, 0))
-        if self._on_sample is not None:
-            try:
-                self._on_sample(sample)
-            except Exception:  # a failing consumer must not kill the reader (and the watchdogs)
-                self._counts['callback_errors'] += 1
-                if self._counts['callback_errors'] == 1:
-                    log.exception('actuator board: on_sample callback failed '
-                                  '(further failures only counted)')
+        deliver(self._on_sample, sample, self._counts, log, 'actuator board')
 
     def close(self):
         """Stop the motor, stop the threads, close the port."""

@@ -30,6 +30,7 @@ import can
 
 from bellows_ros import params
 from bellows_ros.hardware import can_protocol as cp
+from bellows_ros.hardware.sample_delivery import deliver, fresh
 from bellows_ros.hardware.safety import Watchdog, clamp_pressures
 from bellows_ros.models.segment import load_segment_params
 
@@ -144,10 +145,7 @@ class ArmBus:
         return self.latest() is None
 
     def latest(self):
-        sample = self._latest
-        if sample is None or time.monotonic() - sample.t_receive > self.config.stale_timeout:
-            return None
-        return sample
+        return fresh(self._latest, self.config.stale_timeout)
 
     def counters(self):
         out = dict(self._counts)
@@ -271,14 +269,7 @@ class ArmBus:
             pressures=tuple(p for i in range(n) for p in (parts[i]['P1'], parts[i]['P2'])))
         self._latest = sample
         self._counts['samples'] += 1
-        if self._on_sample is not None:
-            try:
-                self._on_sample(sample)
-            except Exception:  # a failing consumer must not kill the reader (and the watchdogs)
-                self._counts['callback_errors'] += 1
-                if self._counts['callback_errors'] == 1:
-                    log.exception('arm bus: on_sample callback failed '
-                                  '(further failures only counted)')
+        deliver(self._on_sample, sample, self._counts, log, 'arm bus')
 
     def close(self):
         """Vent every chamber, stop the threads, shut the bus down."""

@@ -14,6 +14,8 @@ API
 - ``PeriodicLoop(period, stats=None, spin=1e-4)``; ``.ticks(stop_event) -> Iterator[float]``.
 - ``LoopStats(window=10000)``; ``.record(period, lateness, compute)``, ``.add_misses(n)``,
   ``.summary() -> dict[str, float]``.
+- ``LoopThread(loop, name, log, what)``: ``loop(stop_event)`` on a daemon thread from
+  ``.start()`` to ``.stop()`` (restartable); a loop that raises is logged, not lost.
 
 Deadlines are ``t0 + k * period`` on ``time.perf_counter`` (absolute, so sleep jitter never
 accumulates into drift). The loop sleeps until ``spin`` seconds before the deadline and busy-waits
@@ -119,3 +121,35 @@ class PeriodicLoop:
             compute = time.perf_counter() - tick_start
             self.stats.record(tick_start - previous_start, lateness, compute)
             previous_start = tick_start
+
+
+class LoopThread:
+    """Run `loop(stop_event)` on a daemon thread named `name` from `start()` until `stop()`.
+
+    Restartable (the simulated devices are stopped and started again in tests). A loop that raises
+    (e.g. a simulated device's plant callback) is logged on `log` as "`what`: loop stopped"
+    instead of its thread dying silently.
+    """
+
+    def __init__(self, loop, name, log, what):
+        self._loop, self._name, self._log, self._what = loop, name, log, what
+        self._stop = threading.Event()
+        self._thread = None
+
+    def start(self):
+        self._stop.clear()
+        self._thread = threading.Thread(target=self._run, name=self._name, daemon=True)
+        self._thread.start()
+
+    def stop(self):
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
+            self._thread = None
+
+    def _run(self):
+        try:
+            self._loop(self._stop)
+        except Exception:
+            self._log.exception('%s: loop stopped', self._what)
+            raise

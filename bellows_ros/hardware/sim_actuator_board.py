@@ -36,7 +36,7 @@ import tty
 from bellows_ros.hardware import serial_protocol as sp
 from bellows_ros.hardware.actuator_board import load_config
 from bellows_ros.hardware.faults import Faults
-from bellows_ros.hardware.loop_timing import LoopStats, PeriodicLoop
+from bellows_ros.hardware.loop_timing import LoopStats, LoopThread, PeriodicLoop
 
 log = logging.getLogger(__name__)
 
@@ -70,8 +70,8 @@ class SimActuatorBoard:
         self._fd_lock = threading.Lock()
         self._master = self._slave = None
         self._decoder = sp.FrameDecoder()
-        self._stop = threading.Event()
-        self._thread = None
+        self._thread = LoopThread(self._loop, 'sim-actuator-board', log,
+                                  'simulated actuator board')
         self.duty = 0.0
         self._last_host = time.monotonic()
         self._stuck_p = None
@@ -106,16 +106,11 @@ class SimActuatorBoard:
 
     # -- run ----------------------------------------------------------------------------------
     def start(self):
-        self._stop.clear()
         self._last_host = time.monotonic()
-        self._thread = threading.Thread(target=self._run, name='sim-actuator-board', daemon=True)
         self._thread.start()
 
     def stop(self):
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=2.0)
-            self._thread = None
+        self._thread.stop()
 
     def close(self):
         self.stop()
@@ -129,18 +124,11 @@ class SimActuatorBoard:
                    rx_framing_errors=self._decoder.framing_errors)
         return out
 
-    def _run(self):
-        try:
-            self._loop()
-        except Exception:  # e.g. the plant callback: say so instead of dying silently
-            log.exception('simulated actuator board: loop stopped')
-            raise
-
-    def _loop(self):
+    def _loop(self, stop):
         t_us = 0
         seq = 0
         state = None
-        for dt in PeriodicLoop(self.period, self.stats).ticks(self._stop):
+        for dt in PeriodicLoop(self.period, self.stats).ticks(stop):
             self._read_host()
             status = self._apply_safety(state)
             state = self._step(dt, self.duty)

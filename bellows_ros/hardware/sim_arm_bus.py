@@ -16,14 +16,13 @@ CRC/counter-checked like on the driver side; every chamber vents after `ARM_HEAR
 without a host heartbeat.
 """
 import logging
-import threading
 import time
 
 import can
 
 from bellows_ros.hardware import can_protocol as cp
 from bellows_ros.hardware.faults import Faults
-from bellows_ros.hardware.loop_timing import LoopStats, PeriodicLoop
+from bellows_ros.hardware.loop_timing import LoopStats, LoopThread, PeriodicLoop
 
 log = logging.getLogger(__name__)
 
@@ -57,19 +56,13 @@ class SimArmBus:
         self._stuck = None
         self._counts = {'sent': 0, 'dropped': 0, 'corrupted': 0, 'replayed': 0, 'tx_errors': 0,
                         'heartbeat_vents': 0}
-        self._stop = threading.Event()
-        self._thread = None
+        self._thread = LoopThread(self._loop, 'sim-arm-bus', log, 'simulated arm')
 
     def start(self):
-        self._stop.clear()
-        self._thread = threading.Thread(target=self._run, name='sim-arm-bus', daemon=True)
         self._thread.start()
 
     def stop(self):
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=2.0)
-            self._thread = None
+        self._thread.stop()
 
     def close(self):
         self.stop()
@@ -80,20 +73,13 @@ class SimArmBus:
         out.update({f'rx_{k}': v for k, v in self._checker.counters().items()})
         return out
 
-    def _run(self):
-        try:
-            self._loop()
-        except Exception:  # e.g. the plant callback: say so instead of dying silently
-            log.exception('simulated arm: loop stopped')
-            raise
-
-    def _loop(self):
+    def _loop(self, stop):
         tick = 0
         previous = None
         # No busy-wait before each deadline: on a shared 2-core machine the spin (10 % of a core at
         # 1 kHz) is CPU the driver and model nodes need, and the samples are stamped on arrival
         # at the driver, so the tick's sleep overshoot (timer slack, ~50-100 us) costs nothing.
-        for dt in PeriodicLoop(self.period, self.stats, spin=0.0).ticks(self._stop):
+        for dt in PeriodicLoop(self.period, self.stats, spin=0.0).ticks(stop):
             self._read_host()
             self._apply_heartbeat()
             measured = self._step(dt, self.setpoints)

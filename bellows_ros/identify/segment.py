@@ -36,7 +36,7 @@ NONLINEAR = (('mu1', (100.0, 1e5)), ('mu2', (10.0, 1e5)), ('gamma1', (2.05, 12.0
 SEARCH_ROWS = 6000  # the outer search runs on at most this many (evenly strided) training rows
 REFINE_ROWS = 18000  # ... and its final refinement (step 3) on at most this many
 POLISH_EVALUATIONS = 40  # full-rate forward runs of the final polish (step 4), ~0.5-1.8 s each
-POLISH_STEP = 0.02  # initial simplex edge of the polish, in ln μ and γ
+POLISH_STEP = 1e-3  # relative finite-difference step of the polish's Jacobian
 INPUT_FILTER_ORDER = 4  # Butterworth order of the input low-pass (applied forward and backward)
 MIN_RATE_PER_CUTOFF = 5.0  # below this sampling rate / cutoff the inputs are left unfiltered
 FILTERED_INPUTS = ('p1', 'p2', 'psi', 'psi_dot')
@@ -191,10 +191,9 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=1
        residual, enough to move its minimum on 1 kHz data — see docs/segment.md): (c_Ψ0, c_Ψ0,p),
        which only enter X_s, by least squares for the best material — no forward runs — and a
        shorter Nelder-Mead polish of the material with them, twice;
-    4. on every training row (full rate: any stride shifts the optimum, docs/segment.md): the curvature
-       constants by least squares again, a Nelder-Mead polish of the material from a small simplex
-       (edge POLISH_STEP) of at most `polish_evaluations` forward runs, and the curvature constants once
-       more (0: skip the step).
+    4. on every training row (full rate: any stride shifts the optimum, docs/segment.md): a bounded
+       trust-region Gauss-Newton (`least_squares`) on all six, θ re-solved by (32) in each residual, of
+       at most ~`polish_evaluations` forward runs (0: skip the step).
     The two Ogden terms are interchangeable, so (μ1, γ1) and (μ2, γ2) may come out swapped.
     Before all of it the inputs are low-pass filtered (`filter_inputs`) at `input_cutoff` Hz
     (None: `params.identify_input_cutoff`; 0: off); `Fit.input_cutoff` says what was applied.
@@ -214,7 +213,7 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=1
     evaluations = 0
     polish = max_evaluations // 2
     bar = tqdm(total=screen + 1 + starts * max_evaluations + 2 * polish + 2
-               + (polish_evaluations + 2 if polish_evaluations > 0 else 0), desc='identify segment',
+               + polish_evaluations, desc='identify segment',
                unit='run', disable=not progress, file=sys.stderr, leave=False)
 
     def blocks_for(z_material):
@@ -259,24 +258,42 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=1
             return optimize.least_squares(curvature_residual, curvature,
                                           bounds=(bounds.lb[4:], bounds.ub[4:]), diff_step=1e-4).x
 
+        def full_rate_polish(z0):
+            # Gauss-Newton (trust region) on all six nonlinear parameters over every training row, θ
+            # re-solved by (32) in each residual; forward runs cached per material, so the curvature
+            # columns of the finite-difference Jacobian cost none. About 1 + 4 runs per iteration.
+            psi, y = np.asarray(record['psi'], float)[train], y_all[train]
+            q1 = scaled_pressure(params, np.asarray(record['p1'], float)[train])
+            q2 = scaled_pressure(params, np.asarray(record['p2'], float)[train])
+            cache = {}
+
+            def residual(z):
+                key = tuple(z[:4])
+                if key not in cache:
+                    if len(cache) > 5:
+                        cache.clear()
+                    cache[key] = _full_blocks(z[:4])
+                blocks = dict(cache[key], X_s=restoring_regressor(psi, q1, q2, z[4], z[5]))
+                return solve_linear(blocks, y)[1]
+
+            def _full_blocks(z_material):
+                nonlocal evaluations
+                evaluations += 1
+                bar.update(1)
+                return regressors(_from_vector(params, np.concatenate([z_material, [0.0, 0.0]])),
+                                  record, train)
+
+            result = optimize.least_squares(residual, np.clip(z0, bounds.lb, bounds.ub),
+                                            bounds=(bounds.lb, bounds.ub), diff_step=POLISH_STEP,
+                                            max_nfev=max(1, polish_evaluations // 5))
+            return result.x, 2.0 * result.cost
+
         for _ in range(2):  # alternate: curvature constants for this material, then re-polish
             curvature = fit_curvature(best_z)
             best_z, best_cost = local(best_z, polish)
         if polish_evaluations > 0:
-            searched = train
-            y_search = y_all[train]
-            psi_s = np.asarray(record['psi'], float)[train]
-            q1_s = scaled_pressure(params, np.asarray(record['p1'], float)[train])
-            q2_s = scaled_pressure(params, np.asarray(record['p2'], float)[train])
-            curvature = fit_curvature(best_z)
-            simplex = best_z + np.vstack([np.zeros(4), POLISH_STEP * np.eye(4)])
-            result = optimize.minimize(cost, best_z, method='Nelder-Mead', bounds=material_bounds,
-                                       options={'maxfev': polish_evaluations, 'xatol': 1e-4,
-                                                'fatol': 1e-9,
-                                                'initial_simplex': np.clip(simplex, material_bounds.lb,
-                                                                           material_bounds.ub)})
-            best_z, best_cost = result.x, result.fun
-            curvature = fit_curvature(best_z)
+            best_z, best_cost = full_rate_polish(np.concatenate([best_z, curvature]))
+            best_z, curvature = best_z[:4], best_z[4:]
         bar.set_postfix(rms=f'{math.sqrt(best_cost / len(y_search)):.4g} N·m')
     best_z = np.concatenate([best_z, curvature])
     fitted = _from_vector(params, best_z)

@@ -204,13 +204,7 @@ class ActuatorPlant:
             raise ParameterError(f'time step must be > 0, got {dt}')
         duty = -1.0 if duty < -1.0 else 1.0 if duty > 1.0 else float(duty)
         self._step_drive(dt, duty)
-        if x_s_imposed is not None:
-            self._x_s = float(x_s_imposed)
-        elif f_load is not None:
-            self._x_s = self._spring_under_load(float(f_load))
-        self._step_gas(dt)
-        self.t += dt
-        return self._sample(dt)
+        return self._finish_step(dt, x_s_imposed, f_load)
 
     def step_nut(self, dt, x_nut, x_s_imposed=None, f_load=None):
         """Advance by `dt` (s) with the lead-screw nut moved to `x_nut` (m) kinematically.
@@ -226,6 +220,10 @@ class ActuatorPlant:
         self._omega = (new_theta - self._theta) / dt
         self._theta = new_theta
         self._move_plate(x_nut)
+        return self._finish_step(dt, x_s_imposed, f_load)
+
+    def _finish_step(self, dt, x_s_imposed, f_load):
+        """The rest of a step once the plate has moved: spring imposed or loaded, gas, clock."""
         if x_s_imposed is not None:
             self._x_s = float(x_s_imposed)
         elif f_load is not None:

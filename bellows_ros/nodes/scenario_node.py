@@ -117,12 +117,13 @@ class ScenarioNode(rt.Node):
         if after:
             band = 0.02 * self.k_high
             outside = [t for t, k in after if abs(k - self.k_high) > band]
-            settled = (outside[-1] if outside else 0.0) if abs(after[-1][1] - self.k_high) <= band \
-                else math.nan
             overshoot = max(k for _, k in after) - self.k_high
-            lines.append(f'stiffness step {self.k_low:.0f} -> {self.k_high:.0f} N/m: within 2 % after '
-                         f'{settled:.2f} s, overshoot {max(0.0, overshoot):.1f} N/m, final '
-                         f'{after[-1][1]:.1f} N/m')
+            if abs(after[-1][1] - self.k_high) <= band:
+                settled = f'within 2 % after {outside[-1] if outside else 0.0:.2f} s'
+            else:  # e.g. a run shorter than the lead screw's travel time
+                settled = f'not within 2 % by the end of the run ({after[-1][0]:.1f} s after the step)'
+            lines.append(f'stiffness step {self.k_low:.0f} -> {self.k_high:.0f} N/m: {settled}, '
+                         f'overshoot {max(0.0, overshoot):.1f} N/m, final {after[-1][1]:.1f} N/m')
         else:
             lines.append('stiffness step: no /actuator/stiffness received')
         for name, unit in (('p1', 'Pa'), ('psi', 'rad'), ('tau_drive', 'N·m'), ('x_c', 'm')):
