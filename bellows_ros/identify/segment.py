@@ -33,8 +33,10 @@ from bellows_ros.models.segment import (actuator_regressor, contact_lengths, fri
 # Outer (nonlinear) parameters: name, SegmentParams field, bounds; μ searched in log space.
 NONLINEAR = (('mu1', (100.0, 1e5)), ('mu2', (10.0, 1e5)), ('gamma1', (2.05, 12.0)),
              ('gamma2', (2.05, 12.0)), ('c_psi0', (0.1, 20.0)), ('c_psi0_p', (-1.5, 1.5)))
-SEARCH_ROWS = 6000  # the outer search runs on at most this many (evenly strided) training rows
-REFINE_ROWS = 18000  # ... and its final refinement (step 3) on at most this many
+# The outer search runs on at most this many (evenly strided) training rows: on a 1 kHz record a
+# stride near 50 Hz biases Algorithm 1 enough to move the optimum into another basin; ~140 Hz does not.
+SEARCH_ROWS = 12000
+REFINE_ROWS = 24000  # ... and its refinement (step 3) on at most this many
 POLISH_EVALUATIONS = 40  # full-rate forward runs of the final polish (step 4), ~0.5-1.8 s each
 POLISH_STEP = 1e-3  # relative finite-difference step of the polish's Jacobian
 INPUT_FILTER_ORDER = 4  # Butterworth order of the input low-pass (applied forward and backward)
