@@ -7,6 +7,7 @@ untouched so that `bellows simulate` can write "the input plus outputs".
 A directory is read as a rosbag2 recording (see `bellows_ros.bag`).
 """
 import csv
+import io
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,7 +19,8 @@ from bellows_ros.errors import DataError
 # Required and optional columns of each system's files.
 COLUMNS = {
     'segment': (('t', 'psi', 'p1', 'p2', 'tau_ext'), ('psi_dot', 'tau_motion')),
-    'actuator': (('t', 'x_c', 'x_s', 'p', 'f'), ()),
+    # `run` numbers separate sealed runs of one record (used by `bellows identify actuator`).
+    'actuator': (('t', 'x_c', 'x_s', 'p', 'f'), ('run',)),
 }
 
 
@@ -58,32 +60,30 @@ def read_csv(path, required, optional=()):
     """
     path = Path(path)
     try:
-        stream = open(path, newline='')
+        raw = path.read_bytes()
     except OSError as exc:
         raise DataError(path, f'cannot read file ({exc.strerror})') from None
-    fast = _read_numeric(path, required, optional)
+    fast = _read_numeric(path, raw, required, optional)
     if fast is not None:
-        stream.close()
         return fast
-    with stream:
-        reader = csv.reader(stream)
-        header = next(reader, None)
-        if not header:
-            raise DataError(path, 'empty file: expected a header row', line=1)
-        header = [name.strip() for name in header]
-        for name in required:
-            if name not in header:
-                raise DataError(path, f"missing column '{name}' (header has: {', '.join(header)})",
-                                line=1)
-        rows, lines = [], []
-        for row in reader:
-            if not row or all(not cell.strip() for cell in row):
-                continue
-            if len(row) != len(header):
-                raise DataError(path, f'expected {len(header)} fields, found {len(row)}',
-                                line=reader.line_num)
-            rows.append(row)
-            lines.append(reader.line_num)
+    reader = csv.reader(io.StringIO(raw.decode(errors='replace'), newline=''))
+    header = next(reader, None)
+    if not header:
+        raise DataError(path, 'empty file: expected a header row', line=1)
+    header = [name.strip() for name in header]
+    for name in required:
+        if name not in header:
+            raise DataError(path, f"missing column '{name}' (header has: {', '.join(header)})",
+                            line=1)
+    rows, lines = [], []
+    for row in reader:
+        if not row or all(not cell.strip() for cell in row):
+            continue
+        if len(row) != len(header):
+            raise DataError(path, f'expected {len(header)} fields, found {len(row)}',
+                            line=reader.line_num)
+        rows.append(row)
+        lines.append(reader.line_num)
     if not rows:
         raise DataError(path, 'no data rows after the header')
     wanted = [name for name in header if name in required or name in optional]
@@ -97,14 +97,12 @@ def read_csv(path, required, optional=()):
     return Table(str(path), header, values, extras, lines)
 
 
-def _read_numeric(path, required, optional):
+def _read_numeric(path, raw, required, optional):
     """Fast path for the common file: every column wanted, all finite numbers, no blank lines.
 
     NumPy's C parser reads a 600 000-row record several times faster than the csv module. Anything
-    unusual returns None, and the careful reader above finds and names the problem.
+    unusual returns None, and the careful reader in `read_csv` finds and names the problem.
     """
-    with open(path, 'rb') as stream:
-        raw = stream.read()
     first, _, body = raw.partition(b'\n')
     header = [name.strip() for name in first.decode(errors='replace').split(',')]
     if any(name not in required and name not in optional for name in header) \
@@ -112,7 +110,7 @@ def _read_numeric(path, required, optional):
         return None
     rows = body.rstrip(b'\r\n').count(b'\n') + 1 if body.strip() else 0
     try:
-        array = np.loadtxt(path, delimiter=',', skiprows=1, dtype=float, ndmin=2)
+        array = np.loadtxt(io.BytesIO(body), delimiter=',', dtype=float, ndmin=2)
     except ValueError:
         return None
     if rows == 0 or array.shape != (rows, len(header)) or not np.isfinite(array).all():
@@ -159,12 +157,18 @@ def check_range(table, name, low, high, unit=''):
                         table.line(i), name)
 
 
-def read_table(path, system):
-    """Read a `system` ('segment' or 'actuator') file: CSV, or a rosbag2 directory."""
-    required, optional = COLUMNS[system]
+def read_table(path, system, required=None):
+    """Read a `system` ('segment' or 'actuator') file: CSV, or a rosbag2 directory.
+
+    `required` narrows the required columns of a CSV (e.g. a simulation input has no measured
+    torque); the system's other columns are then optional. A bag always yields the full set.
+    """
     if Path(path).is_dir():
         from bellows_ros.bag import read_bag_table
         return read_bag_table(path, system)
+    mandatory, optional = COLUMNS[system]
+    required = mandatory if required is None else tuple(required)
+    optional = tuple(name for name in mandatory + optional if name not in required)
     table = read_csv(path, required, optional)
     check_increasing(table, 't')
     return table

@@ -1,24 +1,13 @@
 """`bellows simulate actuator` and `bellows identify actuator` (DESIGN.md, docs/actuator.md)."""
 import sys
-from pathlib import Path
 
 import numpy as np
 
 from bellows_ros import params as param_files
-from bellows_ros.data import check_increasing, check_range, read_csv, read_table, write_csv
-from bellows_ros.errors import DataError
+from bellows_ros.data import check_range, read_table, write_csv
 from bellows_ros.identify.actuator import fit_actuator
 from bellows_ros.models.actuator import evaluate_array, load_actuator_params, params_to_flat
 from bellows_ros.models.actuator_plant import ActuatorPlant, effect_parameters
-
-
-def _read(path, columns):
-    """Actuator input: a CSV needs `columns` (p, f optional), a rosbag2 directory the full set."""
-    if Path(path).is_dir():
-        return read_table(path, 'actuator')
-    table = read_csv(path, columns, ('t', 'x_c', 'x_s', 'p', 'f'))
-    check_increasing(table, 't')
-    return table
 
 
 def _check_compressions(table, params):
@@ -37,7 +26,7 @@ def simulate(input_path, output_path, params_path, effects):
     """
     params = load_actuator_params(params_path)
     chosen = effect_parameters(params, effects) if effects else {}
-    table = _read(input_path, ('t', 'x_c', 'x_s'))
+    table = read_table(input_path, 'actuator', ('t', 'x_c', 'x_s'))  # p, f are outputs here
     _check_compressions(table, params)
     x_c, x_s, t = table['x_c'], table['x_s'], table['t']
     if not chosen:
@@ -66,9 +55,7 @@ def identify(args):
     params = load_actuator_params(args.params)
     table = read_table(args.data, 'actuator')
     _check_compressions(table, params)
-    run = None
-    if 'run' in table.extras:
-        run = _numeric_extra(table, 'run')
+    run = table['run'] if 'run' in table else None
     fit = fit_actuator(params, table['x_c'], table['x_s'], table['p'], table['f'], run=run,
                        seed=args.seed, progress=not args.quiet)
     fitted = fit.params
@@ -85,14 +72,3 @@ def identify(args):
     print(f'wrote {args.output}')
     return 0
 
-
-def _numeric_extra(table, name):
-    values = np.empty(len(table))
-    for row, cell in enumerate(table.extras[name]):
-        try:
-            values[row] = float(cell)
-        except ValueError:
-            raise DataError(table.path, f'not a number: {cell.strip()!r}', table.line(row), name) from None
-        if not np.isfinite(values[row]):
-            raise DataError(table.path, f'{cell.strip()} is not a finite number', table.line(row), name)
-    return values

@@ -17,18 +17,12 @@ from bellows_ros.identify.segment import MIN_RATE_PER_CUTOFF, fit_segment
 from bellows_ros.models.segment import load_segment_params, simulate_model, velocity
 from bellows_ros.models.segment_plant import SegmentPlant, check_effects
 
-INPUT_REQUIRED = ('t', 'psi', 'p1', 'p2')
-INPUT_OPTIONAL = ('psi_dot', 'tau_ext', 'tau_motion')
+INPUT_REQUIRED = ('t', 'psi', 'p1', 'p2')  # a simulation input needs no measured torque
 
 
-def _read(path, params, required):
-    """Read and validate a segment file: finite numbers, increasing t, 0 ≤ p ≤ p_max."""
-    if Path(path).is_dir():
-        table = data.read_table(path, 'segment')
-    else:
-        table = data.read_csv(path, required, tuple(c for c in ('t', 'psi', 'p1', 'p2', 'tau_ext') + INPUT_OPTIONAL
-                                                    if c not in required))
-        data.check_increasing(table, 't')
+def _read(path, params, required=None):
+    """Read a segment file (data.read_table) and check 0 ≤ p ≤ p_max on both chains."""
+    table = data.read_table(path, 'segment', required)
     for name in ('p1', 'p2'):
         data.check_range(table, name, 0.0, params.p_max, 'Pa')
     return table
@@ -61,15 +55,14 @@ def _run_plant(params, effects, table):
         sample = plant.step(dt, p1, p2, psi_imposed=psi)
         measured.append((sample.psi, sample.psi_dot, sample.p1, sample.p2, sample.tau_ext,
                          plant.tau_motion))
-        true.append(plant.outputs)
+        # the plant's own τ_drive: paper A's with contact_hysteresis, else the previous model's
+        true.append(plant.outputs[:5] + (plant.tau_drive,) + plant.outputs[6:])
     measured, true = np.array(measured), np.array(true)
     outputs = {'p1_cmd': table['p1'], 'p2_cmd': table['p2']}
     for k, name in enumerate(('psi', 'psi_dot', 'p1', 'p2', 'tau_ext', 'tau_motion')):
         outputs[name] = measured[:, k]
     for k, name in enumerate(('sa1', 'sa2', 'tau_a', 'tau_s', 'tau_f', 'tau_drive', 'tau_prev')):
         outputs[name] = true[:, k]
-    if 'contact_hysteresis' not in effects:  # the plant's driving torque is the previous model's
-        outputs['tau_drive'] = true[:, 6]
     return outputs
 
 
@@ -88,12 +81,10 @@ def _filter_summary(fit, params):
 def identify(args):
     """Fit paper A's model to DATA, write the parameters, print held-out errors of both models."""
     params = load_segment_params(args.params)
-    table = _read(args.data, params, ('t', 'psi', 'p1', 'p2', 'tau_ext'))
+    table = _read(args.data, params)
     if len(table) < 50:
         raise DataError(table.path, f'only {len(table)} rows: identification needs at least 50')
-    record = {name: table[name] for name in ('t', 'psi', 'p1', 'p2', 'tau_ext') + INPUT_OPTIONAL
-              if name in table}
-    fit = fit_segment(params, record, seed=args.seed, progress=not args.quiet)
+    fit = fit_segment(params, table.values, seed=args.seed, progress=not args.quiet)
     header = (f'bellows identify segment {args.data}\n'
               f'held-out RMSE {fit.heldout["model"][0]:.4g} N·m (previous model '
               f'{fit.heldout["previous"][0]:.4g} N·m) on the last {fit.heldout_rows} rows; '
