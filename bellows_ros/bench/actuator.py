@@ -14,7 +14,7 @@ import numpy as np
 
 from bellows_ros.bench import Result, timing
 from bellows_ros.models.actuator import evaluate, evaluate_array, estimate_gas, load_actuator_params
-from bellows_ros.models.actuator_geometry import volume_geo
+from bellows_ros.models.actuator_geometry import P_ATM, volume_geo
 from bellows_ros.models.actuator_plant import ActuatorPlant
 from bellows_ros.models.stiffness_map import compression_for_stiffness, stiffness_map, stiffness_range
 
@@ -49,7 +49,7 @@ def run(quick=False):
 
     def gas_estimate():
         x_c, x_s = next(points)
-        return estimate_gas(params, 101325.0, x_c, x_s)
+        return estimate_gas(params, P_ATM, x_c, x_s)
 
     results = [reference, geometry,
                timing('actuator forward: evaluate -> (P, F, K)', forward, calls, reference=reference,

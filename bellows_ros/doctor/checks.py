@@ -10,8 +10,8 @@ import numpy as np
 
 from bellows_ros.data import check_range, read_table
 from bellows_ros.errors import DataError
+from bellows_ros.models.actuator_geometry import P_ATM
 
-P_ATM = 101325.0          # Pa, ambient
 MIN_SAMPLES = 200
 MIN_DURATION = 5.0        # s
 MAX_JITTER = 0.05         # relative std of the sampling interval above which data is resampled

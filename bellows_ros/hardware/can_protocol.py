@@ -25,7 +25,6 @@ import cantools
 
 from bellows_ros import params
 
-VENT_PRESSURE = 101325.0  # Pa abs: what the arm's valves hold when vented (they exhaust to ambient)
 ARM_HEARTBEAT_TIMEOUT = 0.1  # s without ARM_HOST_HEARTBEAT before the arm vents every chamber
 
 
@@ -101,13 +100,8 @@ class FrameCodec:
 
     def crc(self, data):
         """CRC-8 of `data` without its CRC byte, followed by the frame ID (see module docstring)."""
-        crc = 0xFF
-        for i, byte in enumerate(data):
-            if i != self.crc_byte:
-                crc = _TABLE[crc ^ byte]
-        for byte in self._id_bytes:
-            crc = _TABLE[crc ^ byte]
-        return crc ^ 0xFF
+        i = self.crc_byte
+        return crc8_j1850(bytes(data[:i]) + bytes(data[i + 1:]) + self._id_bytes)
 
     def encode(self, values, counter):
         """Data bytes with `values` (physical units), the rolling `counter` and the CRC."""

@@ -23,12 +23,13 @@ import can
 from bellows_ros.hardware import can_protocol as cp
 from bellows_ros.hardware.faults import Faults
 from bellows_ros.hardware.loop_timing import LoopStats, LoopThread, PeriodicLoop
+from bellows_ros.models.segment import load_segment_params
 
 log = logging.getLogger(__name__)
 
 
 class SimArmBus:
-    def __init__(self, bus, step, n_segments=4, faults=None, dbc=None):
+    def __init__(self, bus, step, n_segments=4, faults=None, dbc=None, vent_pressure=None):
         self.db = cp.load_dbc(dbc)
         self._bus = bus
         self._step = step
@@ -49,7 +50,9 @@ class SimArmBus:
         psi = self._samples[0].get_signal_by_name('Psi')
         self._p_range = (p1.minimum, p1.maximum)
         self._psi_range = (psi.minimum, psi.maximum)
-        self.setpoints = (cp.VENT_PRESSURE,) * (2 * n_segments)
+        # Vented valves hold ambient: the segment model's p0 (config/segment.yaml).
+        self.vent_pressure = load_segment_params().p0 if vent_pressure is None else vent_pressure
+        self.setpoints = (self.vent_pressure,) * (2 * n_segments)
         self._commanded = list(self.setpoints)
         self._last_host = None      # never heard: vented until a host speaks
         self._heartbeat_lost = True
@@ -120,7 +123,7 @@ class SimArmBus:
         if lost and not self._heartbeat_lost:
             self._counts['heartbeat_vents'] += 1
         self._heartbeat_lost = lost
-        self.setpoints = ((cp.VENT_PRESSURE,) * (2 * self.n_segments) if lost
+        self.setpoints = ((self.vent_pressure,) * (2 * self.n_segments) if lost
                           else tuple(self._commanded))
 
     def _encode(self, counter, measured):

@@ -356,11 +356,3 @@ def rest_length_change(params, p, x_low=-0.03, x_high=0.03):
     except ValueError:
         raise ParameterError(f'actuator: no rest length within [{x_low}, {x_high}] m at {p:.0f} Pa') from None
 
-
-def check_compression(params, x_c, x_s):
-    """ParameterError unless x_c and x_s lie within the travel limits of the YAML."""
-    c, s = params.chamber, params.spring
-    if not c.x_min <= x_c <= c.x_max:
-        raise ParameterError(f'air-chamber compression {x_c:g} m is outside [{c.x_min:g}, {c.x_max:g}] m')
-    if not s.x_min <= x_s <= s.x_max:
-        raise ParameterError(f'spring compression {x_s:g} m is outside [{s.x_min:g}, {s.x_max:g}] m')

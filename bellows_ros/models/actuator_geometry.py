@@ -47,12 +47,6 @@ class Bellows:
         object.__setattr__(self, '_k', math.pi / 3.0)
         object.__setattr__(self, 'bulging', any(a != 0.0 for a in self.e_v))
 
-    @property
-    def x_straight(self):
-        """Total compression at which the walls are straight (R = r): the geometric extension limit."""
-        slant = math.sqrt(self._a2 + self.h0 ** 2 / 4.0)
-        return self.n * (self.h0 - 2.0 * slant)
-
 
 def frustum_state(b, x):
     """Large radius R (3), its derivative dR/dΔh, and f = R² + r² + R r at compression x (m).

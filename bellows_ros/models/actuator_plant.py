@@ -112,8 +112,6 @@ class ActuatorPlant:
         self.effects = effect_parameters(params, effects)
         self.params = model_params(params, self.effects)
         drive = params.drive
-        self.lead = drive.lead
-        self.gear_ratio = drive.gear_ratio
         self.counts_per_rev = int(drive.counts_per_rev)
         self.x_c_min, self.x_c_max = params.chamber.x_min, params.chamber.x_max
         self.max_speed = drive.max_speed

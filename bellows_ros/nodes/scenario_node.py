@@ -22,10 +22,10 @@ from pathlib import Path
 
 from bellows_ros.errors import BellowsError
 from bellows_ros.models.actuator import load_actuator_params
+from bellows_ros.models.segment import load_segment_params
 from bellows_ros.models.stiffness_map import stiffness_range
 from bellows_ros.runtime import rt
 
-P_AMBIENT = 101325.0
 
 
 class ScenarioNode(rt.Node):
@@ -41,6 +41,7 @@ class ScenarioNode(rt.Node):
         self.excursion_length = self.declare_parameter('excursion_length', 20.0).value
         self.output_dir = Path(self.declare_parameter('output_dir', 'scenario_out').value)
         actuator_params = self.declare_parameter('actuator_params', '').value or None
+        self.p0 = load_segment_params().p0  # ambient: the vented chain's pressure, Pa abs
         rt.check_parameters(self)
         k_min, k_max = stiffness_range(load_actuator_params(actuator_params))
         self.k_low = max(k_low, 1.01 * k_min)
@@ -92,8 +93,8 @@ class ScenarioNode(rt.Node):
         """Raised-cosine excursion ambient -> p_peak -> ambient."""
         phase = (t - self.excursion_start) / self.excursion_length
         if not 0.0 <= phase <= 1.0:
-            return P_AMBIENT
-        return P_AMBIENT + (self.p_peak - P_AMBIENT) * 0.5 * (1 - math.cos(2 * math.pi * phase))
+            return self.p0
+        return self.p0 + (self.p_peak - self.p0) * 0.5 * (1 - math.cos(2 * math.pi * phase))
 
     def command(self):
         t = self.elapsed()
@@ -106,7 +107,7 @@ class ScenarioNode(rt.Node):
             self._last_setpoint = k
         self._ticks += 1
         command = rt.msg.JointState(name=['segment_1/chain_1', 'segment_1/chain_2'],
-                                    effort=[self.chain_1_pressure(t), P_AMBIENT])
+                                    effort=[self.chain_1_pressure(t), self.p0])
         command.header.stamp = self.get_clock().now().to_msg()
         self.pressure_pub.publish(command)
 

@@ -49,7 +49,7 @@ class SimArmNode(rt.Node):
         except Exception as exc:  # python-can raises interface-specific errors
             raise BellowsError(f'sim_arm_node: cannot open CAN bus {interface}:{channel} ({exc})') \
                 from None
-        self.sim = SimArmBus(bus, self.step, n_segments=n_segments)
+        self.sim = SimArmBus(bus, self.step, n_segments=n_segments, vent_pressure=params.p0)
         self.sim.start()
         self.link = f'{interface}:{channel}'
         self.diag_pub = self.create_publisher(rt.msg.DiagnosticArray, '/diagnostics', 10)

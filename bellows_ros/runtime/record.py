@@ -14,7 +14,7 @@ from rosbags.rosbag2.enums import StoragePlugin
 
 from bellows_ros.errors import BellowsError
 from bellows_ros.runtime import dds_node
-from bellows_ros.runtime.messages import TYPESTORE, message_class, to_typestore
+from bellows_ros.runtime.messages import TYPESTORE, message_class
 from bellows_ros.runtime.topics import SAMPLE_DEPTH, TOPICS
 
 
@@ -43,7 +43,7 @@ def record(output, topics=None, duration=None, ready=None):
             ros_type = TOPICS[topic]
             connection = writer.add_connection(topic, ros_type, typestore=TYPESTORE)
             node.create_subscription(message_class(ros_type), topic,
-                                     _writer_callback(writer, connection, ros_type, counts, topic),
+                                     _writer_callback(writer, connection, counts, topic),
                                      SAMPLE_DEPTH)
         if ready:
             ready()
@@ -59,9 +59,10 @@ def record(output, topics=None, duration=None, ready=None):
     return counts
 
 
-def _writer_callback(writer, connection, ros_type, counts, topic):
+def _writer_callback(writer, connection, counts, topic):
     def write(msg):
-        data = TYPESTORE.serialize_cdr(to_typestore(msg), ros_type)
+        # The message classes serialise to the very CDR the type store would (tested), once.
+        data = msg.serialize(use_version_2=False)
         writer.write(connection, time.time_ns(), data)
         counts[topic] += 1
     return write
