@@ -23,6 +23,7 @@ from scipy.linalg import cho_factor, cho_solve
 from scipy.signal import savgol_filter
 
 from bellows_ros.doctor.scoring import Model
+from bellows_ros.identify.segment import target
 from bellows_ros.models.segment import (actuator_regressor, contact_lengths, friction_regressor,
                                         previous_regressor, restoring_regressor, scaled_pressure,
                                         velocity)
@@ -49,13 +50,7 @@ def add_columns(record, params):
     columns = record.columns
     if 'psi_dot' not in columns:
         columns['psi_dot'] = velocity(columns['t'], columns['psi'])
-    if 'tau_motion' in columns:
-        motion = columns['tau_motion']
-    else:
-        acceleration = np.gradient(columns['psi_dot'], columns['t'])
-        motion = (params.dynamics_inertia * acceleration + params.dynamics_damping * columns['psi_dot']
-                  + params.dynamics_gravity * np.sin(columns['psi']))
-    columns['y'] = motion - columns['tau_ext']
+    columns['y'] = target(params, columns)  # Y = τ_motion - τ_ext (30)
     return record
 
 

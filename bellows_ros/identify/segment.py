@@ -26,9 +26,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize, signal, stats
 
-from bellows_ros.models.segment import (actuator_regressor, contact_lengths, friction_regressor,
-                                        previous_regressor, restoring_regressor, scaled_pressure,
-                                        velocity)
+from bellows_ros.models.segment import (actuator_regressor, contact_lengths, external_torque,
+                                        friction_regressor, previous_regressor, restoring_regressor,
+                                        scaled_pressure, velocity)
 
 # Outer (nonlinear) parameters: name, SegmentParams field, bounds; μ searched in log space.
 NONLINEAR = (('mu1', (100.0, 1e5)), ('mu2', (10.0, 1e5)), ('gamma1', (2.05, 12.0)),
@@ -103,9 +103,8 @@ def target(params, record):
     else:
         t, psi = np.asarray(record['t'], float), np.asarray(record['psi'], float)
         psi_dot = np.asarray(record['psi_dot'], float) if 'psi_dot' in record else velocity(t, psi)
-        psi_ddot = velocity(t, psi_dot)
-        motion = (params.dynamics_inertia * psi_ddot + params.dynamics_damping * psi_dot
-                  + params.dynamics_gravity * np.sin(psi))
+        # M Ψ̈ + C Ψ̇ + N(Ψ) of (2): the external torque with no driving torque, negated.
+        motion = -external_torque(params, psi, psi_dot, velocity(t, psi_dot), 0.0)
     return motion - np.asarray(record['tau_ext'], float)
 
 

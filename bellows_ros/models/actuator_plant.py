@@ -145,7 +145,7 @@ class ActuatorPlant:
         p, force, k = _forward(self.params, self._x_c, self._x_s, self._gas, math.exp)
         self._p, self._f, self._k = p, force, k
         self._p_sensor = p
-        self._volume = self._total_volume(p)
+        self._volume = self._total_volume(p) if self._heat_tau else None
 
     @staticmethod
     def _noise_settings(params, noise):
@@ -303,12 +303,13 @@ class ActuatorPlant:
         return x
 
     def _step_gas(self, dt):
-        # Volume at the new geometry (E_V at the last pressure; the Newton solve below is exact).
-        volume_new = self._total_volume(self._p)
         if self._heat_tau:
+            # Volume at the new geometry (E_V at the last pressure; the Newton solve below is exact),
+            # needed only for the adiabatic temperature change.
+            volume_new = self._total_volume(self._p)
             t = self._temperature * (self._volume / volume_new) ** (self._gamma - 1.0)
             self._temperature = self._t_amb + (t - self._t_amb) * self._exp_cache[3]
-        self._volume = volume_new
+            self._volume = volume_new
         if self._leak:
             self._gas -= dt * self._p * self._leak * (self._p - P_ATM) * self._t_amb / self._temperature
         amount = self._gas * self._temperature / self._t_amb
