@@ -31,7 +31,7 @@ import serial
 from bellows_ros import params
 from bellows_ros.hardware import serial_protocol as sp
 from bellows_ros.hardware.sample_delivery import deliver, fresh
-from bellows_ros.hardware.safety import Watchdog, limit_duty
+from bellows_ros.hardware.safety import Watchdog, into_end_stop, limit_duty
 from bellows_ros.models.actuator import load_actuator_params
 
 log = logging.getLogger(__name__)
@@ -260,8 +260,7 @@ class ActuatorBoard:
         self._latest = sample
         self._counts['samples'] += 1
         if self._duty != 0.0:  # re-check the end stops against every new position
-            low, high = self._at_stops(sample)
-            if (self._duty < 0 and low) or (self._duty > 0 and high):
+            if into_end_stop(self._duty, *self._at_stops(sample)):
                 self._counts['end_stop_stops'] += 1
                 self._duty = 0.0
                 self._send(lambda seq: sp.MotorCommand(seq, 0))

@@ -30,15 +30,20 @@ def clamp_pressures(values, p_min, p_max):
     return out, clamped, invalid
 
 
-def limit_duty(duty, duty_max, at_low_stop, at_high_stop):
-    """Motor duty (-1..1) limited to +-duty_max and never driving further into an end stop.
+def into_end_stop(duty, at_low_stop, at_high_stop):
+    """True when `duty` drives further into an end stop the plate is already at.
 
     Positive duty compresses the air chamber (x_c grows) towards the high stop.
     """
+    return (duty < 0 and at_low_stop) or (duty > 0 and at_high_stop)
+
+
+def limit_duty(duty, duty_max, at_low_stop, at_high_stop):
+    """Motor duty (-1..1) limited to +-duty_max and never driving further into an end stop."""
     duty = float(duty)
     if not math.isfinite(duty):
         return 0.0, 'invalid'
-    if (duty < 0 and at_low_stop) or (duty > 0 and at_high_stop):
+    if into_end_stop(duty, at_low_stop, at_high_stop):
         return 0.0, 'end_stop'
     if abs(duty) > duty_max:
         return math.copysign(duty_max, duty), 'clamped'

@@ -37,6 +37,7 @@ from bellows_ros.hardware import serial_protocol as sp
 from bellows_ros.hardware.actuator_board import load_config
 from bellows_ros.hardware.faults import Faults
 from bellows_ros.hardware.loop_timing import LoopStats, LoopThread, PeriodicLoop
+from bellows_ros.hardware.safety import into_end_stop
 
 log = logging.getLogger(__name__)
 
@@ -164,8 +165,7 @@ class SimActuatorBoard:
                 self.duty = 0.0
         if state is not None:
             stops = self._end_stops(state.x_c)
-            if (self.duty < 0 and stops & sp.END_STOP_LOW) or \
-                    (self.duty > 0 and stops & sp.END_STOP_HIGH):
+            if into_end_stop(self.duty, stops & sp.END_STOP_LOW, stops & sp.END_STOP_HIGH):
                 self.duty = 0.0
         return status
 
