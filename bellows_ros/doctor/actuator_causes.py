@@ -123,7 +123,7 @@ def predict(params, causes, values, x_c, x_s, dt, geometry=None):
             amount = recurrence(1.0 - flow * temperature / volume, flow * P_ATM / n0, 1.0)
             gas = temperature * amount
     if 'wall_bulging' in causes:
-        p = pressure(model, x_c, x_s, gas=model.p_ref * gas)
+        p = pressure(model, x_c, x_s, gas=model.p_ref * gas, v_geo=volume)
     else:
         p = n0 * gas / volume
     if 'sensor_lag' in causes:

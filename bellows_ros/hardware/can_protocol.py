@@ -19,6 +19,7 @@ API
 - ``frame_bits(length, extended=False) -> int`` (worst-case stuffed length), ``bus_load(db, bitrate,
   names=None) -> float`` (fraction of the bus used by the DBC's cyclic frames).
 """
+import functools
 import re
 
 import cantools
@@ -42,6 +43,7 @@ def load_dbc(path=None):
     return db
 
 
+@functools.lru_cache(maxsize=None)  # the DBC's signal names are few and fixed
 def chamber_of(signal_name):
     """0-based chamber index of a set-point signal ``S<segment>_P<chain>`` (order seg1 chain1, seg1
     chain2, seg2 chain1, ...), or None for any other signal."""

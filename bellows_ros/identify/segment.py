@@ -143,10 +143,15 @@ def linear_of(params):
                                                    params.friction_c_f, params.friction_c_fp])
 
 
+def restoring_and_friction(params, blocks, rows=slice(None)):
+    """τ_s + τ_f (3, 5), N·m, on `rows` of the regressor blocks, with k_s, k_s,p, c_f, c_f,p of `params`."""
+    theta = linear_of(params)
+    return blocks['X_s'][rows] @ theta[8:10] + blocks['X_f'][rows] @ theta[10:12]
+
+
 def fit_previous(params, blocks, y):
     """θ_prev of (34) by lstsq on Y - τ_s - τ_f, with τ_s, τ_f of `params`."""
-    theta = linear_of(params)
-    rest = y - blocks['X_s'] @ theta[8:10] - blocks['X_f'] @ theta[10:12]
+    rest = y - restoring_and_friction(params, blocks)
     return np.linalg.lstsq(blocks['X_prev'], rest, rcond=None)[0]
 
 
@@ -336,9 +341,8 @@ def _predict(params, blocks, rows):
 
 
 def _predict_previous(params, blocks, rows):
-    theta = linear_of(params)
     return (blocks['X_prev'][rows] @ np.array(params.previous_theta)
-            + blocks['X_s'][rows] @ theta[8:10] + blocks['X_f'][rows] @ theta[10:12])
+            + restoring_and_friction(params, blocks, rows))
 
 
 # --- Fig. 10 calibration of config/segment.yaml ------------------------------------------------------
@@ -362,13 +366,12 @@ def calibrate_fig10(params, before=FIG10_BEFORE, after=FIG10_AFTER, free=(0, 1),
     record, i_before, i_after = fig10_record(params, FULL_MODEL, NO_NOISE)
     blocks = regressors(params, record)
     rows = [i_before, i_after]
-    theta = linear_of(params)
     theta_a = np.array(params.actuator_theta, float)
     free, others = list(free), [k for k in range(8) if k not in free]
     x = blocks['X_a'][rows]
     # τ_drive = -τ_ext = +|τ_ext| at both instants: chain 1 drives the segment towards larger Ψ
-    rhs = (np.array([before, after]) - blocks['X_s'][rows] @ theta[8:10]
-           - blocks['X_f'][rows] @ theta[10:12] - x[:, others] @ theta_a[others])
+    rhs = (np.array([before, after]) - restoring_and_friction(params, blocks, rows)
+           - x[:, others] @ theta_a[others])
     theta_a[free] = np.linalg.solve(x[:, free], rhs)
     calibrated = params.replace(actuator_theta=tuple(float(v) for v in theta_a))
     quasi = quasi_static_record(calibrated, FULL_MODEL, NO_NOISE, seed=seed, duration=300.0, dt=5e-3)

@@ -209,10 +209,13 @@ def _gas(params, gas):
     return params._gas_nominal if gas is None else gas_amount(params, gas)
 
 
-def pressure(params, x_c, x_s, gas=None):
-    """System pressure P (Pa) at (x_c, x_s): the root of (17), floats or arrays."""
+def pressure(params, x_c, x_s, gas=None, v_geo=None):
+    """System pressure P (Pa) at (x_c, x_s): the root of (17), floats or arrays.
+
+    `v_geo`: the geometric total volume V_c + V_s + V_tube (m³), if the caller already has it.
+    """
     amount = _gas(params, gas)
-    return _solve_pressure(params, x_c, x_s, amount)[0]
+    return _solve_pressure(params, x_c, x_s, amount, v_geo)[0]
 
 
 def _solve_pressure(params, x_c, x_s, amount, v_geo=None):
