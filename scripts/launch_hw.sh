@@ -52,10 +52,7 @@ start() {
 start driver_node "${driver[@]}"
 # The driver exits within its startup_timeout when a device is absent: report that, not a hang.
 sleep 3
-if ! kill -0 "${pids[0]}" 2>/dev/null; then
-  cat "$logs/driver_node.log" >&2
-  exit 2
-fi
+nodes_alive launch_hw
 [ "$arm" = 1 ] && start model_node
 [ "$actuator" = 1 ] && start stiffness_controller_node
 echo "launch_hw: graph running; Ctrl-C to stop" >&2

@@ -56,32 +56,23 @@ start() {  # start NAME ARGS...: a node in the background, log in $output/logs/N
   start_node "$@"
   echo "launch_sim: $1 (pid $!)" >&2
 }
-alive() {  # fail early, naming the node, when one exited (bad parameters, absent device)
-  for pid in "${pids[@]}"; do
-    if ! kill -0 "$pid" 2>/dev/null; then
-      echo "launch_sim: a node exited; logs in $output/logs:" >&2
-      tail -n 3 "$output"/logs/*.log >&2
-      exit 2
-    fi
-  done
-}
 
 start sim_arm_node -p "can.channel:=$group"
 start sim_actuator_node -p "port:=$port"
 for _ in $(seq 50); do [ -e "$port" ] && break; sleep 0.1; done
-alive
+nodes_alive launch_sim
 start driver_node -p "arm.channel:=$group" -p "actuator.port:=$port"
 start model_node
 start stiffness_controller_node
 sleep 3
-alive
+nodes_alive launch_sim
 
 if [ "$scenario" = 1 ]; then
   "$python" -m bellows_ros.nodes.scenario_node "${common[@]}" -p "duration:=$duration" \
     -p "output_dir:=$output" "${extra[@]}"
-  alive
+  nodes_alive launch_sim
 else
   echo "launch_sim: graph running; Ctrl-C to stop" >&2
   wait -n "${pids[@]}"
-  alive
+  nodes_alive launch_sim
 fi

@@ -19,3 +19,13 @@ start_node() {  # start_node NAME ARGS...: a node in the background, log in $nod
   "$bin/$name" "${common[@]}" "$@" "${extra[@]}" >"$node_logs/$name.log" 2>&1 &
   pids+=($!)
 }
+
+nodes_alive() {  # nodes_alive WHO: exit 2, naming WHO and showing the logs, if a started node exited
+  for pid in "${pids[@]}"; do
+    if ! kill -0 "$pid" 2>/dev/null; then
+      echo "$1: a node exited (bad parameters, absent device?); logs in $node_logs:" >&2
+      tail -n 3 "$node_logs"/*.log >&2
+      exit 2
+    fi
+  done
+}
