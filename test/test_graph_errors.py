@@ -61,3 +61,8 @@ def test_unknown_parameter_in_the_node_section(tmp_path):
 def test_bad_identified_parameters_file(tmp_path):
     check(run('model_node', ['-p', f'params_file:={tmp_path / "missing.yaml"}'], tmp_path),
           'missing.yaml')
+
+
+def test_realtime_priority_out_of_range(tmp_path):
+    result = run('model_node', ['-p', 'realtime_priority:=120'], tmp_path)
+    check(result, "'realtime_priority'", '0 (off) or 1..99', '120')

@@ -5,6 +5,7 @@ import dataclasses
 import json
 import os
 import random
+import socket
 import subprocess
 import sys
 import time
@@ -170,12 +171,13 @@ def test_silent_arm_goes_stale_and_comes_back(rig):
 
 
 CHILD = r'''
-import sys, time, json, can
+import sys, time, json
+from bellows_ros.hardware.arm_bus import open_can
 from bellows_ros.hardware.sim_arm_bus import SimArmBus
 sys.path.insert(0, sys.argv[4])
 from test_hw_arm_bus import Pattern
 group, port, instants = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
-sim = SimArmBus(can.Bus(interface='udp_multicast', channel=group, port=port), Pattern())
+sim = SimArmBus(open_can('udp_multicast', group, port=port), Pattern())
 sim.start()
 end = time.monotonic() + 60.0   # however long a loaded machine takes, but bounded
 while sim.stats.count < instants and time.monotonic() < end:
@@ -228,6 +230,10 @@ def test_a_bus_hears_only_its_own_multicast_group():
         talker.send(message)
         assert other.recv(timeout=2.0) is not None     # the group works...
         assert listener.recv(timeout=0.5) is None      # ...and does not leak into another group
+        # The simulated bus stays on this host: frames leave through the loopback interface.
+        sock = talker._multicast._socket
+        assert sock.getsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_IF, 4) == \
+            socket.inet_aton('127.0.0.1')
     finally:
         for bus in (talker, listener, other):
             bus.shutdown()

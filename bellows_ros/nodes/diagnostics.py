@@ -1,13 +1,13 @@
 """/diagnostics for every node: one DiagnosticStatus per loop or device group, about once a second.
 
 Reported per loop: achieved rate, loop compute time p50/p99, period p99, lateness p99, deadline misses
-(from `hardware.loop_timing.LoopStats`), plus whatever counters the node passes (link health,
+(from `hardware.loop_timing.LoopStats`), the scheduling policy (SCHED_FIFO when granted), plus whatever counters the node passes (link health,
 stale data, rejected samples). Level: ERROR when the link is down, WARN on new deadline misses or
 stale data since the last report, else OK.
 """
 import time
 
-from bellows_ros.runtime import rt
+from bellows_ros.runtime import realtime, rt
 
 _S = rt.msg.DiagnosticStatus
 OK, WARN, ERROR, STALE = _S.OK, _S.WARN, _S.ERROR, _S.STALE
@@ -29,7 +29,7 @@ class LoopReport:
         new_misses = misses - self._misses
         self._count, self._misses, self._time = count, misses, now
         values = {'rate_hz': f'{rate:.1f}', 'samples': str(count), 'deadline_misses': str(misses),
-                  'new_deadline_misses': str(new_misses)}
+                  'new_deadline_misses': str(new_misses), 'scheduling': realtime.describe()}
         for key in ('compute_p50', 'compute_p99', 'period_p99', 'lateness_p99'):
             values[f'{key}_us'] = f'{summary[key] * 1e6:.1f}'
         return values, rate, new_misses

@@ -14,6 +14,8 @@ Parameters (config/nodes_*.yaml, section `driver_node`):
   arm.interface, arm.channel (str): python-can bus ('' = hardware.arm_bus.*).
   arm.n_segments (int): segments on the bus (0 = hardware.arm_bus.n_segments).
   startup_timeout (s): a device with no sample by then is an error (exit status 2).
+  realtime_priority (int): SCHED_FIFO priority for the node's threads, 1-99; 0 = normal
+      scheduling (runtime/realtime.py).
 """
 import dataclasses
 import os
@@ -24,7 +26,7 @@ from bellows_ros.errors import BellowsError
 from bellows_ros.hardware import actuator_board, arm_bus
 from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.nodes import diagnostics
-from bellows_ros.runtime import rt
+from bellows_ros.runtime import realtime, rt
 from bellows_ros.runtime.topics import ACTUATOR_FRAME, SAMPLE_DEPTH
 
 
@@ -59,6 +61,7 @@ class DriverNode(rt.Node):
         channel = self.declare_parameter('arm.channel', '').value
         n_segments = self.declare_parameter('arm.n_segments', 0).value
         self.startup_timeout = self.declare_parameter('startup_timeout', 2.0).value
+        realtime.declare(self)  # SCHED_FIFO priority, applied by rt.main once the node is built
         rt.check_parameters(self)
         if not (self.use_arm or self.use_actuator):
             raise BellowsError('driver_node: neither arm.enabled nor actuator.enabled is set')

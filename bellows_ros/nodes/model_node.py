@@ -11,7 +11,9 @@ carries from sample to sample, Algorithm 1) and the node publishes
 
 Parameters: segments (int array, which segments to evaluate), params_file (str: identified
 parameters from `bellows identify`, laid over config/segment.yaml; '' = defaults),
-max_pending (int: unmatched half-samples kept before the oldest is dropped and counted).
+max_pending (int: unmatched half-samples kept before the oldest is dropped and counted),
+latency_budget (s: a torque published later than this after its sample's stamp is counted `late`),
+realtime_priority (int: SCHED_FIFO priority 1-99 for the node's threads, 0 = normal scheduling).
 A sample with a non-finite value or a pressure outside [0, 2 p_max] is rejected and counted.
 """
 import math
@@ -22,7 +24,7 @@ from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.models.segment import SegmentModel, external_torque, load_segment_params
 from bellows_ros.nodes import diagnostics
-from bellows_ros.runtime import rt
+from bellows_ros.runtime import realtime, rt
 from bellows_ros.runtime.topics import SAMPLE_DEPTH
 
 
@@ -33,6 +35,8 @@ class ModelNode(rt.Node):
         segments = self.declare_parameter('segments', [1, 2, 3, 4]).value
         params_file = self.declare_parameter('params_file', '').value or None
         self.max_pending = self.declare_parameter('max_pending', 100).value
+        latency_budget = self.declare_parameter('latency_budget', 0.002).value
+        realtime.declare(self)  # SCHED_FIFO priority, applied by rt.main once the node is built
         rt.check_parameters(self)
         if not segments or any(s < 1 for s in segments):
             raise BellowsError(f'model_node: parameter segments must list segment numbers >= 1, '
@@ -43,10 +47,11 @@ class ModelNode(rt.Node):
         self.models = [SegmentModel(self.params) for _ in segments]
         self.previous_psi_dot = [None] * len(segments)
         self.pending = OrderedDict()  # stamp (ns) -> [joint_state or None, chambers or None]
-        self.counts = dict.fromkeys(['evaluated', 'rejected', 'unmatched_dropped'], 0)
+        self.counts = dict.fromkeys(['evaluated', 'rejected', 'unmatched_dropped', 'late'], 0)
         self.stats = LoopStats()
         self.report = diagnostics.LoopReport(self.stats)
         self.latency = []
+        self.latency_budget_ns = round(latency_budget * 1e9)
         self._last_stamp = None
         self._p_limit = 2.0 * self.params.p_max
 
@@ -120,7 +125,10 @@ class ModelNode(rt.Node):
         self.counts['evaluated'] += 1
         compute = time.perf_counter() - start
         # Latency from the sample's stamp to the torque's publication, on the node clock.
-        self.latency.append(self.get_clock().now().nanoseconds - stamp)
+        latency = self.get_clock().now().nanoseconds - stamp
+        self.latency.append(latency)
+        if latency > self.latency_budget_ns:
+            self.counts['late'] += 1
         self.stats.record(dt or 0.0, 0.0, compute)
 
     def publish_diagnostics(self):

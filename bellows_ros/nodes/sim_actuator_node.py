@@ -16,6 +16,8 @@ Parameters:
   spring.amplitude (m), spring.period (s): the spring is moved sinusoidally between 0 and
       `amplitude` (a test machine); 0 = spring free at x_s = 0.
   clock_rate (Hz): /clock publication rate when use_sim_time is on.
+  realtime_priority (int): SCHED_FIFO priority for the node's threads, 1-99; 0 = normal
+      scheduling (runtime/realtime.py).
 With use_sim_time the node is the clock source: it publishes the plant's time on /clock.
 """
 import math
@@ -26,7 +28,7 @@ from bellows_ros.hardware.sim_actuator_board import SimActuatorBoard
 from bellows_ros.models.actuator import load_actuator_params
 from bellows_ros.models.actuator_plant import ActuatorPlant
 from bellows_ros.nodes import diagnostics
-from bellows_ros.runtime import rt
+from bellows_ros.runtime import realtime, rt
 
 
 class SimActuatorNode(rt.Node):
@@ -42,6 +44,7 @@ class SimActuatorNode(rt.Node):
         self.amplitude = self.declare_parameter('spring.amplitude', 0.0).value
         self.spring_period = self.declare_parameter('spring.period', 4.0).value
         clock_rate = self.declare_parameter('clock_rate', 100.0).value
+        realtime.declare(self)  # SCHED_FIFO priority, applied by rt.main once the node is built
         rt.check_parameters(self)
         if not port:
             raise BellowsError('sim_actuator_node: parameter port is empty')

@@ -12,6 +12,8 @@ Parameters:
       ([''] = the baseline plant), seed (int),
   load_torque (N·m): constant external torque on every segment (0 = free).
   clock_rate (Hz): /clock publication rate when use_sim_time is on (the node is then the clock).
+  realtime_priority (int): SCHED_FIFO priority for the node's threads, 1-99; 0 = normal
+      scheduling (runtime/realtime.py).
 """
 
 from bellows_ros.errors import BellowsError
@@ -20,7 +22,7 @@ from bellows_ros.hardware.sim_arm_bus import SimArmBus
 from bellows_ros.models.segment import load_segment_params
 from bellows_ros.models.segment_plant import SegmentPlant
 from bellows_ros.nodes import diagnostics
-from bellows_ros.runtime import rt
+from bellows_ros.runtime import realtime, rt
 
 
 class SimArmNode(rt.Node):
@@ -35,6 +37,7 @@ class SimArmNode(rt.Node):
         seed = self.declare_parameter('seed', 1).value
         self.load_torque = self.declare_parameter('load_torque', 0.0).value
         clock_rate = self.declare_parameter('clock_rate', 100.0).value
+        realtime.declare(self)  # SCHED_FIFO priority, applied by rt.main once the node is built
         rt.check_parameters(self)
         params = load_segment_params(segment_params)
         self.plants = [SegmentPlant(params, effects=effects, seed=seed + i)

@@ -15,7 +15,8 @@ Parameters: actuator_params (str: YAML over config/actuator.yaml), pd.kp (1/m), 
 pd.velocity_cutoff (Hz), pd.duty_max, pd.deadband (m), gas_time_constant (s),
 control_every (samples per control step), target_every (control steps between re-computations
 of x_c* from the gas estimate), publish_every,
-initial_stiffness (N/m; 0 = hold still until the first set-point).
+initial_stiffness (N/m; 0 = hold still until the first set-point), realtime_priority (SCHED_FIFO
+priority 1-99 for the node's threads; 0 = normal scheduling).
 """
 import time
 
@@ -25,7 +26,7 @@ from bellows_ros.control.stiffness import StiffnessSetpoint
 from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.models.actuator import load_actuator_params
 from bellows_ros.nodes import diagnostics
-from bellows_ros.runtime import rt
+from bellows_ros.runtime import realtime, rt
 from bellows_ros.runtime.topics import SAMPLE_DEPTH
 
 
@@ -44,6 +45,7 @@ class StiffnessControllerNode(rt.Node):
         self.target_every = self.declare_parameter('target_every', 4).value
         self.publish_every = self.declare_parameter('publish_every', 2).value
         initial = self.declare_parameter('initial_stiffness', 0.0).value
+        realtime.declare(self)  # SCHED_FIFO priority, applied by rt.main once the node is built
         rt.check_parameters(self)
         if not (0 < gains.duty_max <= 1 and gains.kp >= 0 and gains.kd >= 0):
             raise BellowsError('stiffness_controller_node: need 0 < pd.duty_max <= 1, '

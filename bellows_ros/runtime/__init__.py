@@ -12,6 +12,7 @@ from_msg), `msg` (JointState, WrenchStamped, Float64, DiagnosticArray, Diagnosti
 Clock, Header, Time), `SENSOR_DATA` (best-effort QoS), `check_parameters(node)` and `main`.
 `USING_RCLPY` says which one was picked; `BELLOWS_RUNTIME=dds` forces the DDS runtime.
 """
+import gc
 import os
 import signal
 import sys
@@ -94,14 +95,23 @@ def main(node_class, args=None):
 
     `node_class()` must declare its parameters up front; `check_parameters` runs right after.
     A node may define `close()` for its own clean-up (devices, threads); it runs before shutdown.
+    A node that declares `realtime_priority` gets it here (`realtime.request`).
     """
+    from bellows_ros.runtime import realtime
+
     program = os.path.basename(sys.argv[0]) if args is None else node_class.__name__
     signal.signal(signal.SIGTERM, _raise_interrupt)
+    # A shell starts background jobs with SIGINT ignored; ros2 launch stops nodes with SIGINT.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     node = None
     try:
         rt.init(args=args)
         node = node_class()
         check_parameters(node)
+        realtime.request(node)
+        # Everything built so far (modules, type store, model tables) lives as long as the node:
+        # keep the cyclic collector from walking it again and again in the 1 kHz callbacks.
+        gc.freeze()
         rt.spin(node)
     except BellowsError as exc:
         message = str(exc).removeprefix(f'{program}: ')  # node errors often name the node already
