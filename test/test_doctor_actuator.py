@@ -138,6 +138,27 @@ def test_backlash_not_identifiable_without_reversals(tmp_path):
     assert report['cause'] == 'none'
 
 
+def test_backlash_in_a_record_that_never_reverses_is_not_named_as_something_else(tmp_path):
+    """Backlash in the plant, but the chamber only compresses: the plate then just trails the nut
+    (the encoder) by half the play, a constant offset. Backlash is not identifiable, and the offset
+    must not be taken up by wall bulging (the baseline refits the encoder's zero)."""
+    rng = np.random.default_rng(3)
+    params = random_params(rng)
+    width = rng.uniform(3e-4, 6e-4)
+    record = actuator_record(params, {'backlash': {'width': width}}, seed=3, duration=DURATION,
+                             x_c0=-0.010, monotone=True)
+    assert np.all(np.diff(record['x_c']) >= 0.0)       # the encoder never goes back
+    report, directory = diagnose(tmp_path, write_csv(tmp_path / 'sweep.csv', record))
+    details = json.loads((directory / 'details.json').read_text())
+    assert details['candidates']['backlash']['identifiable'] is False
+    assert 'never reverses' in details['candidates']['backlash']['reason']
+    bulging = next(c for c in report['candidates'] if c['cause'] == 'wall_bulging')
+    assert bulging['heldout_rmse'] is not None          # tried, and it does not pay
+    assert report['cause'] == 'none'
+    assert report['causes'] == []
+    assert report['unexplained'] is False
+
+
 @pytest.mark.parametrize('rows, message', [
     (150, 'only 150 samples'),
     (3000, 'lasts'),

@@ -1,8 +1,10 @@
 """The model doctor on arm-segment data with hidden effects (paper A).
 
 Records come from the segment plant on the test bench (`quasi_static_record`: slow excursions with
-reversals, holds, pressure steps and ramps on both chains, sensor noise), with random (seeded)
-parameters; the doctor sees only the CSV path.
+reversals and holds, while the chain pressures follow their own schedule of steps and ramps at
+several speeds over 1-7.5 bar abs, one chain or both pressurised, as in paper A's "simultaneous
+variation of the angle of curvature and pressure"; sensor noise as in the YAML), with random
+(seeded) parameters; the doctor sees only the CSV path.
 """
 import json
 
@@ -15,18 +17,18 @@ from bellows_ros.models.segment_experiments import quasi_static_record
 
 NAMES = ('t', 'psi', 'p1', 'p2', 'tau_ext', 'psi_dot', 'tau_motion')
 DURATION = 30.0
+PRESSURE_HOLD = (0.5, 2.0)  # s between pressure changes (`quasi_static_record`'s pressure schedule)
+MIN_GAIN = 0.30             # held-out gain every hidden effect must reach (the issue)
 
 EFFECTS = {
     'contact_hysteresis': lambda rng: {},
     'pressure_friction': lambda rng: {'c_fp': rng.uniform(0.5, 1.2)},
     'sensor_lag': lambda rng: {'tau': rng.uniform(0.02, 0.06)},
-    # Ψ_j0(p) is mostly absorbed by the pressure polynomial of the baseline (34); only a steep
-    # tanh (a bellows that takes its natural curvature at low pressure) leaves a visible trace.
+    # Ψ_j0(p) is partly absorbed by the pressure polynomial of the baseline (34); a bellows that
+    # takes most of its natural curvature below ~1 bar gauge (steep tanh) leaves a trace the
+    # polynomial cannot follow once the record holds many pressures (docs/doctor.md).
     'natural_curvature': lambda rng: {'c_psi0': rng.uniform(8.0, 12.0), 'c_psi0_p': rng.uniform(0.5, 0.7)},
 }
-# Held-out gain each hidden effect must reach (see docs/doctor.md for natural_curvature's).
-MIN_GAIN = {'contact_hysteresis': 0.30, 'pressure_friction': 0.30, 'sensor_lag': 0.30,
-            'natural_curvature': 0.20}
 
 
 def random_params(rng):
@@ -45,7 +47,8 @@ def hidden(tmp_path, effects, seed, duration=DURATION):
     rng = np.random.default_rng(seed)
     params = random_params(rng)
     chosen = {name: EFFECTS[name](rng) for name in effects}
-    record = quasi_static_record(params, chosen, seed=seed, duration=duration)
+    record = quasi_static_record(params, chosen, seed=seed, duration=duration,
+                                 pressure_hold=PRESSURE_HOLD)
     return write_csv(tmp_path / 'bench.csv', record), chosen
 
 
@@ -61,13 +64,18 @@ def test_names_the_hidden_cause(tmp_path, cause):
     report, _ = diagnose(tmp_path, data)
     assert report['cause'] == cause
     assert report['causes'] == [cause]
-    assert report['gain'] >= MIN_GAIN[cause]
+    assert report['gain'] >= MIN_GAIN
     assert report['baseline']['unit'] == 'N·m'
     fitted = next(c for c in report['candidates'] if c['cause'] == cause)['params']
     if cause == 'sensor_lag':
         assert fitted['tau'] == pytest.approx(chosen[cause]['tau'], rel=0.3)
     if cause == 'pressure_friction':
         assert fitted['friction.c_fp'] == pytest.approx(chosen[cause]['c_fp'], rel=0.3)
+    if cause == 'natural_curvature':
+        assert fitted['restoring.c_psi0'] == pytest.approx(chosen[cause]['c_psi0'], rel=0.3)
+        assert fitted['restoring.c_psi0_p'] == pytest.approx(chosen[cause]['c_psi0_p'], rel=0.3)
+    # Extended down to the noise: nothing left that the doctor would call unexplained.
+    assert report['unexplained'] is False
 
 
 def test_no_effect_is_none(tmp_path):
@@ -78,10 +86,24 @@ def test_no_effect_is_none(tmp_path):
     assert report['unexplained'] is False
 
 
+def test_effect_outside_the_vocabulary_is_unexplained(tmp_path):
+    """A 0.3 Hz torque ripple (no cause of the vocabulary makes one) must not get the nearest name."""
+    rng = np.random.default_rng(21)
+    record = quasi_static_record(random_params(rng), {}, seed=21, duration=DURATION,
+                                 pressure_hold=PRESSURE_HOLD)
+    record['tau_ext'] = record['tau_ext'] + 0.05 * np.sin(2 * np.pi * 0.3 * record['t'])
+    report, directory = diagnose(tmp_path, write_csv(tmp_path / 'bench.csv', record))
+    assert report['cause'] == 'none'
+    assert report['causes'] == []
+    assert report['unexplained'] is True
+    assert 'Unexplained structure remains' in (directory / 'report.md').read_text()
+
+
 def test_two_effects_are_both_named(tmp_path):
     data, _ = hidden(tmp_path, ['contact_hysteresis', 'pressure_friction'], seed=13)
     report, _ = diagnose(tmp_path, data)
     assert sorted(report['causes']) == ['contact_hysteresis', 'pressure_friction']
+    assert report['gain'] >= MIN_GAIN
 
 
 def test_paper_a_story_end_to_end(tmp_path):

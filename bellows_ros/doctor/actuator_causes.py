@@ -1,9 +1,11 @@
 """The actuator's baseline and its candidate causes, as physically parameterised extensions.
 
 Baseline (DESIGN.md "Baselines"): paper B's gas law (17) with the purely geometric volume (2-4, no
-E_V), isothermal sealed gas; the gas amount (as `p_ref`) and `v_tube` are refitted to the data. The
-doctor compares the predicted system pressure with the measured one (Pa); the force follows from the
-pressure (7-12), so every cause below shows first in the pressure.
+E_V), isothermal sealed gas; the gas amount (as `p_ref`), `v_tube` and the zero of the motor
+encoder (`x_c_offset`, within ±1 mm: on a rig the encoder's zero is set by homing and is as unknown
+as the tube volume) are refitted to the data. The doctor compares the predicted system pressure
+with the measured one (Pa); the force follows from the pressure (7-12), so every cause below shows
+first in the pressure.
 
 Each cause adds the missing physics with its own physical parameters (MODEL.md, config/actuator.yaml
 `actuator.effects`):
@@ -37,7 +39,10 @@ ML = 1e-6  # m³ per mL: volumes are fitted in mL so that all parameters are O(1
 
 # Nonlinear parameters of each part: (name, start, lower, upper), other starts for multi-start.
 SPECS = {
-    'baseline': [('p_ref_kpa', 101.325, 20.0, 500.0), ('v_tube_ml', 20.0, 0.0, 400.0)],
+    # x_c_offset: the plate sits at x_c + offset. Without it a constant nut-plate offset (backlash
+    # in a record whose chamber never reverses) is taken up by the most flexible candidate (E_V).
+    'baseline': [('p_ref_kpa', 101.325, 20.0, 500.0), ('v_tube_ml', 20.0, 0.0, 400.0),
+                 ('x_c_offset_mm', 0.0, -1.0, 1.0)],
     'air_leak': [('log10_conductance', -11.0, -15.0, -7.0)],
     'heat_exchange': [('log10_time_constant', 0.0, -1.0, 2.5), ('gamma', 1.4, 1.0, 1.67)],
     'wall_bulging': [('e_q_ml', 0.0, -200.0, 200.0), ('e_dq_chamber_ml', 0.0, -200.0, 200.0),
@@ -64,7 +69,8 @@ def initial_guess(record, params):
     base = without_bulging(params)
     v = total_geometric_volume(base, record['x_c'], record['x_s'], base.v_tube)
     v_ref = total_geometric_volume(base, base.x_c_ref, 0.0, base.v_tube)
-    return {'p_ref_kpa': float(np.mean(record['p'] * v) / v_ref / 1e3), 'v_tube_ml': base.v_tube / ML}
+    return {'p_ref_kpa': float(np.mean(record['p'] * v) / v_ref / 1e3), 'v_tube_ml': base.v_tube / ML,
+            'x_c_offset_mm': 0.0}
 
 
 def total_geometric_volume(params, x_c, x_s, v_tube):
@@ -93,8 +99,9 @@ def geometric_volumes(params, x_c, x_s):
 def predict(params, causes, values, x_c, x_s, dt, geometry=None):
     """Pressure the extended model predicts at the sensor (Pa) over a record.
 
-    `values`: physical parameters {cause: {name: value}} plus 'baseline': {'p_ref', 'v_tube'};
-    `geometry`: `geometric_volumes(params, x_c, x_s)` if already computed.
+    `values`: physical parameters {cause: {name: value}} plus 'baseline': {'p_ref', 'v_tube',
+    'x_c_offset' (optional, m)}; `geometry`: `geometric_volumes(params, x_c, x_s)` if already
+    computed (for the encoder's x_c; the chamber's volume is recomputed when the offset is not 0).
     Only the inputs x_c, x_s enter: no measured pressure, so nothing of the held-out output leaks in.
     """
     base = values['baseline']
@@ -104,8 +111,11 @@ def predict(params, causes, values, x_c, x_s, dt, geometry=None):
         model = bulged(model, [e['e_q'], e['e_dq_chamber'], e['e_dq_spring'], e['e_dd_chamber'],
                                e['e_dd_spring']])
     v_c, v_s, design = geometry or geometric_volumes(params, x_c, x_s)
-    if 'backlash' in causes:
-        x_c = play(x_c, values['backlash']['width'])
+    offset = base.get('x_c_offset', 0.0)
+    if offset or 'backlash' in causes:
+        x_c = x_c + offset
+        if 'backlash' in causes:
+            x_c = play(x_c, values['backlash']['width'])
         v_c = volume_geo(params.chamber, x_c)
     volume = v_c + v_s + model.v_tube
     n0 = model.p_ref * (design + model.v_tube)   # gas amount N = P V of the sealed gas (17)
@@ -145,7 +155,8 @@ def physical(causes, theta):
 
 def _to_si(part, raw):
     if part == 'baseline':
-        return {'p_ref': raw['p_ref_kpa'] * 1e3, 'v_tube': raw['v_tube_ml'] * ML}
+        return {'p_ref': raw['p_ref_kpa'] * 1e3, 'v_tube': raw['v_tube_ml'] * ML,
+                'x_c_offset': raw['x_c_offset_mm'] * 1e-3}
     if part == 'air_leak':
         return {'conductance': 10.0 ** raw['log10_conductance']}
     if part in ('heat_exchange', 'sensor_lag'):

@@ -109,8 +109,9 @@ def diagnose(system, path, params_path=None, progress=False, causes=None):
     bar = _progress(progress, total=1 + len(module.CAUSES if causes is None else causes))
     extra = {}
     if system == 'segment':
-        # Algorithm 1 over the record does not depend on any fitted parameter: run it once.
-        extra['contact'] = module.ContactLengths(params, record)
+        # Algorithm 1 over the record does not depend on any fitted parameter: run it once, at
+        # the record's full rate (see `segment_causes.ContactLengths`).
+        extra['contact'] = module.ContactLengths(params, full, record.factor)
 
     def score(switched_on, warm=None):
         model = module.build_model(record, params, switched_on, warm=warm, **extra)

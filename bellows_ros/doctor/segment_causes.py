@@ -23,7 +23,7 @@ from scipy.linalg import cho_factor, cho_solve
 from scipy.signal import savgol_filter
 
 from bellows_ros.doctor.scoring import Model
-from bellows_ros.identify.segment import target
+from bellows_ros.identify.segment import filter_inputs, target
 from bellows_ros.models.segment import (actuator_regressor, contact_lengths, friction_regressor,
                                         previous_regressor, restoring_regressor, scaled_pressure,
                                         velocity)
@@ -33,6 +33,10 @@ BASELINE = ('paper A previous model (34), constant friction c_f, no natural curv
             '(psi_j0 = 0, k_s,p = 0); coefficients refitted')
 FIT_RATE = 100.0  # Hz, highest rate the doctor fits at: quasi-static bench records; the sensor lag is ~30 ms
 UNIT = 'N·m'
+# Samples of the centred Savitzky-Golay derivative dp/dt of `sensor_lag` at the fit rate: 50 ms at
+# 100 Hz. A 9-sample (90 ms) window smoothed the bench's fastest pressure steps (~50 ms) so much
+# that 0.037 N·m of structure stayed behind (test seed 203: 0.0367 -> 0.0246 N·m with 5 samples).
+RATE_WINDOW = 5
 
 # Nonlinear parameters: (name, start, lower, upper); alternative starts for multi-start.
 SPECS = {
@@ -46,11 +50,22 @@ STARTS = {
 
 
 def add_columns(record, params):
-    """Add the derived columns the segment causes need: Ψ̇ (if absent) and Y (the target)."""
+    """Add the derived columns the segment causes need: Ψ̇ (if absent) and Y (the target), and
+    low-pass the measured inputs as the identification does (`identify.segment.filter_inputs` at
+    `segment.identify.input_cutoff`).
+
+    Why filter: the torque is steep in the pressure (~0.05 N·m per kPa), so white pressure-sensor
+    noise (1 kPa) would reach the prediction as ~0.05 N·m at 1 kHz — as large as the torque
+    sensor's own noise — and Algorithm 1's strain memory would ratchet with it. The signals are
+    band-limited (valve/chamber lag, imposed motion), so a 25 Hz zero-phase filter removes that noise
+    without delaying anything. Y (the measured output) is never filtered.
+    """
     columns = record.columns
     if 'psi_dot' not in columns:
         columns['psi_dot'] = velocity(columns['t'], columns['psi'])
-    columns['y'] = target(params, columns)  # Y = τ_motion - τ_ext (30)
+    columns['y'] = target(params, columns)  # Y = τ_motion - τ_ext (30), from the raw record
+    filtered, _, _ = filter_inputs(columns, params.identify_input_cutoff)
+    columns.update(filtered)
     return record
 
 
@@ -59,15 +74,25 @@ def measured(record):
 
 
 class ContactLengths:
-    """s̃_a of both chains over the record, computed once (Algorithm 1 is sequential and costly)."""
+    """s̃_a of both chains over the record, computed once (Algorithm 1 is sequential and costly).
 
-    def __init__(self, params, record):
-        self.params, self.record, self.value = params, record, None
+    Algorithm 1 makes one fixed-point iteration per time step (appendix B), so its contact state
+    follows the angle and pressure at a pace set by the step: run on the 100 Hz fitted copy it lags
+    the plant's 1 kHz strain memory and leaves ~0.1 N·m of structure in the residual that is not
+    noise. So it runs on the full-rate record (`record`, inputs already low-passed by
+    `add_columns`) and its result is block-averaged by `factor` like the fitted copy
+    (`checks.Record.decimated`).
+    """
+
+    def __init__(self, params, record, factor=1):
+        self.params, self.record, self.factor, self.value = params, record, factor, None
 
     def __call__(self):
         if self.value is None:
             r = self.record
-            self.value = contact_lengths(self.params, r['psi'], r['p1'], r['p2'])
+            lengths = contact_lengths(self.params, r['psi'], r['p1'], r['p2'])
+            n = len(lengths[0]) // self.factor * self.factor
+            self.value = tuple(sa[:n].reshape(-1, self.factor).mean(axis=1) for sa in lengths)
         return self.value
 
 
@@ -111,8 +136,8 @@ def build_model(record, params, causes, warm=None, contact=None):
         p1, p2 = record['p1'], record['p2']
         if 'sensor_lag' in causes:
             tau = 10.0 ** values['sensor_lag.log10_tau']
-            p1 = p1 + tau * savgol_filter(p1, 9, 2, deriv=1, delta=dt)
-            p2 = p2 + tau * savgol_filter(p2, 9, 2, deriv=1, delta=dt)
+            p1 = p1 + tau * savgol_filter(p1, RATE_WINDOW, 2, deriv=1, delta=dt)
+            p2 = p2 + tau * savgol_filter(p2, RATE_WINDOW, 2, deriv=1, delta=dt)
         ps1, ps2 = scaled_pressure(params, p1), scaled_pressure(params, p2)
         blocks, labels = [], []
         if 'contact_hysteresis' in causes:

@@ -18,8 +18,14 @@ _KP = 4000.0      # 1/m
 _KD = 40.0        # s/m
 
 
-def chamber_programme(rng, n, dt, x0, low, high, max_speed):
-    """Reference compression (m) of the air chamber, n samples: steps, ramps, holds, reversals."""
+def chamber_programme(rng, n, dt, x0, low, high, max_speed, monotone=False):
+    """Reference compression (m) of the air chamber, n samples: steps, ramps, holds, reversals.
+
+    `monotone`: only ramps at several speeds and holds, each ramp compressing further (a record in
+    which the chamber never reverses, e.g. a slow compression sweep), ending in a hold at `high`.
+    """
+    if monotone:
+        return _monotone_programme(rng, n, dt, x0, high, max_speed)
     ref = np.empty(n)
     i, x = 0, x0
     while i < n:
@@ -45,6 +51,20 @@ def chamber_programme(rng, n, dt, x0, low, high, max_speed):
         i += length
         x = target
     return ref[:n]
+
+
+def _monotone_programme(rng, n, dt, x0, high, max_speed):
+    ref = np.full(n, float(high))
+    i, x = 0, x0
+    while i < n and x < high:
+        target = min(high, x + rng.uniform(0.002, 0.008))
+        speed = rng.choice((0.2, 0.4, 0.8)) * max_speed
+        ramp = max(1, int((target - x) / speed / dt))
+        ref[i:i + ramp] = np.linspace(x, target, ramp, endpoint=False)[:n - i]
+        hold = int(rng.uniform(0.5, 2.0) / dt)
+        ref[i + ramp:i + ramp + hold] = target
+        i, x = i + ramp + hold, target
+    return ref
 
 
 def spring_programme(rng, n, dt):
@@ -75,12 +95,13 @@ def spring_programme(rng, n, dt):
 
 
 def actuator_record(params, effects=None, noise=None, seed=None, duration=60.0, dt=1e-3,
-                    x_c_range=(-0.020, 0.040), gas=None, x_c0=None):
+                    x_c_range=(-0.020, 0.040), gas=None, x_c0=None, monotone=False):
     """Simulated measurement: dict of arrays `t, x_c, x_s, p, f` (DESIGN.md actuator columns).
 
     params: ActuatorParams; effects/noise: as `ActuatorPlant`; seed: for the programme and noise;
     duration s; dt s; x_c_range: the span of chamber targets, m; gas: the sealed gas amount as p_ref,
-    Pa (default the YAML's); x_c0: initial chamber compression, m (default the design point).
+    Pa (default the YAML's); x_c0: initial chamber compression, m (default the design point);
+    monotone: the chamber only compresses (ramps and holds, `chamber_programme`).
     60 s at 1 kHz takes a second or two.
     """
     if not (duration > 0.0 and dt > 0.0):
@@ -92,7 +113,7 @@ def actuator_record(params, effects=None, noise=None, seed=None, duration=60.0, 
                           x_c0=x_c0)
     low = max(x_c_range[0], plant.x_c_min)
     high = min(x_c_range[1], plant.x_c_max)
-    ref = chamber_programme(rng, n, dt, x_c0, low, high, plant.max_speed)
+    ref = chamber_programme(rng, n, dt, x_c0, low, high, plant.max_speed, monotone)
     x_s = spring_programme(rng, n, dt)
     out = {name: np.empty(n) for name in ('t', 'x_c', 'x_s', 'p', 'f')}
     t_col, xc_col, xs_col, p_col, f_col = (out[k] for k in ('t', 'x_c', 'x_s', 'p', 'f'))

@@ -66,10 +66,38 @@ def _programme(rng, duration, move_range, hold_range, params):
     return angle_times, angles, pressure_times, pressures1, pressures2
 
 
-def _record(params, effects, noise, seed, duration, dt, move_range, hold_range):
+def _pressure_schedule(rng, duration, hold_range, params):
+    """Chain pressures on their own clock, like paper A's "simultaneous variation of the angle of
+    curvature and pressure": after each hold (`hold_range`, s) new levels are reached by a step or a
+    ramp at one of several speeds (0.05-1 s). Levels cover the whole range p0..p_max: one chain
+    pressurised and the other vented or lower (as in Fig. 10), both pressurised at once, or both
+    vented; so every chain holds many pressures, low ones included."""
+    p0, top = params.p0, params.p_max
+    times, pressures1, pressures2 = [], [p0], [p0]
+    now = 0.5
+    while now < duration:
+        ramp = rng.uniform(0.05, 1.0)
+        times.append((now, now + ramp))
+        kind = rng.random()
+        if kind < 0.1:
+            high = low = p0
+        elif kind < 0.4:
+            high, low = rng.uniform(p0, top), rng.uniform(p0, top)
+        else:
+            high, low = rng.uniform(p0, top), rng.choice([p0, rng.uniform(p0, p0 + 0.5 * (top - p0))])
+        first = rng.integers(2) == 0
+        pressures1.append(high if first else low)
+        pressures2.append(low if first else high)
+        now += ramp + rng.uniform(*hold_range)
+    return times, pressures1, pressures2
+
+
+def _record(params, effects, noise, seed, duration, dt, move_range, hold_range, pressure_hold=None):
     rng = np.random.default_rng(seed)
     t = np.arange(1, int(round(duration / dt)) + 1) * dt
     angle_times, angles, pressure_times, p1, p2 = _programme(rng, duration, move_range, hold_range, params)
+    if pressure_hold is not None:
+        pressure_times, p1, p2 = _pressure_schedule(rng, duration, pressure_hold, params)
     psi = _smooth_moves(angle_times, angles, t)
     cmd1 = _smooth_moves(pressure_times, p1, t)
     cmd2 = _smooth_moves(pressure_times, p2, t)
@@ -77,10 +105,17 @@ def _record(params, effects, noise, seed, duration, dt, move_range, hold_range):
     return run_plant(plant, dt, cmd1, cmd2, psi)
 
 
-def quasi_static_record(params, effects=None, noise=None, seed=None, duration=60.0, dt=1e-3):
+def quasi_static_record(params, effects=None, noise=None, seed=None, duration=60.0, dt=1e-3,
+                        pressure_hold=None):
     """Slow excursions (2-5 s per move, |Ψ| ≤ 1.4 rad) with reversals, holds, and pressure steps and
-    ramps on both chains (up to 7 bar abs) — like paper A's identification measurements."""
-    return _record(params, effects, noise, seed, duration, dt, (2.0, 5.0), (0.5, 2.0))
+    ramps on both chains (up to 7 bar abs) — like paper A's identification measurements.
+
+    By default the pressures change only between angle moves (a few levels in 30 s). With
+    `pressure_hold` = (shortest, longest) hold in s, they follow their own schedule instead
+    (`_pressure_schedule`: many levels over p0..p_max, steps and ramps at several speeds), which is
+    what a pressure-dependent effect needs to be told from a smooth function of the pressure.
+    """
+    return _record(params, effects, noise, seed, duration, dt, (2.0, 5.0), (0.5, 2.0), pressure_hold)
 
 
 def dynamic_record(params, effects=None, noise=None, seed=None, duration=30.0, dt=1e-3):
