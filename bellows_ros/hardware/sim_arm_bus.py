@@ -79,10 +79,7 @@ class SimArmBus:
     def _loop(self, stop):
         tick = 0
         previous = None
-        # No busy-wait before each deadline: on a shared 2-core machine the spin (10 % of a core at
-        # 1 kHz) is CPU the driver and model nodes need, and the samples are stamped on arrival
-        # at the driver, so the tick's sleep overshoot (timer slack, ~50-100 us) costs nothing.
-        for dt in PeriodicLoop(self.period, self.stats, spin=0.0).ticks(stop):
+        for dt in PeriodicLoop(self.period, self.stats).ticks(stop):
             self._read_host()
             self._apply_heartbeat()
             measured = self._step(dt, self.setpoints)
