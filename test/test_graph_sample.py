@@ -65,19 +65,32 @@ def graph(tmp_path, monkeypatch):
     port = str(tmp_path / 'actuator')
     env = dict(os.environ, ROS_DOMAIN_ID=domain, BELLOWS_RUNTIME='dds')
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
+    dds_node.init([])
+    probe = dds_node.Node('acceptance_probe')
+    final = {}
+
+    def on_diagnostics(array):
+        for status in array.status:
+            final[status.name] = {kv.key: kv.value for kv in status.values}
+    probe.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
     can = ['-p', f'can.channel:={group}']
     processes = {
         'sim_arm_node': launch('sim_arm_node', can + ['-p', 'n_segments:=2'], env, tmp_path),
         'sim_actuator_node': launch('sim_actuator_node', ['-p', f'port:={port}'], env, tmp_path),
+        'model_node': launch('model_node', ['-p', 'segments:=[1, 2]'], env, tmp_path),
     }
-    time.sleep(1.0)
-    processes['model_node'] = launch('model_node', ['-p', 'segments:=[1, 2]'], env, tmp_path)
-    processes['driver_node'] = launch('driver_node', ['-p', f'arm.channel:={group}',
-                                                      '-p', 'arm.n_segments:=2',
-                                                      '-p', f'actuator.port:={port}'],
-                                      env, tmp_path)
     try:
-        yield processes, domain, tmp_path
+        # The driver publishes from its first sample on: the model must be subscribed by then,
+        # or the count below would include samples published before anyone listened.
+        end = time.monotonic() + 60.0
+        while 'model_node: driving torque' not in final and time.monotonic() < end:
+            dds_node.spin_once(probe, timeout_sec=0.05)
+        assert 'model_node: driving torque' in final, logs(tmp_path)
+        processes['driver_node'] = launch('driver_node', ['-p', f'arm.channel:={group}',
+                                                          '-p', 'arm.n_segments:=2',
+                                                          '-p', f'actuator.port:={port}'],
+                                          env, tmp_path)
+        yield processes, domain, tmp_path, probe, final
     finally:
         for process in processes.values():
             stop(process)
@@ -89,7 +102,7 @@ def logs(tmp_path):
 
 
 def test_graph_publishes_and_every_sample_is_evaluated(graph):
-    processes, domain, tmp_path = graph
+    processes, domain, tmp_path, node, final = graph
     plain = subprocess.run([sys.executable, '-c', PLAIN_SUBSCRIBER, domain, '/joint_states',
                             '/bellows/driving_torque'], capture_output=True, text=True, timeout=60,
                            env={k: v for k, v in os.environ.items() if k != 'PYTHONPATH'},
@@ -102,14 +115,6 @@ def test_graph_publishes_and_every_sample_is_evaluated(graph):
         assert name == 'segment_1' and int(sec) > 0 and float(value) == float(value)
 
     # Count: let the graph run, stop the driver, then compare its final count with the model's.
-    dds_node.init([])
-    node = dds_node.Node('acceptance_probe')
-    final = {}
-
-    def on_diagnostics(array):
-        for status in array.status:
-            final[status.name] = {kv.key: kv.value for kv in status.values}
-    node.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
     end = time.monotonic() + 4.0
     while time.monotonic() < end:
         dds_node.spin_once(node, timeout_sec=0.05)
@@ -120,6 +125,6 @@ def test_graph_publishes_and_every_sample_is_evaluated(graph):
     driver, model = final['driver_node: arm'], final['model_node: driving torque']
     published = int(driver['published'])
     assert published > 500, (driver, logs(tmp_path))
-    assert int(model['evaluated']) == published, (driver, model)
+    assert int(model['evaluated']) == published, f'driver {driver}\nmodel {model}'
     assert model['rejected'] == '0' and model['unmatched_dropped'] == '0'
     assert int(final['driver_node: actuator']['published']) > 500

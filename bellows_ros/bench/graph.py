@@ -31,7 +31,7 @@ from bellows_ros.errors import BellowsError
 from bellows_ros.models.segment import SegmentModel, load_segment_params
 
 CONFIG = Path(__file__).resolve().parent.parent.parent / 'config' / 'nodes_sim.yaml'
-NODES = ('sim_arm_node', 'driver_node', 'model_node')
+NODES = ('sim_arm_node', 'model_node', 'driver_node')  # in start order
 
 
 def _cpu_seconds(pid):
@@ -82,12 +82,6 @@ def _measure(prefix, window, segments, overrides, reference):
     previous_env = os.environ.get('ROS_DOMAIN_ID')
     os.environ['ROS_DOMAIN_ID'] = domain
     try:
-        for name in NODES:
-            log = open(Path(logs.name) / f'{name}.log', 'w')
-            processes[name] = subprocess.Popen(
-                [str(binary / name), '--ros-args', '--params-file', str(CONFIG), *args[name],
-                 *overrides], env=env, stdout=log, stderr=subprocess.STDOUT)
-            time.sleep(1.0 if name == 'sim_arm_node' else 0.2)
         dds_node.init([])
         node = dds_node.Node('bench_graph')
 
@@ -98,6 +92,17 @@ def _measure(prefix, window, segments, overrides, reference):
                 if status.name.startswith('model_node') and 'latency_p99_us' in values:
                     windows.append(values)
         node.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
+        for name in NODES:
+            log = open(Path(logs.name) / f'{name}.log', 'w')
+            processes[name] = subprocess.Popen(
+                [str(binary / name), '--ros-args', '--params-file', str(CONFIG), *args[name],
+                 *overrides], env=env, stdout=log, stderr=subprocess.STDOUT)
+            if name == 'model_node':
+                # The driver publishes from its first sample on: the model must listen by then.
+                end = time.monotonic() + 60.0
+                while 'model_node: driving torque' not in final and time.monotonic() < end:
+                    dds_node.spin_once(node, timeout_sec=0.05)
+                    _check_alive(processes, logs.name)
         _spin(dds_node, node, 4.0)  # start-up and discovery
         _check_alive(processes, logs.name)
         cpu0 = {name: _cpu_seconds(p.pid) for name, p in processes.items()}
