@@ -172,6 +172,21 @@ def test_stuck_sensor_repeats_its_value_while_the_rest_moves(rig):
     window = received[start + 5:]
     assert len({s.p for s in window}) == 1
     assert len({s.f for s in window}) > 10
+    sim.faults.stuck = False                       # un-stuck: it follows the plant again
+    start = len(received)
+    assert wait_for(lambda: len(received) > start + 100)
+    assert len({s.p for s in received[start + 5:]}) > 10
+
+
+def test_a_stuck_channel_freezes_at_its_value_when_set_and_is_freed_when_cleared():
+    faults = Faults()
+    assert [faults.sensor(v) for v in (1.0, 2.0)] == [1.0, 2.0]
+    faults.stuck = True
+    assert [faults.sensor(v) for v in (3.0, 4.0, 5.0)] == [3.0, 3.0, 3.0]
+    faults.stuck = False
+    assert faults.sensor(6.0) == 6.0
+    faults.stuck = True
+    assert [faults.sensor(v) for v in (7.0, 8.0)] == [7.0, 7.0]   # a new fault, a new value
 
 
 def test_a_failing_callback_is_counted_and_reading_goes_on(rig):

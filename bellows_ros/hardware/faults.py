@@ -8,7 +8,8 @@ seed=None)``
 - ``replay_rate``: probability that the previous frame is sent again (CAN: same counter and CRC).
 - ``silent``: the device sends nothing (a dead board / unplugged bus stub).
 - ``stuck``: the first sensor channel (actuator: pressure; arm: segment 1 chain 1 pressure) freezes
-  at the value it had when the switch was set.
+  at the value it had when the switch was set; the device passes that channel through
+  ``.sensor(value)`` every tick.
 
 The emulator threads read the attributes every tick, so a test or node may simply assign them
 (``sim.faults.silent = True``); single attribute writes are atomic in CPython.
@@ -28,6 +29,16 @@ class Faults:
 
     def __post_init__(self):
         self.rng = random.Random(self.seed)
+        self._held = None
+
+    def sensor(self, value):
+        """What the first sensor channel reads: `value`, or while `stuck` the value it froze at."""
+        if not self.stuck:
+            self._held = None
+            return value
+        if self._held is None:
+            self._held = value
+        return self._held
 
     def drop(self):
         """Whether to drop the frame about to be sent."""

@@ -75,7 +75,6 @@ class SimActuatorBoard:
                                   'simulated actuator board')
         self.duty = 0.0
         self._last_host = time.monotonic()
-        self._stuck_p = None
         self._counts = {'sent': 0, 'dropped': 0, 'corrupted': 0, 'tx_overflow': 0,
                         'motor_commands': 0, 'heartbeats': 0, 'heartbeat_stops': 0}
         self.replug()
@@ -135,12 +134,7 @@ class SimActuatorBoard:
             state = self._step(dt, self.duty)
             t_us = (t_us + int(round(dt * 1e6))) & 0xFFFFFFFF
             status |= self._end_stops(state.x_c) | (sp.MOTOR_ON if self.duty else 0)
-            p = state.p
-            if self.faults.stuck:
-                self._stuck_p = p if self._stuck_p is None else self._stuck_p
-                p = self._stuck_p
-            else:
-                self._stuck_p = None
+            p = self.faults.sensor(state.p)
             telemetry = sp.Telemetry(
                 seq=seq & 0xFFFF, t_us=t_us,
                 encoder_counts=int(round(state.x_c / self.config.metres_per_count)),

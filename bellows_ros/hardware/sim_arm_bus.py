@@ -56,7 +56,6 @@ class SimArmBus:
         self._commanded = list(self.setpoints)
         self._last_host = None      # never heard: vented until a host speaks
         self._heartbeat_lost = True
-        self._stuck = None
         self._counts = {'sent': 0, 'dropped': 0, 'corrupted': 0, 'replayed': 0, 'tx_errors': 0,
                         'heartbeat_vents': 0}
         self._thread = LoopThread(self._loop, 'sim-arm-bus', log, 'simulated arm')
@@ -128,11 +127,8 @@ class SimArmBus:
         psi_lo, psi_hi = self._psi_range
         frames = []
         for i, (message, (p1, p2, psi)) in enumerate(zip(self._samples, measured)):
-            if i == 0 and self.faults.stuck:
-                self._stuck = p1 if self._stuck is None else self._stuck
-                p1 = self._stuck
-            elif i == 0:
-                self._stuck = None
+            if i == 0:
+                p1 = self.faults.sensor(p1)
             # A real sensor saturates at its range; the DBC would refuse an out-of-range value.
             values = {'P1': min(max(p1, lo), hi), 'P2': min(max(p2, lo), hi),
                       'Psi': min(max(psi, psi_lo), psi_hi)}

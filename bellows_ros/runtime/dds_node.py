@@ -280,7 +280,7 @@ class Node:
         return overrides
 
     def _on_clock(self, msg):
-        self._clock.sim_time = msg.clock.sec * 1_000_000_000 + msg.clock.nanosec
+        self._clock.sim_time = Time.from_msg(msg.clock).nanoseconds
 
     # names
     def get_name(self):
