@@ -21,8 +21,9 @@ import os
 
 from bellows_ros.errors import ParameterError
 
-_POLICIES = {os.SCHED_OTHER: 'SCHED_OTHER', os.SCHED_FIFO: 'SCHED_FIFO', os.SCHED_RR: 'SCHED_RR',
-             os.SCHED_BATCH: 'SCHED_BATCH', os.SCHED_IDLE: 'SCHED_IDLE'}
+_POLICIES = {getattr(os, name): name for name in
+             ('SCHED_OTHER', 'SCHED_FIFO', 'SCHED_RR', 'SCHED_BATCH', 'SCHED_IDLE')
+             if hasattr(os, name)}
 
 
 def set_fifo(priority):
@@ -58,6 +59,10 @@ def request(node):
     priority = node.get_parameter('realtime_priority').value
     if priority == 0:
         return False
+    if not hasattr(os, 'sched_setscheduler'):
+        node.get_logger().warn(f'realtime_priority {priority}: no SCHED_FIFO on this platform; '
+                               'running with normal scheduling')
+        return False
     try:
         threads = set_fifo(priority)
     except PermissionError:
@@ -72,6 +77,8 @@ def request(node):
 
 def describe():
     """The calling thread's scheduling policy and priority, e.g. 'SCHED_FIFO 50'."""
+    if not hasattr(os, 'sched_getscheduler'):
+        return 'unknown'
     policy = os.sched_getscheduler(0)
     name = _POLICIES.get(policy, str(policy))
     if policy in (os.SCHED_FIFO, os.SCHED_RR):
