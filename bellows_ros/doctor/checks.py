@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bellows_ros.data import check_range, read_table
+from bellows_ros.doctor.scoring import block_masks
 from bellows_ros.errors import DataError
 from bellows_ros.models.actuator_geometry import P_ATM
 
@@ -133,6 +134,30 @@ def moving_fraction(position, dt, speed):
     return float(np.mean(np.abs(rate) > speed))
 
 
+def pressure_coverage(record, share=0.5):
+    """None if every fold's training rows reach `share` of the record's highest chain pressure
+    (gauge), else why not.
+
+    The segment models' pressure coefficients are shared by both chains (Σ_j σ_j p_j [...], (34),
+    (29)), so what a fold refit can learn is set by the highest gauge pressure either chain holds in
+    its training rows. A record pressurised only in the blocks one fold holds out (a rig that
+    pressurises in the last 2 s) leaves that fold's pressure coefficients to the noise: its held-out
+    score measures an extrapolation, and comparing causes on it names whichever extrapolates least.
+    """
+    gauge = np.maximum(record['p1'], record['p2']) - P_ATM
+    top = float(gauge.max())
+    for fold, (train, _) in enumerate(block_masks(len(record))):
+        reached = float(gauge[train].max())
+        if reached < share * top:
+            held = np.flatnonzero(~train & (gauge > share * top))
+            t = record['t']
+            return (f'the chains reach {top / 1e5:.2f} bar gauge but, without the blocks fold {fold} '
+                    f'holds out, only {reached / 1e5:.2f} bar (the higher pressures lie in '
+                    f't = {t[held[0]]:.1f}-{t[held[-1]]:.1f} s); the held-out score would measure an '
+                    'extrapolation in pressure')
+    return None
+
+
 def identifiability(record, noise):
     """For each cause: None if this record can separate it, else the reason why not.
 
@@ -180,4 +205,9 @@ def identifiability(record, noise):
         rate = np.abs(np.gradient(p1, record.dt)) + np.abs(np.gradient(p2, record.dt))
         reasons['sensor_lag'] = (None if spread > 5e4 and np.percentile(rate, 99) > 1e5 else
                                  'the pressures never change fast, so a lag of the sensors cannot be seen')
+        # Every segment cause acts through the chain pressures: none can be scored on held-out
+        # blocks that only one fold's refit has not seen pressurised.
+        uncovered = pressure_coverage(record)
+        if uncovered:
+            reasons = {cause: reason or uncovered for cause, reason in reasons.items()}
     return reasons

@@ -56,6 +56,7 @@ class Diagnosis:
     values: dict                   # physical parameters of the final model {part: {name: value}}
     extended_flat: dict            # ROS 2 parameters of the extended model
     timings: dict = field(default_factory=dict)
+    failure: str = None            # why the baseline's held-out score is broken (then no cause is tried)
 
     @property
     def gain(self):
@@ -112,6 +113,7 @@ def diagnose(system, path, params_path=None, progress=False, causes=None):
         # Algorithm 1 over the record does not depend on any fitted parameter: run it once, at
         # the record's full rate (see `segment_causes.ContactLengths`).
         extra['contact'] = module.ContactLengths(params, full, record.factor)
+        extra['noise'] = noise / np.sqrt(record.factor)
 
     def score(switched_on, warm=None):
         model = module.build_model(record, params, switched_on, warm=warm, **extra)
@@ -121,11 +123,14 @@ def diagnose(system, path, params_path=None, progress=False, causes=None):
 
     baseline = score(())
     timings['baseline'] = time.perf_counter() - started
+    floor = noise / np.sqrt(record.factor)
+    # A baseline whose held-out score is broken leaves nothing to compare causes against.
+    failure = scoring.heldout_failure(baseline, floor)
     candidates = {cause: Candidate(cause, reason is None, reason)
                   for cause, reason in reasons.items()}
     current, chosen = baseline, []
     vocabulary = module.CAUSES if causes is None else tuple(causes)
-    remaining = [c for c in vocabulary if candidates[c].identifiable]
+    remaining = [c for c in vocabulary if candidates[c].identifiable and failure is None]
     while remaining:
         warm = dict(zip(current.model.names, current.full.theta))
         round_scores = {}
@@ -136,10 +141,8 @@ def diagnose(system, path, params_path=None, progress=False, causes=None):
             candidate.score, candidate.extends = result, tuple(chosen)
             candidate.gain = scoring.gain(result.rmse, current.rmse)
         for cause, result in round_scores.items():
-            edge = scoring.at_edge(result, cause)
-            if edge:
-                candidates[cause].note = f'fitted {", ".join(edge)} at the edge of its physical range'
-        credible = [c for c in round_scores if not scoring.at_edge(round_scores[c], c)]
+            candidates[cause].note = _doubt(result, cause, floor)
+        credible = [c for c in round_scores if candidates[c].note is None]
         if not credible:
             break
         best = min(credible, key=lambda c: round_scores[c].rmse)
@@ -153,12 +156,21 @@ def diagnose(system, path, params_path=None, progress=False, causes=None):
         bar.refresh()
     bar.close()
     timings['fit'] = time.perf_counter() - started
-    evidence = residual_evidence(record, current.heldout, noise / np.sqrt(record.factor), system)
+    evidence = residual_evidence(record, current.heldout, floor, system)
     unexplained = evidence['rmse_over_noise'] > UNEXPLAINED_RATIO and evidence['ljung_box_p'] < LB_P
     values = current.params()
     return Diagnosis(system, str(path), record, y, module.UNIT, module.BASELINE, baseline, current,
                      chosen, candidates, noise, evidence, bool(unexplained), values,
-                     module.extended_flat(params, chosen, values), timings)
+                     module.extended_flat(params, chosen, values), timings, failure)
+
+
+def _doubt(result, cause, floor):
+    """None, or why a scored candidate cannot be named whatever its gain: a physical parameter at
+    the edge of its range (it absorbs some other error), or a broken held-out score."""
+    edge = scoring.at_edge(result, cause)
+    if edge:
+        return f'fitted {", ".join(edge)} at the edge of its physical range'
+    return scoring.heldout_failure(result, floor)
 
 
 def residual_evidence(record, residual, noise, system):

@@ -8,6 +8,8 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
+
 from bellows_ros import params as param_files
 from bellows_ros.doctor import diagnosis as engine
 from bellows_ros.doctor import scoring
@@ -64,7 +66,8 @@ def details_dict(d):
         candidates[cause] = {'identifiable': c.identifiable, 'reason': c.reason,
                              'extends': list(c.extends), 'gain_over_extended_model': c.gain,
                              'pays': c.pays, 'note': c.note,
-                             'heldout_rmse': c.score.rmse if c.score else None}
+                             'heldout_rmse': c.score.rmse if c.score else None,
+                             'insample_rmse': c.score.insample_rmse if c.score else None}
     return {
         'data': d.path,
         'samples_fitted': len(d.record),
@@ -72,13 +75,24 @@ def details_dict(d):
         'decimation': d.record.factor,
         'resampled': d.record.resampled,
         'noise_floor_full_rate': d.noise,
+        'baseline': {'heldout_rmse': d.baseline.rmse, 'insample_rmse': d.baseline.insample_rmse,
+                     'heldout_rmse_per_fold': fold_rmse(d.baseline.heldout)},
+        'heldout_failure': d.failure,
         'rule': {'min_gain': scoring.MIN_GAIN, 'blocks': scoring.BLOCKS, 'penalty': 'BIC on held-out',
-                 'unexplained_ratio': engine.UNEXPLAINED_RATIO, 'ljung_box_p': engine.LB_P},
+                 'unexplained_ratio': engine.UNEXPLAINED_RATIO, 'ljung_box_p': engine.LB_P,
+                 'failure_over_noise': scoring.FAILURE_NOISE,
+                 'failure_over_insample': scoring.FAILURE_INSAMPLE},
         'candidates': candidates,
         'evidence': d.evidence,
         'extended_params': d.values,
         'timings_s': d.timings,
     }
+
+
+def fold_rmse(heldout):
+    """Held-out RMSE of each fold (`scoring.block_masks`): a fold far above the others is one whose
+    refit extrapolates."""
+    return [float(np.sqrt(np.mean(heldout[test] ** 2))) for _, test in scoring.block_masks(len(heldout))]
 
 
 def write_report(d, directory):
@@ -112,6 +126,11 @@ def markdown(d, plots):
                      f'{"it" if len(d.causes) == 1 else "them"} cuts the held-out RMSE from '
                      f'{d.baseline.rmse:.4g} to {d.final.rmse:.4g} {d.unit} '
                      f'(gain {100 * d.gain:.1f} %).')
+    elif d.failure:
+        lines.append(f'**Cause: `none` — the baseline could not be scored.** Its {d.failure} '
+                     f'{d.unit}. Causes compared against a broken score would name whichever breaks '
+                     'least, so none was tried; this is a failure of the doctor on this record, not a '
+                     'finding about the system.')
     else:
         lines.append(f'**Cause: `none`.** No candidate cause improves the held-out RMSE '
                      f'({d.baseline.rmse:.4g} {d.unit}) by at least {100 * scoring.MIN_GAIN:.0f} %.')
@@ -137,6 +156,9 @@ def markdown(d, plots):
     for cause, c in d.candidates.items():
         if not c.identifiable:
             lines.append(f'| `{cause}` | no: {c.reason} | | | | no |')
+            continue
+        if c.score is None:
+            lines.append(f'| `{cause}` | yes | | | | not tried: the baseline\'s held-out score is broken |')
             continue
         extends = ' + '.join(('baseline',) + c.extends)
         verdict = 'yes' if c.pays else ('no: ' + c.note if c.note else 'no')

@@ -27,6 +27,12 @@ BLOCKS = 20
 FOLDS = 5
 # Samples left out of training on each side of a held-out block (fraction of a block).
 GUARD = 0.1
+# A fit whose held-out RMSE is above FAILURE_NOISE × the (averaged) noise floor and above
+# FAILURE_INSAMPLE × its own in-sample RMSE has failed numerically or extrapolated: a model that
+# misses physics is about as wrong on the rows it was fitted to (the segment baselines of the test
+# records: held-out / in-sample 1.0-1.9), so such a score names no cause (docs/doctor.md).
+FAILURE_NOISE = 100.0
+FAILURE_INSAMPLE = 10.0
 # Function evaluations of a held-out refit (warm-started from the fit on all data).
 FOLD_NFEV = 25
 # Function evaluations of each start of a multi-start fit before the best is refined.
@@ -133,6 +139,11 @@ class Score:
     def rmse(self):
         return float(np.sqrt(np.mean(self.heldout ** 2)))
 
+    @property
+    def insample_rmse(self):
+        """RMSE of the fit on all data, over all data."""
+        return float(np.sqrt(self.full.cost))
+
     def params(self):
         return self.model.physical(self.full.theta, self.full.linear)
 
@@ -147,6 +158,21 @@ def score(model, y, warm=None):
         fold = fit(model, y, train, x0=full.theta if model.names else None, max_nfev=FOLD_NFEV)
         heldout[test] = (fold.prediction - y)[test]
     return Score(model, full, heldout)
+
+
+def heldout_failure(score, noise):
+    """None, or why the held-out score of `score` is not a measure of its model: held-out RMSE above
+    `FAILURE_NOISE` × `noise` (the averaged noise floor) while the same model fits all the data to
+    within 1 / `FAILURE_INSAMPLE` of that. Such a gap is not physics a cause could remove but a fold
+    refit gone wrong (an ill-posed solve, or a fold whose training rows never see the conditions of
+    its held-out blocks), and comparing causes against it would name whichever breaks least.
+    """
+    held, fitted = score.rmse, score.insample_rmse
+    if not np.isfinite(held) or (held > FAILURE_NOISE * noise and held > FAILURE_INSAMPLE * fitted):
+        ratio = f'{held / noise:.0f} ×' if noise > 0 else 'far above'
+        return (f'numerical failure of the held-out refits: held-out RMSE {held:.4g} is {ratio} the '
+                f'noise floor while the fit on all data reaches {fitted:.4g}')
+    return None
 
 
 def gain(extended_rmse, baseline_rmse):
