@@ -80,15 +80,17 @@ def graph(tmp_path, monkeypatch):
         'model_node': launch('model_node', ['-p', 'segments:=[1, 2]'], env, tmp_path),
     }
     try:
-        # The driver publishes from its first sample on: the model must be subscribed by then,
-        # or the count below would include samples published before anyone listened.
+        # The driver publishes from its first sample on: the model must be subscribed by then
+        # (and the driver waits until it has matched it), or the count below would include
+        # samples published before anyone listened.
         end = time.monotonic() + 60.0
         while 'model_node: driving torque' not in final and time.monotonic() < end:
             dds_node.spin_once(probe, timeout_sec=0.05)
         assert 'model_node: driving torque' in final, logs(tmp_path)
         processes['driver_node'] = launch('driver_node', ['-p', f'arm.channel:={group}',
                                                           '-p', 'arm.n_segments:=2',
-                                                          '-p', f'actuator.port:={port}'],
+                                                          '-p', f'actuator.port:={port}',
+                                                          '-p', 'wait_for_subscribers:=20.0'],
                                           env, tmp_path)
         yield processes, domain, tmp_path, probe, final
     finally:

@@ -166,3 +166,66 @@ def test_bad_yaml_names_the_line(tmp_path, env):
     process = start(tmp_path, TALKER, ['--ros-args', '--params-file', str(bad)], env)
     _, err = process.communicate(timeout=20)
     assert process.returncode == 2 and f'{bad}:' in err and len(err.strip().splitlines()) == 1
+
+
+def test_publisher_waits_until_readers_acknowledged(env):
+    dds_node.init([])
+    node = dds_node.Node('acked')
+    publisher = node.create_publisher(msg.JointState, '/acked', 100)
+    assert publisher.wait_for_all_acked(dds_node.Duration(seconds=0.0))   # no reader: nothing owed
+    received = []
+    node.create_subscription(msg.JointState, '/acked', received.append, 100)
+    for i in range(50):
+        publisher.publish(msg.JointState(name=['segment_1'], position=[float(i)]))
+    assert publisher.wait_for_all_acked(dds_node.Duration(seconds=2.0))
+    assert [m.position[0] for m in receive(node, received, 50)] == [float(i) for i in range(50)]
+
+
+def test_waiting_for_a_dead_reader_times_out(env):
+    """A reader killed without goodbye stays matched until its lease ends: never acknowledges."""
+    dds_node.init([])
+    node = dds_node.Node('acked')
+    publisher = node.create_publisher(msg.JointState, '/acked', 100)
+    reader = subprocess.Popen([sys.executable, '-c', JOINT_STATE_SUBSCRIBER + textwrap.dedent('''\
+        reader = DataReader(participant, Topic(participant, 'rt/acked', JointState),
+                            qos=Qos(Policy.Reliability.Reliable(0), Policy.History.KeepLast(10)))
+        time.sleep(60)
+        '''), DOMAIN], env={k: v for k, v in env.items() if k != 'PYTHONPATH'})
+    try:
+        end = time.monotonic() + 20.0
+        while publisher.get_subscription_count() == 0 and time.monotonic() < end:
+            time.sleep(0.02)
+        assert publisher.get_subscription_count() == 1
+        reader.kill()
+        reader.wait()
+        publisher.publish(msg.JointState(name=['segment_1'], position=[1.0]))
+        start = time.monotonic()
+        assert publisher.wait_for_all_acked(dds_node.Duration(seconds=0.3)) is False
+        assert time.monotonic() - start < 5.0   # bounded (a generous bound, not a timing claim)
+    finally:
+        reader.kill()
+
+
+def test_a_backlog_of_two_topics_is_served_in_step(env):
+    """After a stall the two halves of each sample (two topics) must not drift apart: the model
+    node pairs them and drops a half after `max_pending` unmatched ones."""
+    dds_node.init([])
+    node = dds_node.Node('backlog')
+    order = []
+    for topic in ('/half_a', '/half_b'):
+        node.create_subscription(msg.JointState, topic,
+                                 lambda m, t=topic: order.append((t, m.position[0])), 500)
+    publishers = [node.create_publisher(msg.JointState, t, 500) for t in ('/half_a', '/half_b')]
+    for i in range(300):                       # nobody spins meanwhile: a 300-sample backlog
+        for publisher in publishers:
+            publisher.publish(msg.JointState(name=['segment_1'], position=[float(i)]))
+    end = time.monotonic() + 10.0
+    while len(order) < 600 and time.monotonic() < end:
+        dds_node.spin_once(node, timeout_sec=0.05)
+    assert len(order) == 600
+    seen = {'/half_a': 0, '/half_b': 0}
+    worst = 0
+    for topic, _ in order:
+        seen[topic] += 1
+        worst = max(worst, abs(seen['/half_a'] - seen['/half_b']))
+    assert worst <= 10, worst                  # was 256 with one topic's backlog taken first

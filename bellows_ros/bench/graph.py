@@ -72,7 +72,7 @@ def _measure(prefix, window, segments, overrides, reference):
     env = dict(os.environ, ROS_DOMAIN_ID=domain, BELLOWS_RUNTIME='dds')
     args = {'sim_arm_node': ['-p', f'can.channel:={group}', '-p', f'n_segments:={segments}'],
             'driver_node': ['-p', f'arm.channel:={group}', '-p', f'arm.n_segments:={segments}',
-                            '-p', 'actuator.enabled:=false'],
+                            '-p', 'actuator.enabled:=false', '-p', 'wait_for_subscribers:=20.0'],
             'model_node': ['-p', f'segments:={list(range(1, segments + 1))}',
                            '-p', 'latency_budget:=0.002']}
     binary = Path(sys.executable).parent
@@ -98,7 +98,8 @@ def _measure(prefix, window, segments, overrides, reference):
                 [str(binary / name), '--ros-args', '--params-file', str(CONFIG), *args[name],
                  *overrides], env=env, stdout=log, stderr=subprocess.STDOUT)
             if name == 'model_node':
-                # The driver publishes from its first sample on: the model must listen by then.
+                # The driver publishes from its first sample on: the model must listen by then
+                # (and the driver waits until it has matched it).
                 end = time.monotonic() + 60.0
                 while 'model_node: driving torque' not in final and time.monotonic() < end:
                     dds_node.spin_once(node, timeout_sec=0.05)

@@ -14,6 +14,10 @@ Parameters (config/nodes_*.yaml, section `driver_node`):
   arm.interface, arm.channel (str): python-can bus ('' = hardware.arm_bus.*).
   arm.n_segments (int): segments on the bus (0 = hardware.arm_bus.n_segments).
   startup_timeout (s): a device with no sample by then is an error (exit status 2).
+  wait_for_subscribers (s): before opening the devices, wait up to this long for `/joint_states`
+      and `/bellows/chambers` to have a subscriber (like `ros2 topic pub
+      --wait-matching-subscriptions`), so that a consumer started first sees every sample; 0 = no
+      wait (the default: a robot's driver publishes whoever listens).
   realtime_priority (int): SCHED_FIFO priority for the node's threads, 1-99; 0 = normal
       scheduling (runtime/realtime.py).
 """
@@ -28,6 +32,9 @@ from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import realtime, rt
 from bellows_ros.runtime.topics import ACTUATOR_FRAME, SAMPLE_DEPTH
+
+
+_DISCOVERY_SETTLE = 0.5  # s, see DriverNode._wait_for_subscribers
 
 
 class SampleClock:
@@ -61,6 +68,7 @@ class DriverNode(rt.Node):
         channel = self.declare_parameter('arm.channel', '').value
         n_segments = self.declare_parameter('arm.n_segments', 0).value
         self.startup_timeout = self.declare_parameter('startup_timeout', 2.0).value
+        wait_for_subscribers = self.declare_parameter('wait_for_subscribers', 0.0).value
         realtime.declare(self)  # SCHED_FIFO priority, applied by rt.main once the node is built
         rt.check_parameters(self)
         if not (self.use_arm or self.use_actuator):
@@ -76,6 +84,8 @@ class DriverNode(rt.Node):
         self.arm = self.actuator = None
         self.reports = {}
         self.published = {'arm': 0, 'actuator': 0}
+        if wait_for_subscribers > 0:
+            self._wait_for_subscribers(wait_for_subscribers)
         try:
             if self.use_actuator:
                 self._open_actuator(actuator_board.load_config(hardware_params), port)
@@ -139,13 +149,32 @@ class DriverNode(rt.Node):
             raise BellowsError(f'driver_node: no {name} samples on {where} within '
                                f'{self.startup_timeout:g} s (device absent or not powered)')
 
+    def _wait_for_subscribers(self, timeout):
+        end = time.monotonic() + timeout
+        publishers = (self.state_pub, self.chamber_pub)
+        while not all(p.get_subscription_count() for p in publishers):
+            if time.monotonic() > end:
+                self.get_logger().warn(f'no subscriber on /joint_states and /bellows/chambers '
+                                       f'after {timeout:g} s: publishing anyway')
+                return
+            time.sleep(0.01)
+        # Our writers have matched the readers; each reader matches our writers only when it has
+        # processed our announcement, and drops what arrives before (seen: the first 8-17 samples
+        # lost, half of some, under load). Give the other side the same chance.
+        time.sleep(_DISCOVERY_SETTLE)
+
     def close(self):
         devices = [(n, d) for n, d in (('actuator', self.actuator), ('arm', self.arm)) if d]
         for _, device in devices:
             device.close()
         if devices and self.reports:
             self.publish_diagnostics(final=True)  # the closing counts: nothing published after
-            time.sleep(0.3)  # let the reliable writer deliver it before the participant goes
+            # Samples still being repaired (a packet lost under load) must reach the readers
+            # before the participant goes; bounded, so a reader that died cannot hold it up.
+            end = time.monotonic() + 1.0
+            for publisher in (self.state_pub, self.chamber_pub, self.wrench_pub, self.diag_pub):
+                left = max(0.0, end - time.monotonic())
+                publisher.wait_for_all_acked(rt.Duration(seconds=left))
         self.actuator = self.arm = None
 
     # --- samples -> topics (called from the drivers' reader threads) ----------------------------

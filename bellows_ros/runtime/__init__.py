@@ -8,7 +8,7 @@ Node code is the same either way::
         return rt.main(Talker, args)
 
 `rt` exposes: `init`, `ok`, `shutdown`, `spin`, `spin_once`, `Node`, `Time` (nanoseconds, to_msg,
-from_msg), `msg` (JointState, WrenchStamped, Float64, DiagnosticArray, DiagnosticStatus, KeyValue,
+from_msg), `Duration` (publishers' `wait_for_all_acked`), `msg` (JointState, WrenchStamped, Float64, DiagnosticArray, DiagnosticStatus, KeyValue,
 Clock, Header, Time), `SENSOR_DATA` (best-effort QoS), `check_parameters(node)` and `main`.
 `USING_RCLPY` says which one was picked; `BELLOWS_RUNTIME=dds` forces the DDS runtime.
 """
@@ -23,6 +23,7 @@ from bellows_ros.errors import BellowsError, ParameterError
 
 def _load_rclpy():
     import rclpy
+    import rclpy.duration
     import rclpy.qos
     import rclpy.time
     from builtin_interfaces.msg import Time as TimeMsg
@@ -46,7 +47,7 @@ def _load_rclpy():
     return types.SimpleNamespace(
         USING_RCLPY=True, init=lambda args=None: rclpy.init(args=args), ok=rclpy.ok,
         shutdown=rclpy.try_shutdown, spin=rclpy.spin, spin_once=rclpy.spin_once,
-        Node=rclpy.node.Node, Time=rclpy.time.Time, msg=msg,
+        Node=rclpy.node.Node, Time=rclpy.time.Time, Duration=rclpy.duration.Duration, msg=msg,
         SENSOR_DATA=rclpy.qos.qos_profile_sensor_data, undeclared_overrides=undeclared_overrides,
         Interrupted=(KeyboardInterrupt, ExternalShutdownException))
 
@@ -57,7 +58,7 @@ def _load_dds():
     return types.SimpleNamespace(
         USING_RCLPY=False, init=dds_node.init, ok=dds_node.ok, shutdown=dds_node.shutdown,
         spin=dds_node.spin, spin_once=dds_node.spin_once, Node=dds_node.Node, Time=dds_node.Time,
-        msg=msg, SENSOR_DATA=dds_node.SENSOR_DATA,
+        Duration=dds_node.Duration, msg=msg, SENSOR_DATA=dds_node.SENSOR_DATA,
         undeclared_overrides=lambda node: node.undeclared_overrides(), Interrupted=(KeyboardInterrupt,))
 
 

@@ -22,8 +22,8 @@ import threading
 import time
 from dataclasses import dataclass
 
-from cyclonedds.core import GuardCondition, Policy, Qos, ReadCondition, SampleState, ViewState, \
-    InstanceState, WaitSet
+from cyclonedds.core import DDSException, GuardCondition, InstanceState, Policy, Qos, ReadCondition, \
+    SampleState, ViewState, WaitSet
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
@@ -38,6 +38,9 @@ from bellows_ros.runtime.messages import message_class, type_hash
 
 # Longest time spin_once blocks in C: Python only handles SIGINT between bytecodes.
 _MAX_WAIT_S = 0.1
+# Samples taken per subscription per round, and rounds per spin_once (then timers get a turn).
+_BATCH = 4
+_MAX_ROUNDS = 64
 
 
 class _Context:
@@ -119,6 +122,13 @@ class Time:
 
     def seconds_nanoseconds(self):
         return divmod(self.nanoseconds, 1_000_000_000)
+
+
+class Duration:
+    """A span of time, in nanoseconds (rclpy.duration.Duration's interface)."""
+
+    def __init__(self, seconds=0.0, nanoseconds=0):
+        self.nanoseconds = int(nanoseconds) + int(round(seconds * 1e9))
 
 
 class Clock:
@@ -219,6 +229,17 @@ class Publisher:
 
     def publish(self, msg):
         self._writer.write(msg)
+
+    def wait_for_all_acked(self, timeout=Duration(seconds=-1)):
+        """Block until every matched reliable reader acknowledged all samples, or `timeout`
+        (Duration; negative = forever) passes; True when all were acknowledged."""
+        wait = duration(infinite=True) if timeout.nanoseconds < 0 else timeout.nanoseconds
+        # DataWriter.wait_for_acks of cyclonedds 11.0.1 raises AttributeError on a timeout (it
+        # names `Exception.DDS_RETCODE_TIMEOUT`); the C call's return code is unambiguous.
+        code = self._writer._wait_for_acks(self._writer._ref, wait)
+        if code not in (0, DDSException.DDS_RETCODE_TIMEOUT):
+            raise DDSException(code, f'waiting for acknowledgements on {self.topic_name}')
+        return code == 0
 
     def get_subscription_count(self):
         return self._writer.get_publication_matched_status().current_count
@@ -373,10 +394,19 @@ class Node:
             wait = min(wait, max(0.0, min(t.next_due for t in timers) - now))
         if wait > 0:
             self._waitset.wait(duration(seconds=wait))
-        for subscription in self._subscriptions:
-            for sample in subscription.reader.take(N=256, condition=subscription.condition):
-                if not isinstance(sample, InvalidSample):  # instance state changes carry no data
-                    subscription.callback(sample)
+        # Round-robin in small batches, as rclpy's executor serves one ready entity at a time:
+        # after a stall, messages of two topics that belong together (the driver's /joint_states
+        # and /bellows/chambers halves of a sample) are then handled in step, not one topic's
+        # whole backlog first.
+        for _ in range(_MAX_ROUNDS):
+            busy = False
+            for subscription in self._subscriptions:
+                for sample in subscription.reader.take(N=_BATCH, condition=subscription.condition):
+                    busy = True
+                    if not isinstance(sample, InvalidSample):  # state changes carry no data
+                        subscription.callback(sample)
+            if not busy:
+                break
         now = time.monotonic()
         for timer in timers:
             if now >= timer.next_due:
