@@ -399,13 +399,14 @@ class Node:
         # and /bellows/chambers halves of a sample) are then handled in step, not one topic's
         # whole backlog first.
         for _ in range(_MAX_ROUNDS):
-            busy = False
+            full = False  # a full batch: that reader may hold more, go round again
             for subscription in self._subscriptions:
-                for sample in subscription.reader.take(N=_BATCH, condition=subscription.condition):
-                    busy = True
+                samples = subscription.reader.take(N=_BATCH, condition=subscription.condition)
+                full = full or len(samples) == _BATCH
+                for sample in samples:
                     if not isinstance(sample, InvalidSample):  # state changes carry no data
                         subscription.callback(sample)
-            if not busy:
+            if not full:
                 break
         now = time.monotonic()
         for timer in timers:
