@@ -1,8 +1,11 @@
 """Benchmark of the node graph over real DDS: sim_arm_node -> driver_node -> model_node.
 
-Measured in one run (separate processes, the DDS runtime, CAN over udp_multicast), twice: with the
-scheduling config/nodes_sim.yaml asks for (`realtime_priority`: SCHED_FIFO when the machine grants
-it) and with every node at normal scheduling (`graph.normal.*`), for comparison:
+Measured in one run (separate processes, the DDS runtime, CAN over udp_multicast), twice:
+- `graph.*`: the host nodes at the SCHED_FIFO priority config/nodes_hw.yaml gives them on a robot,
+  the simulated arm 10 above (a real arm has its own processor: the host cannot delay it);
+- `graph.normal.*`: every node at normal scheduling (config/nodes_sim.yaml, or a machine that does
+  not grant real-time priority).
+Figures:
 - achieved rate: arm samples per second the model node evaluated (target 1000 Hz);
 - fraction of the samples the driver published that the model node evaluated (target >= 0.99),
   from their final counters;
@@ -13,6 +16,7 @@ it) and with every node at normal scheduling (`graph.normal.*`), for comparison:
   more than 2 ms after the sample's stamp (the model node counts them): p99 <= 2 ms over the
   whole window, not per 1 s window, is `late_fraction <= 0.01`;
 - CPU per node: utime + stime from /proc/<pid>/stat over the window, as a fraction of one core.
+The scheduling each node actually got (from its /diagnostics) is in `graph*.rate`'s extra.
 Reference, measured in the same run: `SegmentModel.step` for the same segments, in-process (the
 model's own cost, without DDS); the latency ratio is against it.
 Nothing here asserts a time. A node that exits is an error (BellowsError with its log), not a zero.
@@ -26,11 +30,13 @@ import tempfile
 import time
 from pathlib import Path
 
+from bellows_ros import params
 from bellows_ros.bench import Result, timing
 from bellows_ros.errors import BellowsError
 from bellows_ros.models.segment import SegmentModel, load_segment_params
 
 CONFIG = Path(__file__).resolve().parent.parent.parent / 'config' / 'nodes_sim.yaml'
+ROBOT_CONFIG = CONFIG.with_name('nodes_hw.yaml')
 NODES = ('sim_arm_node', 'model_node', 'driver_node')  # in start order
 
 
@@ -57,13 +63,16 @@ def run(quick=False, segments=4):
     window = 3.0 if quick else 10.0
     reference = _model_reference(segments)
     results = [reference]
-    for prefix, overrides in (('graph', []), ('graph.normal', ['-p', 'realtime_priority:=0'])):
-        results += _measure(prefix, window, segments, overrides, reference)
+    host = {name: params.read_file(ROBOT_CONFIG, name)['realtime_priority']
+            for name in ('driver_node', 'model_node')}
+    realtime = dict(host, sim_arm_node=max(host.values()) + 10)
+    for prefix, priorities in (('graph', realtime), ('graph.normal', dict.fromkeys(NODES, 0))):
+        results += _measure(prefix, window, segments, priorities, reference)
     return results
 
 
-def _measure(prefix, window, segments, overrides, reference):
-    """Run the three nodes for `window` s with `overrides` for every node; their figures."""
+def _measure(prefix, window, segments, priorities, reference):
+    """Run the three nodes for `window` s at the given `realtime_priority` each; their figures."""
     from bellows_ros.runtime import dds_node
     from bellows_ros.runtime.messages import msg
 
@@ -96,7 +105,8 @@ def _measure(prefix, window, segments, overrides, reference):
             log = open(Path(logs.name) / f'{name}.log', 'w')
             processes[name] = subprocess.Popen(
                 [str(binary / name), '--ros-args', '--params-file', str(CONFIG), *args[name],
-                 *overrides], env=env, stdout=log, stderr=subprocess.STDOUT)
+                 '-p', f'realtime_priority:={priorities[name]}'],
+                env=env, stdout=log, stderr=subprocess.STDOUT)
             if name == 'model_node':
                 # The driver publishes from its first sample on: the model must listen by then
                 # (and the driver waits until it has matched it).

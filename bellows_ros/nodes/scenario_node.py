@@ -12,7 +12,9 @@ prints a summary (step settling time and overshoot, excursion extremes) and writ
 `output_dir/scenario.csv` and `output_dir/scenario.png`.
 
 Parameters: duration (s), step_time (s), stiffness_low, stiffness_high (N/m), pressure_peak (Pa),
-excursion_start, excursion_length (s), output_dir (str), actuator_params (str).
+excursion_start, excursion_length (s), output_dir (str), actuator_params (str), realtime_priority
+(SCHED_FIFO priority, 0 = normal scheduling: it stands in for the arm controller, whose 50 Hz
+set-points must not starve behind the 1 kHz nodes, or the driver's watchdog vents the arm).
 """
 import csv
 import math
@@ -24,7 +26,7 @@ from bellows_ros.errors import BellowsError
 from bellows_ros.models.actuator import load_actuator_params
 from bellows_ros.models.segment import load_segment_params
 from bellows_ros.models.stiffness_map import stiffness_range
-from bellows_ros.runtime import rt
+from bellows_ros.runtime import realtime, rt
 
 
 
@@ -41,6 +43,7 @@ class ScenarioNode(rt.Node):
         self.excursion_length = self.declare_parameter('excursion_length', 20.0).value
         self.output_dir = Path(self.declare_parameter('output_dir', 'scenario_out').value)
         actuator_params = self.declare_parameter('actuator_params', '').value or None
+        realtime.declare(self)  # SCHED_FIFO priority, applied by rt.main once the node is built
         self.p0 = load_segment_params().p0  # ambient: the vented chain's pressure, Pa abs
         rt.check_parameters(self)
         k_min, k_max = stiffness_range(load_actuator_params(actuator_params))
