@@ -19,14 +19,13 @@ API
 
 Deadlines are ``t0 + k * period`` on ``time.perf_counter`` (absolute, so sleep jitter never
 accumulates into drift). The loop sleeps until ``spin`` seconds before the deadline and busy-waits
-the rest. ``time.sleep`` overshoots by 50-150 us (timer slack; measured here 110 us median at
-normal scheduling, 70 us under SCHED_FIFO), but the default is no busy-wait: the loops here are
-the simulated devices, whose samples are stamped on arrival at the driver, and on a shared 2-core
+the rest. ``time.sleep`` overshoots by 50-150 us (timer slack; measured here 110 us median at normal
+scheduling, 70 us under SCHED_FIFO), but the default is no busy-wait: the loops here are the
+simulated devices, whose samples are stamped on arrival at the driver, and on a shared 2-core
 machine the spin (~10 % of a core per loop at 1 kHz) is CPU the driver and model nodes need. When a
-tick starts
-more than one period late, the slots it lost are *skipped*, not replayed in a burst, and counted as
-deadline misses; the returned ``dt`` then covers the skipped slots so that simulated time keeps pace
-with wall time.
+tick starts more than one period late, the slots it lost are *skipped*, not replayed in a burst, and
+counted as deadline misses; the returned ``dt`` then covers the skipped slots so that simulated time
+keeps pace with wall time.
 """
 import threading
 import time

@@ -1,9 +1,9 @@
 """/diagnostics for every node: one DiagnosticStatus per loop or device group, about once a second.
 
-Reported per loop: achieved rate, loop compute time p50/p99, period p99, lateness p99, deadline misses
-(from `hardware.loop_timing.LoopStats`), the scheduling policy (SCHED_FIFO when granted), plus whatever counters the node passes (link health,
-stale data, rejected samples). Level: ERROR when the link is down, WARN on new deadline misses or
-stale data since the last report, else OK.
+Reported per loop: achieved rate, loop compute time p50/p99, period p99, lateness p99, deadline
+misses (from `hardware.loop_timing.LoopStats`), the scheduling policy (SCHED_FIFO when granted),
+plus whatever counters the node passes (link health, stale data, rejected samples). Level: ERROR
+when the link is down, WARN on new deadline misses or stale data since the last report, else OK.
 """
 import time
 

@@ -13,8 +13,9 @@ prints a summary (step settling time and overshoot, excursion extremes) and writ
 
 Parameters: duration (s), step_time (s), stiffness_low, stiffness_high (N/m), pressure_peak (Pa),
 excursion_start, excursion_length (s), output_dir (str), actuator_params (str), realtime_priority
-(SCHED_FIFO priority, 0 = normal scheduling: it stands in for the arm controller, whose 50 Hz
-set-points must not starve behind the 1 kHz nodes, or the driver's watchdog vents the arm).
+(SCHED_FIFO priority, 0 = normal scheduling; when the 1 kHz nodes run SCHED_FIFO give it one too,
+below theirs: it stands in for the arm controller, and when its 50 Hz set-points starve the
+driver's watchdog vents the arm).
 """
 import csv
 import math

@@ -8,9 +8,10 @@ Node code is the same either way::
         return rt.main(Talker, args)
 
 `rt` exposes: `init`, `ok`, `shutdown`, `spin`, `spin_once`, `Node`, `Time` (nanoseconds, to_msg,
-from_msg), `Duration` (publishers' `wait_for_all_acked`), `msg` (JointState, WrenchStamped, Float64, DiagnosticArray, DiagnosticStatus, KeyValue,
-Clock, Header, Time), `SENSOR_DATA` (best-effort QoS), `check_parameters(node)` and `main`.
-`USING_RCLPY` says which one was picked; `BELLOWS_RUNTIME=dds` forces the DDS runtime.
+from_msg), `Duration` (publishers' `wait_for_all_acked`), `msg` (JointState, WrenchStamped, Float64,
+DiagnosticArray, DiagnosticStatus, KeyValue, Clock, Header, Time), `SENSOR_DATA` (best-effort QoS),
+`check_parameters(node)` and `main`. `USING_RCLPY` says which one was picked; `BELLOWS_RUNTIME=dds`
+forces the DDS runtime.
 """
 import gc
 import os
