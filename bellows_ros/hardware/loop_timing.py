@@ -11,21 +11,20 @@ Used by the simulated devices, the drivers and the nodes for every 1 kHz loop (D
 
 API
 ---
-- ``PeriodicLoop(period, stats=None, spin=0.0)``; ``.ticks(stop_event) -> Iterator[float]``.
+- ``PeriodicLoop(period, stats=None)``; ``.ticks(stop_event) -> Iterator[float]``.
 - ``LoopStats(window=10000)``; ``.record(period, lateness, compute)``, ``.add_misses(n)``,
   ``.summary() -> dict[str, float]``.
 - ``LoopThread(loop, name, log, what)``: ``loop(stop_event)`` on a daemon thread from
   ``.start()`` to ``.stop()`` (restartable); a loop that raises is logged, not lost.
 
 Deadlines are ``t0 + k * period`` on ``time.perf_counter`` (absolute, so sleep jitter never
-accumulates into drift). The loop sleeps until ``spin`` seconds before the deadline and busy-waits
-the rest. ``time.sleep`` overshoots by 50-150 us (timer slack; measured here 110 us median at normal
-scheduling, 70 us under SCHED_FIFO), but the default is no busy-wait: the loops here are the
-simulated devices, whose samples are stamped on arrival at the driver, and on a shared 2-core
-machine the spin (~10 % of a core per loop at 1 kHz) is CPU the driver and model nodes need. When a
-tick starts more than one period late, the slots it lost are *skipped*, not replayed in a burst, and
-counted as deadline misses; the returned ``dt`` then covers the skipped slots so that simulated time
-keeps pace with wall time.
+accumulates into drift). The loop only sleeps: ``time.sleep`` overshoots by 50-150 us (timer slack;
+measured here 110 us median at normal scheduling, 70 us under SCHED_FIFO), and a busy-wait before
+each deadline would cost ~10 % of a core per 1 kHz loop, CPU the driver and model nodes need on a
+shared 2-core machine; the loops here are the simulated devices, whose samples are stamped on
+arrival at the driver. When a tick starts more than one period late, the slots it lost are
+*skipped*, not replayed in a burst, and counted as deadline misses; the returned ``dt`` then covers
+the skipped slots so that simulated time keeps pace with wall time.
 """
 import threading
 import time
@@ -81,26 +80,26 @@ class LoopStats:
 class PeriodicLoop:
     """Run a body every `period` seconds against absolute deadlines.
 
-    Parameters ---------- period : float
+    Parameters
+    ----------
+    period : float
         Loop period, s.
     stats : LoopStats, optional
         Where each tick's timing is recorded.
-    spin : float
-        Busy-wait margin before each deadline, s (0: sleep only).
     """
 
-    def __init__(self, period, stats=None, spin=0.0):
+    def __init__(self, period, stats=None):
         if not period > 0:
             raise ValueError(f'period must be positive, got {period}')
         self.period = float(period)
         self.stats = stats if stats is not None else LoopStats()
-        self.spin = float(spin)
 
-    def _sleep_until(self, deadline):
+    @staticmethod
+    def _sleep_until(deadline):
         remaining = deadline - time.perf_counter()
-        if remaining > self.spin:
-            time.sleep(remaining - self.spin)
-        while time.perf_counter() < deadline:
+        if remaining > 0:
+            time.sleep(remaining)
+        while time.perf_counter() < deadline:  # never start early: lateness stays >= 0
             pass
 
     def ticks(self, stop_event):
