@@ -15,7 +15,8 @@ class Result:
 
     name: what was measured; value: the median (seconds for timings); unit: of `value`;
     samples: how many calls or samples the median is over; reference: name of the reference figure;
-    ratio: value / reference value; target: the issue's target in `unit`, if any; extra: more figures.
+    ratio: value / reference value; target: the issue's target in `unit`, if any; extra: more figures,
+    in `unit` unless `extra_units` names another unit for them ('' for a fraction).
     """
     name: str
     value: float
@@ -25,6 +26,7 @@ class Result:
     ratio: float = None
     target: float = None
     extra: dict = field(default_factory=dict)
+    extra_units: dict = field(default_factory=dict)
 
     def as_dict(self):
         return asdict(self)

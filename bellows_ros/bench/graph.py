@@ -17,8 +17,17 @@ Figures:
   whole window, not per 1 s window, is `late_fraction <= 0.01`;
 - CPU per node: utime + stime from /proc/<pid>/stat over the window, as a fraction of one core.
 The scheduling each node actually got (from its /diagnostics) is in `graph*.rate`'s extra.
-Reference, measured in the same run: `SegmentModel.step` for the same segments, in-process (the
-model's own cost, without DDS); the latency ratio is against it.
+References, measured in the same run:
+- `SegmentModel.step` for the same segments, in-process (the model's own cost, without DDS); the
+  latency ratio is against it;
+- `graph.platform.wakeup_lateness`: how late a lone 1 kHz sleeping loop wakes on the idle machine,
+  at the model node's SCHED_FIFO priority (p99 in `value`). One wake-up is the least any hop of the
+  graph pays, so this is the floor under the graph's p99 on this machine at this time: on a
+  virtual machine whose host is busy it reaches milliseconds, whatever the graph does.
+  `slots_missed`: the share of 1 ms slots the loop lost to waking a whole period late, a ceiling
+  on the rate any 1 kHz loop here can hold;
+- `steal`: the share of CPU time the hypervisor took from this machine during each window
+  (/proc/stat), in `graph*.rate`'s extra.
 Nothing here asserts a time. A node that exits is an error (BellowsError with its log), not a zero.
 """
 import os
@@ -27,12 +36,14 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
 from bellows_ros import params
 from bellows_ros.bench import Result, timing
 from bellows_ros.errors import BellowsError
+from bellows_ros.hardware.loop_timing import LoopStats, PeriodicLoop
 from bellows_ros.models.segment import SegmentModel, load_segment_params
 
 CONFIG = Path(__file__).resolve().parent.parent.parent / 'config' / 'nodes_sim.yaml'
@@ -66,6 +77,7 @@ def run(quick=False, segments=4):
     host = {name: params.read_file(ROBOT_CONFIG, name)['realtime_priority']
             for name in ('driver_node', 'model_node')}
     realtime = dict(host, sim_arm_node=max(host.values()) + 10)
+    results.append(_wakeup_reference(window, host['model_node']))
     for prefix, priorities in (('graph', realtime), ('graph.normal', dict.fromkeys(NODES, 0))):
         results += _measure(prefix, window, segments, priorities, reference)
     return results
@@ -118,9 +130,11 @@ def _measure(prefix, window, segments, priorities, reference):
         _check_alive(processes, logs.name)
         cpu0 = {name: _cpu_seconds(p.pid) for name, p in processes.items()}
         windows.clear()
+        steal = _Steal()
         start = time.monotonic()
         _spin(dds_node, node, window)
         elapsed = time.monotonic() - start
+        stolen = steal.fraction()
         _check_alive(processes, logs.name)
         cpu = {name: (_cpu_seconds(p.pid) - cpu0[name]) / elapsed
                for name, p in processes.items()}
@@ -153,7 +167,9 @@ def _measure(prefix, window, segments, priorities, reference):
     scheduling = {name.split(':')[0]: values.get('scheduling', '?')
                   for name, values in final.items() if name.split(':')[0] in NODES}
     results = [Result(f'{prefix}.rate', statistics.median(rates) if rates else 0.0, 'Hz',
-                      len(rates), target=1000.0, extra={'scheduling': scheduling})]
+                      len(rates), target=1000.0,
+                      extra={'scheduling': scheduling, 'steal': stolen},
+                      extra_units={'steal': ''})]
     results.append(Result(f'{prefix}.fraction_evaluated',
                           evaluated / published if published else 0.0, '', published,
                           target=0.99,
@@ -174,6 +190,59 @@ def _measure(prefix, window, segments, priorities, reference):
     for name, fraction in cpu.items():
         results.append(Result(f'{prefix}.cpu.{name}', fraction, 'core', 1))
     return results
+
+
+def _wakeup_reference(seconds, priority):
+    """Lateness of a lone 1 kHz sleeping loop (PeriodicLoop, as the simulated devices use) on a
+    thread at SCHED_FIFO `priority` when granted, for `seconds` s."""
+    stats = LoopStats(window=int(seconds * 1000) + 1000)
+    stop = threading.Event()
+    granted = []
+
+    def loop():
+        try:
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))  # this thread only
+            granted.append(True)
+        except (AttributeError, PermissionError):
+            pass
+        for _ in PeriodicLoop(1e-3, stats).ticks(stop):
+            pass
+    thread = threading.Thread(target=loop, name='wakeup-reference', daemon=True)
+    steal = _Steal()
+    thread.start()
+    time.sleep(seconds)
+    stop.set()
+    thread.join()
+    summary = stats.summary()
+    return Result('graph.platform.wakeup_lateness', summary['lateness_p99'], 's',
+                  int(summary['count']),
+                  extra={'p50': summary['lateness_p50'], 'max': summary['lateness_max'],
+                         'slots_missed': summary['misses'] / (summary['count'] + summary['misses']),
+                         'scheduling': f'SCHED_FIFO {priority}' if granted else 'SCHED_OTHER',
+                         'steal': steal.fraction()},
+                  extra_units={'slots_missed': '', 'steal': ''})
+
+
+class _Steal:
+    """Share of all CPU time stolen by the hypervisor since construction (/proc/stat `steal`)."""
+
+    def __init__(self):
+        self._start = self._read()
+
+    @staticmethod
+    def _read():
+        try:
+            with open('/proc/stat') as stream:
+                return [int(x) for x in stream.readline().split()[1:]]
+        except OSError:
+            return None
+
+    def fraction(self):
+        end = self._read()
+        if self._start is None or end is None or len(end) < 8:
+            return float('nan')
+        delta = [b - a for a, b in zip(self._start, end)]
+        return delta[7] / sum(delta) if sum(delta) else float('nan')
 
 
 def _check_alive(processes, log_dir):

@@ -41,6 +41,7 @@ def format_table(results):
         target = _show(r.target, r.unit) if r.target is not None else ' ' * 13
         lines.append(f'{r.name:<48} {_show(r.value, r.unit)} {ratio}  {target}  {r.reference or ""}')
         for key, value in r.extra.items():
-            shown = _show(value, r.unit) if isinstance(value, float) else value
+            shown = (_show(value, r.extra_units.get(key, r.unit)) if isinstance(value, float)
+                     else value)
             lines.append(f'    {key}: {shown}')
     return '\n'.join(lines)

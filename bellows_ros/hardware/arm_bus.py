@@ -31,6 +31,7 @@ import can
 
 from bellows_ros import params
 from bellows_ros.hardware import can_protocol as cp
+from bellows_ros.hardware.can_echo_filter import drop_own_frames
 from bellows_ros.hardware.sample_delivery import deliver, fresh
 from bellows_ros.hardware.safety import Watchdog, clamp_pressures
 from bellows_ros.models.segment import load_segment_params
@@ -132,6 +133,7 @@ class ArmBus:
         self._setpoint_frames = [m for m in self.db.messages if m.name.startswith('ARM_SETPOINT_')]
         self._tx_period = self._heartbeat.cycle_time * 1e-3
         self._tx_counter = {m.frame_id: 0 for m in [self._heartbeat] + self._setpoint_frames}
+        self.echo_filtered = drop_own_frames(self._bus, self._tx_counter)  # see can_echo_filter
         self._pending = {}          # counter -> {segment: values}
         self._last_counter = None
         self._last_stamp = 0.0

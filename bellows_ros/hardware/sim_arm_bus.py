@@ -21,6 +21,7 @@ import time
 import can
 
 from bellows_ros.hardware import can_protocol as cp
+from bellows_ros.hardware.can_echo_filter import drop_own_frames
 from bellows_ros.hardware.faults import Faults
 from bellows_ros.hardware.loop_timing import LoopStats, LoopThread, PeriodicLoop
 from bellows_ros.models.segment import load_segment_params
@@ -44,6 +45,7 @@ class SimArmBus:
         self._setpoint_ids = {m.frame_id for m in self.db.messages
                               if m.name.startswith('ARM_SETPOINT_')}
         self._own_ids = {m.frame_id for m in self._samples} | {self._status.frame_id}
+        self.echo_filtered = drop_own_frames(bus, self._own_ids)  # in the kernel where possible
         self.period = self._samples[0].cycle_time * 1e-3
         self._status_every = max(1, round(self._status.cycle_time * 1e-3 / self.period))
         p1 = self._samples[0].get_signal_by_name('P1')
