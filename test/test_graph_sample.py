@@ -41,6 +41,54 @@ PLAIN_SUBSCRIBER = JOINT_STATE_SUBSCRIBER + textwrap.dedent('''\
 ''')
 
 
+# Which node owns the writer of each topic, as `ros2 topic info -v` works it out: the writers a
+# reader matched (GUIDs, from DDS discovery), their owners from `ros_discovery_info`.
+PLAIN_GRAPH_READER = JOINT_STATE_SUBSCRIBER + textwrap.dedent('''\
+    from cyclonedds.idl.types import array, bounded_str, uint8
+
+    @dataclass
+    class Gid(IdlStruct, typename='rmw_dds_common::msg::dds_::Gid_'):
+        data: array[uint8, 16]
+
+    @dataclass
+    class NodeEntitiesInfo(IdlStruct, typename='rmw_dds_common::msg::dds_::NodeEntitiesInfo_'):
+        node_namespace: bounded_str[256]
+        node_name: bounded_str[256]
+        reader_gid_seq: sequence[Gid]
+        writer_gid_seq: sequence[Gid]
+
+    @dataclass
+    class ParticipantEntitiesInfo(IdlStruct,
+                                  typename='rmw_dds_common::msg::dds_::ParticipantEntitiesInfo_'):
+        gid: Gid
+        node_entities_info_seq: sequence[NodeEntitiesInfo]
+
+    # Every participant writes this one unkeyed topic: a deep history, or one node's sample
+    # replaces another's before it is taken.
+    qos = Qos(Policy.Reliability.Reliable(0), Policy.Durability.TransientLocal,
+              Policy.History.KeepLast(100))
+    info = DataReader(participant, Topic(participant, 'ros_discovery_info',
+                                         ParticipantEntitiesInfo), qos=qos)
+    readers = {t: DataReader(participant, Topic(participant, 'rt' + t, JointState))
+               for t in sys.argv[2:]}
+    owner, found = {}, {}
+    end = time.time() + 20
+    while time.time() < end and set(found) != set(readers):
+        for sample in info.take(50):
+            for node in getattr(sample, 'node_entities_info_seq', []):
+                for gid in node.writer_gid_seq:
+                    owner[bytes(gid.data)] = node.node_namespace.rstrip('/') + '/' + node.node_name
+        for topic, reader in readers.items():
+            for handle in reader.get_matched_publications():
+                key = reader.get_matched_publication_data(handle).key.bytes
+                if key in owner:
+                    found[topic] = owner[key]
+        time.sleep(0.02)
+    for topic, node in sorted(found.items()):
+        print(topic, node)
+''')
+
+
 def launch(name, args, env, log_dir):
     log = open(log_dir / f'{name}.log', 'w')
     return subprocess.Popen([str(BIN / name), '--ros-args', '--params-file', str(CONFIG), *args],
@@ -115,6 +163,15 @@ def test_graph_publishes_and_every_sample_is_evaluated(graph):
     for line in lines.values():
         name, sec, _nanosec, value = line.split()
         assert name == 'segment_1' and int(sec) > 0 and float(value) == float(value)
+    # The same reader can tell which node publishes what (ROS 2's graph, `ros_discovery_info`).
+    owners = subprocess.run([sys.executable, '-c', PLAIN_GRAPH_READER, domain, '/joint_states',
+                             '/bellows/driving_torque'],
+                            capture_output=True, text=True, timeout=60,
+                            env={k: v for k, v in os.environ.items() if k != 'PYTHONPATH'},
+                            cwd=tmp_path)
+    assert owners.returncode == 0, owners.stderr
+    assert dict(line.split() for line in owners.stdout.strip().splitlines()) == {
+        '/joint_states': '/driver_node', '/bellows/driving_torque': '/model_node'}, owners.stdout
 
     # Count: let the graph run, stop the driver, then compare its final count with the model's.
     end = time.monotonic() + 4.0

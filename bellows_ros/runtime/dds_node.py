@@ -9,7 +9,11 @@ Wire conventions (what `rmw_cyclonedds_cpp` in Jazzy does, so ROS 2 nodes intero
 - data representation XCDR1 (plain CDR, little endian), as the RMW requests;
 - participant USER_DATA `enclave=/;`; every reader and writer carries USER_DATA
   `typehash=RIHS01_<sha256>;` (rmw_dds_common's `encode_type_hash_for_user_data_qos`);
-- default QoS: reliable, keep-last 10, volatile (rclpy's default profile).
+- default QoS: reliable, keep-last 10, volatile (rclpy's default profile);
+- the ROS graph: every participant publishes rmw_dds_common/ParticipantEntitiesInfo on the DDS topic
+  `ros_discovery_info` (reliable, transient local, keep-last 1): its GUID and, per node, the name,
+  namespace and the GUIDs of the node's readers and writers, again whenever one is added. This is
+  how `ros2 node list` and `ros2 topic info -v` on a ROS 2 machine attribute endpoints to nodes.
 
 Execution model, like rclpy's single-threaded executor: subscription and timer callbacks run in
 the thread that calls `spin`/`spin_once`, one at a time. Publishing is allowed from any thread (the
@@ -44,13 +48,16 @@ _MAX_ROUNDS = 64
 
 
 class _Context:
-    """Process-wide state: the DDS participant and the parsed `--ros-args`."""
+    """Process-wide state: the DDS participant, the parsed `--ros-args`, the nodes (for the ROS
+    graph)."""
 
     def __init__(self):
         self.participant = None
         self.args = ros_args.RosArgs()
         self.shutdown = threading.Event()
         self.topics = {}
+        self.nodes = []
+        self.graph_writer = None
 
 
 _context = _Context()
@@ -68,6 +75,15 @@ def init(args=None):
         domain_id, qos=Qos(Policy.Userdata(data=b'enclave=/;')))
     _context.shutdown.clear()
     _context.topics = {}
+    _context.nodes = []
+    info = message_class(_GRAPH_TYPE)
+    _context.graph_writer = DataWriter(
+        _context.participant, Topic(_context.participant, 'ros_discovery_info', info),
+        qos=Qos(Policy.Reliability.Reliable(duration(milliseconds=100)),
+                Policy.History.KeepLast(1), Policy.Durability.TransientLocal,
+                Policy.DataRepresentation(use_cdrv0_representation=True),
+                Policy.Userdata(data=f'typehash={type_hash(_GRAPH_TYPE)};'.encode())))
+    _publish_graph()
     return rest
 
 
@@ -80,6 +96,27 @@ def shutdown():
     _context.shutdown.set()
     _context.participant = None
     _context.topics = {}
+    _context.nodes = []
+    _context.graph_writer = None
+
+
+_GRAPH_TYPE = 'rmw_dds_common/msg/ParticipantEntitiesInfo'
+
+
+def _gid(entity):
+    """rmw_dds_common/Gid of a DDS entity: its 16-byte GUID, as rmw_cyclonedds_cpp fills it."""
+    return message_class('rmw_dds_common/msg/Gid')(data=list(entity.guid.bytes))
+
+
+def _publish_graph():
+    """Publish this participant's nodes and their endpoints on `ros_discovery_info`."""
+    node_info = message_class('rmw_dds_common/msg/NodeEntitiesInfo')
+    nodes = [node_info(node_namespace=node.get_namespace(), node_name=node.get_name(),
+                       reader_gid_seq=[_gid(s.reader) for s in node._subscriptions],
+                       writer_gid_seq=[_gid(w) for w in node._writers])
+             for node in _context.nodes]
+    _context.graph_writer.write(message_class(_GRAPH_TYPE)(
+        gid=_gid(_context.participant), node_entities_info_seq=nodes))
 
 
 # --- QoS -------------------------------------------------------------------------------------------
@@ -285,6 +322,8 @@ class Node:
         self._wakeup = GuardCondition(_context.participant)
         self._waitset.attach(self._wakeup)
         self._clock = Clock()
+        _context.nodes.append(self)
+        _publish_graph()
         if self.declare_parameter('use_sim_time', False).value:
             self._clock.sim_time = 0
             self.create_subscription(message_class('rosgraph_msgs/msg/Clock'), '/clock',
@@ -359,6 +398,7 @@ class Node:
         writer = DataWriter(_context.participant, dds_topic,
                             qos=_qos(qos_profile, msg_type.__ros_type__))
         self._writers.append(writer)
+        _publish_graph()
         return Publisher(writer, resolved)
 
     def create_subscription(self, msg_type, topic, callback, qos_profile=10):
@@ -368,6 +408,7 @@ class Node:
         subscription = Subscription(reader, callback, resolved)
         self._waitset.attach(subscription.condition)
         self._subscriptions.append(subscription)
+        _publish_graph()
         return subscription
 
     def create_timer(self, timer_period_sec, callback):
@@ -384,6 +425,9 @@ class Node:
     def destroy_node(self):
         self._wakeup.set(True)
         self._subscriptions, self._timers, self._writers = [], [], []
+        if self in _context.nodes and _context.graph_writer is not None:
+            _context.nodes.remove(self)
+            _publish_graph()
 
     # execution
     def _spin_once(self, timeout_sec):
