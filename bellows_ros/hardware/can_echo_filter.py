@@ -3,8 +3,8 @@
 A SocketCAN socket does not receive the frames it sends (CAN_RAW_RECV_OWN_MSGS is off by default).
 python-can's udp_multicast bus does: IP multicast loopback hands every datagram to every member on
 the host, the sender included. The simulated arm sends 4000 sample frames a second and used to
-receive each one back only to discard it. At about 24 us per frame in python-can (select, recvmsg,
-msgpack, Message), that was a fifth of the simulated arm's CPU.
+receive each one back only to discard it, at about 24 us per frame in python-can (select, recvmsg,
+msgpack, Message): its bus work took 0.37 core with the echoes, 0.245 without (measured).
 
 `drop_own_frames(bus, frame_ids)` attaches a classic BPF program (socket(7) SO_ATTACH_FILTER) that
 drops such datagrams in the kernel. The program compares the start of the datagram with python-can's
