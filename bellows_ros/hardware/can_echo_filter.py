@@ -20,6 +20,7 @@ import sys
 
 import can
 import msgpack
+from can.interfaces.udp_multicast.utils import pack_message
 
 SO_ATTACH_FILTER = 26  # <asm-generic/socket.h>
 _LD_ABS = {4: 0x20, 2: 0x28, 1: 0x30}  # BPF_LD | BPF_W / BPF_H / BPF_B | BPF_ABS
@@ -51,12 +52,10 @@ def drop_own_frames(bus, frame_ids):
     return True
 
 
-def frame_pattern(frame_id, pack=None):
+def frame_pattern(frame_id, pack=pack_message):
     """[(offset, bytes), ...] every udp_multicast datagram carrying standard frame `frame_id`
-    starts with, or None when `pack` (default python-can's `pack_message`) lays frames out in a
-    way this module does not know."""
-    if pack is None:
-        from can.interfaces.udp_multicast.utils import pack_message as pack
+    starts with, or None when `pack` (python-can's packing by default) lays frames out in a way
+    this module does not know."""
     packed = pack(can.Message(arbitration_id=frame_id, is_extended_id=False, timestamp=0.0))
     timestamp_key = msgpack.packb('timestamp')
     identity = (msgpack.packb('arbitration_id') + msgpack.packb(frame_id) +
