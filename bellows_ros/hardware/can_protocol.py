@@ -149,15 +149,10 @@ def _bound(limit, direction, scale):
     return limit + direction * abs(scale) * 1e-6
 
 
-_codecs = {}
-
-
+@functools.lru_cache(maxsize=None)  # one per Message of the loaded DBCs
 def codec(message):
     """The `FrameCodec` of a cantools Message (built once per Message)."""
-    found = _codecs.get(message)
-    if found is None:
-        found = _codecs[message] = FrameCodec(message)
-    return found
+    return FrameCodec(message)
 
 
 def encode_frame(message, values, counter):
