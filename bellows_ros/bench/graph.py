@@ -130,11 +130,11 @@ def _measure(prefix, window, segments, priorities, reference):
         _check_alive(processes, logs.name)
         cpu0 = {name: _cpu_seconds(p.pid) for name, p in processes.items()}
         windows.clear()
-        steal = _Steal()
+        times = _cpu_times()
         start = time.monotonic()
         _spin(dds_node, node, window)
         elapsed = time.monotonic() - start
-        stolen = steal.fraction()
+        stolen = _steal_fraction(times, _cpu_times())
         _check_alive(processes, logs.name)
         cpu = {name: (_cpu_seconds(p.pid) - cpu0[name]) / elapsed
                for name, p in processes.items()}
@@ -208,7 +208,7 @@ def _wakeup_reference(seconds, priority):
         for _ in PeriodicLoop(1e-3, stats).ticks(stop):
             pass
     thread = threading.Thread(target=loop, name='wakeup-reference', daemon=True)
-    steal = _Steal()
+    times = _cpu_times()
     thread.start()
     time.sleep(seconds)
     stop.set()
@@ -219,30 +219,25 @@ def _wakeup_reference(seconds, priority):
                   extra={'p50': summary['lateness_p50'], 'max': summary['lateness_max'],
                          'slots_missed': summary['misses'] / (summary['count'] + summary['misses']),
                          'scheduling': f'SCHED_FIFO {priority}' if granted else 'SCHED_OTHER',
-                         'steal': steal.fraction()},
+                         'steal': _steal_fraction(times, _cpu_times())},
                   extra_units={'slots_missed': '', 'steal': ''})
 
 
-class _Steal:
-    """Share of all CPU time stolen by the hypervisor since construction (/proc/stat `steal`)."""
+def _cpu_times():
+    """The machine's CPU time counters (first line of /proc/stat), or None where there are none."""
+    try:
+        with open('/proc/stat') as stream:
+            return [int(x) for x in stream.readline().split()[1:]]
+    except OSError:
+        return None
 
-    def __init__(self):
-        self._start = self._read()
 
-    @staticmethod
-    def _read():
-        try:
-            with open('/proc/stat') as stream:
-                return [int(x) for x in stream.readline().split()[1:]]
-        except OSError:
-            return None
-
-    def fraction(self):
-        end = self._read()
-        if self._start is None or end is None or len(end) < 8:
-            return float('nan')
-        delta = [b - a for a, b in zip(self._start, end)]
-        return delta[7] / sum(delta) if sum(delta) else float('nan')
+def _steal_fraction(start, end):
+    """Share of all CPU time the hypervisor stole between two `_cpu_times()` readings."""
+    if start is None or end is None or len(end) < 8:
+        return float('nan')
+    delta = [b - a for a, b in zip(start, end)]
+    return delta[7] / sum(delta) if sum(delta) else float('nan')
 
 
 def _check_alive(processes, log_dir):
