@@ -133,6 +133,8 @@ def _primitive(base):
 def _write(plan, obj, out):
     """Append `obj`'s CDR to `out` (bytearray whose first 4 bytes are the encapsulation header;
     alignment counts from after it, as in XCDR1)."""
+    # Strings are written inline in both places below, as _read reads them: a helper call per
+    # string measured 1-3 us more per JointState, on a path that runs 4000 times a second.
     for name, kind, code in plan:
         value = getattr(obj, name)
         if kind == 'prim':
