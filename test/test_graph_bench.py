@@ -4,6 +4,7 @@ No time is asserted (shared machine): only that every figure is measured, is a s
 that the counts the bench reports agree with each other."""
 import json
 import math
+import time
 
 from bellows_ros.bench import Result
 from bellows_ros.bench import graph
@@ -12,11 +13,15 @@ from bellows_ros.cli import main
 
 
 def test_the_wakeup_reference_measures_a_lone_1khz_loop():
+    start = time.perf_counter()
     result = graph._wakeup_reference(1.0, priority=50)
-    ticks = result.samples
-    assert 500 <= ticks <= 1001     # one tick per 1 ms slot not missed
+    elapsed = time.perf_counter() - start
+    ticks, slots = result.samples, result.extra['slots']
+    # Every 1 ms slot the loop lived through either ticked or was counted missed; how many slots
+    # that is depends on how long the (shared) machine took, so the bound is the time measured here.
+    assert 1 <= ticks <= slots <= math.floor(elapsed / 1e-3) + 1
+    assert result.extra['slots_missed'] == (slots - ticks) / slots
     assert 0.0 <= result.extra['p50'] <= result.value <= result.extra['max']
-    assert 0.0 <= result.extra['slots_missed'] < 0.5
     assert result.extra['scheduling'] in ('SCHED_FIFO 50', 'SCHED_OTHER')
     assert 0.0 <= result.extra['steal'] <= 1.0 or math.isnan(result.extra['steal'])
 

@@ -24,8 +24,8 @@ References, measured in the same run:
   at the model node's SCHED_FIFO priority (p99 in `value`). One wake-up is the least any hop of the
   graph pays, so this is the floor under the graph's p99 on this machine at this time: on a
   virtual machine whose host is busy it reaches milliseconds, whatever the graph does.
-  `slots_missed`: the share of 1 ms slots the loop lost to waking a whole period late, a ceiling
-  on the rate any 1 kHz loop here can hold;
+  `slots`: the 1 ms slots the loop lived through; `slots_missed`: the share of them it lost to
+  waking a whole period late, a ceiling on the rate any 1 kHz loop here can hold;
 - `steal`: the share of CPU time the hypervisor took from this machine during each window
   (/proc/stat), in `graph*.rate`'s extra.
 Nothing here asserts a time. A node that exits is an error (BellowsError with its log), not a zero.
@@ -214,13 +214,14 @@ def _wakeup_reference(seconds, priority):
     stop.set()
     thread.join()
     summary = stats.summary()
+    slots = int(summary['count'] + summary['misses'])
     return Result('graph.platform.wakeup_lateness', summary['lateness_p99'], 's',
                   int(summary['count']),
                   extra={'p50': summary['lateness_p50'], 'max': summary['lateness_max'],
-                         'slots_missed': summary['misses'] / (summary['count'] + summary['misses']),
+                         'slots': slots, 'slots_missed': summary['misses'] / slots,
                          'scheduling': f'SCHED_FIFO {priority}' if granted else 'SCHED_OTHER',
                          'steal': _steal_fraction(times, _cpu_times())},
-                  extra_units={'slots_missed': '', 'steal': ''})
+                  extra_units={'slots': '', 'slots_missed': '', 'steal': ''})
 
 
 def _cpu_times():
