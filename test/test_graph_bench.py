@@ -4,18 +4,25 @@ No time is asserted (shared machine): only that every figure is measured, is a s
 that the counts the bench reports agree with each other."""
 import json
 import math
+import os
 import time
 
+from bellows_ros import params
 from bellows_ros.bench import Result
 from bellows_ros.bench import graph
 from bellows_ros.cli.bench import format_table
 from bellows_ros.cli import main
+from bellows_ros.runtime import realtime
 
 
 def test_the_wakeup_reference_measures_a_lone_1khz_loop():
+    before = realtime.cpu_latency_in_force()
     start = time.perf_counter()
-    result = graph._wakeup_reference(1.0, priority=50)
+    result = graph._wakeup_reference('reference', 1.0, priority=50, latency_limit=123e-6)
     elapsed = time.perf_counter() - start
+    if os.access(realtime.CPU_LATENCY_DEVICE, os.W_OK):
+        assert result.extra['cpu_latency_limit'] == min(before, 123e-6)   # held while it ran
+    assert realtime.cpu_latency_in_force() == before or math.isnan(before)  # and withdrawn after
     ticks, slots = result.samples, result.extra['slots']
     # Every 1 ms slot the loop lived through either ticked or was counted missed; how many slots
     # that is depends on how long the (shared) machine took, so the bound is the time measured here.
@@ -33,11 +40,14 @@ def test_fractions_in_extra_are_shown_without_the_figures_unit():
     assert '    p50:        980 Hz' in table
 
 
-def test_graph_bench_reports_every_figure_for_both_schedulings(capsys):
+def test_graph_bench_reports_every_figure_for_each_variant(capsys):
+    configured = params.read_file(graph.CONFIG, 'model_node')['cpu_latency_limit']
+    unlimited = realtime.cpu_latency_in_force()
     assert main(['bench', '--only', 'graph', '--quick', '--json']) == 0
     results = {r['name']: r for r in json.loads(capsys.readouterr().out)}
     assert 'graph.platform.wakeup_lateness' in results
-    for prefix in ('graph', 'graph.normal'):
+    assert 'graph.platform.wakeup_lateness_no_latency_limit' in results
+    for prefix in ('graph', 'graph.normal', 'graph.no_latency_limit'):
         evaluated = results[f'{prefix}.fraction_evaluated']
         assert evaluated['extra']['published'] > 100   # samples flowed (3 s window; the rate is host-bound)
         assert evaluated['value'] == evaluated['extra']['evaluated'] / evaluated['extra']['published']
@@ -50,5 +60,11 @@ def test_graph_bench_reports_every_figure_for_both_schedulings(capsys):
         assert 0.0 <= results[f'{prefix}.late_fraction']['value'] <= 1.0
         for name in graph.NODES:
             assert results[f'{prefix}.cpu.{name}']['value'] > 0.01    # every node was working
-    assert all(v.startswith('SCHED_OTHER')
-               for v in results['graph.normal.rate']['extra']['scheduling'].values())
+    for prefix in ('graph.normal', 'graph.no_latency_limit'):
+        assert all(v.startswith('SCHED_OTHER')
+                   for v in results[f'{prefix}.rate']['extra']['scheduling'].values())
+    if os.access(realtime.CPU_LATENCY_DEVICE, os.W_OK):    # the nodes could hold the limit
+        for name in ('graph.platform.wakeup_lateness', 'graph.rate', 'graph.normal.rate'):
+            assert results[name]['extra']['cpu_latency_limit'] == min(configured, unlimited), name
+        for name in ('graph.platform.wakeup_lateness_no_latency_limit', 'graph.no_latency_limit.rate'):
+            assert results[name]['extra']['cpu_latency_limit'] == unlimited, name

@@ -66,3 +66,8 @@ def test_bad_identified_parameters_file(tmp_path):
 def test_realtime_priority_out_of_range(tmp_path):
     result = run('model_node', ['-p', 'realtime_priority:=120'], tmp_path)
     check(result, "'realtime_priority'", '0 (off) or 1..99', '120')
+
+
+def test_cpu_latency_limit_out_of_range(tmp_path):
+    result = run('model_node', ['-p', 'cpu_latency_limit:=5000.0'], tmp_path)
+    check(result, "'cpu_latency_limit'", 'negative value (off) or 0..2000 s', '5000')

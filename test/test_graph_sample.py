@@ -15,7 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from bellows_ros.runtime import dds_node
+from bellows_ros import params
+from bellows_ros.runtime import dds_node, realtime
 from bellows_ros.runtime.messages import msg
 
 from plain_cyclone import JOINT_STATE_SUBSCRIBER
@@ -187,3 +188,11 @@ def test_graph_publishes_and_every_sample_is_evaluated(graph):
     assert int(model['evaluated']) == published, f'driver {driver}\nmodel {model}'
     assert model['rejected'] == '0' and model['unmatched_dropped'] == '0'
     assert int(final['driver_node: actuator']['published']) > 500
+
+    # Every node held the CPU latency limit the config asks for while it ran (when it could).
+    if os.access(realtime.CPU_LATENCY_DEVICE, os.W_OK):
+        limit = params.read_file(CONFIG, 'model_node')['cpu_latency_limit']
+        reported = {name.split(':')[0]: values['cpu_latency_limit_us']
+                    for name, values in final.items() if 'cpu_latency_limit_us' in values}
+        assert set(reported) == {'sim_arm_node', 'sim_actuator_node', 'driver_node', 'model_node'}
+        assert set(reported.values()) == {f'{limit * 1e6:.0f}'}, reported

@@ -1,11 +1,17 @@
-"""runtime.realtime: SCHED_FIFO for every thread of a node's process, or one clear warning.
+"""runtime.realtime: SCHED_FIFO for every thread of a node's process, and the CPU latency limit
+held while the node runs; or one clear warning each.
 
-Each case runs in a child process, so the test runner itself never changes its scheduling. Whether
-this machine grants SCHED_FIFO is asked of the kernel first (a throw-away child), and the node
-must then do exactly what the kernel allows: switch every thread, or warn and carry on.
+Each case runs in a child process, so the test runner itself never changes its scheduling nor
+holds a latency request. Whether this machine grants SCHED_FIFO is asked of the kernel first (a
+throw-away child), and the node must then do exactly what the kernel allows: switch every thread,
+or warn and carry on. The latency limit is read back from the kernel (/dev/cpu_dma_latency).
 """
+import math
+import os
 import subprocess
 import sys
+
+from bellows_ros.runtime import realtime
 
 CHILD = r'''
 import os, sys, threading
@@ -70,3 +76,70 @@ def test_zero_leaves_scheduling_alone():
     out = run_child(0)
     assert 'RESULT False' in out and "'main': 'SCHED_OTHER'" in out, out
     assert 'WARN' not in out and 'INFO' not in out, out
+
+
+LATENCY_CHILD = r'''
+import os, sys
+from bellows_ros.runtime import realtime
+
+class Param:
+    def __init__(self, value): self.value = value
+
+class Log:
+    def info(self, m): print('INFO', m)
+    def warn(self, m): print('WARN', m)
+
+class Node:
+    def __init__(self, limit): self.limit = limit
+    def has_parameter(self, name): return name == 'cpu_latency_limit'
+    def get_parameter(self, name): return Param(self.limit)
+    def get_logger(self): return Log()
+
+if 'unprivileged' in sys.argv:    # root drops to nobody: the device is then as closed as to a user
+    os.setgid(65534)
+    os.setuid(65534)
+before = realtime.cpu_latency_in_force()
+fd = realtime.limit_cpu_latency(Node(float(sys.argv[1])))
+held = realtime.cpu_latency_in_force()
+if fd is not None:
+    os.close(fd)
+print('RESULT', fd is not None, repr(before), repr(held), repr(realtime.cpu_latency_in_force()))
+'''
+
+
+def run_latency_child(limit, *flags):
+    result = subprocess.run([sys.executable, '-c', LATENCY_CHILD, repr(limit), *flags],
+                            capture_output=True, text=True, timeout=60)
+    assert result.returncode == 0, result.stderr
+    line = [line for line in result.stdout.splitlines() if line.startswith('RESULT')][0]
+    held, before, during, after = line.split()[1:]
+    return held == 'True', float(before), float(during), float(after), result.stdout
+
+
+def test_the_cpu_latency_limit_holds_while_the_request_is_open_or_warns_once():
+    held, before, during, after, out = run_latency_child(123e-6)
+    if os.access(realtime.CPU_LATENCY_DEVICE, os.W_OK):
+        assert held, out
+        # The kernel keeps the least request: ours, unless another process holds a lower one.
+        assert during == min(before, 123e-6), out
+        assert after == before, out                      # closing withdrew it
+        assert 'INFO CPU wake-up latency limited to 123 µs' in out, out
+    else:
+        assert not held and (math.isnan(during) or during == before), out
+        warnings = [line for line in out.splitlines() if line.startswith('WARN')]
+        assert len(warnings) == 1 and realtime.CPU_LATENCY_DEVICE in warnings[0], out
+
+
+def test_an_unprivileged_node_warns_once_and_runs_on():
+    flags = ['unprivileged'] if os.geteuid() == 0 else []
+    held, _, _, _, out = run_latency_child(0.0, *flags)
+    assert not held, out
+    warnings = [line for line in out.splitlines() if line.startswith('WARN')]
+    assert len(warnings) == 1, out
+    assert f'cpu_latency_limit 0 s not applied ({realtime.CPU_LATENCY_DEVICE}: ' in warnings[0], out
+
+
+def test_a_negative_limit_leaves_the_cpus_alone():
+    held, before, during, after, out = run_latency_child(-1.0)
+    assert not held and 'WARN' not in out and 'INFO' not in out, out
+    assert during == before or math.isnan(during), out

@@ -1,10 +1,12 @@
 """Benchmark of the node graph over real DDS: sim_arm_node -> driver_node -> model_node.
 
-Measured in one run (separate processes, the DDS runtime, CAN over udp_multicast), twice:
+Measured in one run (separate processes, the DDS runtime, CAN over udp_multicast), three times:
 - `graph.*`: the host nodes at the SCHED_FIFO priority config/nodes_hw.yaml gives them on a robot,
   the simulated arm 10 above (a real arm has its own processor: the host cannot delay it);
 - `graph.normal.*`: every node at normal scheduling (config/nodes_sim.yaml, or a machine that does
-  not grant real-time priority).
+  not grant real-time priority);
+- `graph.no_latency_limit.*`: normal scheduling, and no node holding the CPU latency limit the
+  configs ask for (`cpu_latency_limit`, runtime/realtime.py): what the limit buys on this machine.
 Figures:
 - achieved rate: arm samples per second the model node evaluated (target 1000 Hz);
 - fraction of the samples the driver published that the model node evaluated (target >= 0.99),
@@ -21,13 +23,16 @@ References, measured in the same run:
 - `SegmentModel.step` for the same segments, in-process (the model's own cost, without DDS); the
   latency ratio is against it;
 - `graph.platform.wakeup_lateness`: how late a lone 1 kHz sleeping loop wakes on the idle machine,
-  at the model node's SCHED_FIFO priority (p99 in `value`). One wake-up is the least any hop of the
-  graph pays, so this is the floor under the graph's p99 on this machine at this time: on a
-  virtual machine whose host is busy it reaches milliseconds, whatever the graph does.
+  at the model node's SCHED_FIFO priority and under the configured CPU latency limit (p99 in
+  `value`); `graph.platform.wakeup_lateness_no_latency_limit`: the same loop without the limit.
+  One wake-up is the least any hop of the graph pays, so this is the floor under the graph's p99
+  on this machine at this time: on a virtual machine whose host is busy it reaches milliseconds,
+  whatever the graph does.
   `slots`: the 1 ms slots the loop lived through; `slots_missed`: the share of them it lost to
   waking a whole period late, a ceiling on the rate any 1 kHz loop here can hold;
 - `steal`: the share of CPU time the hypervisor took from this machine during each window
-  (/proc/stat), in `graph*.rate`'s extra.
+  (/proc/stat), and `cpu_latency_limit`: the limit in force then (s, read back from the kernel;
+  nan where the device is not readable), both in `graph*.rate`'s extra.
 Nothing here asserts a time. A node that exits is an error (BellowsError with its log), not a zero.
 """
 import os
@@ -45,6 +50,7 @@ from bellows_ros.bench import Result, timing
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.loop_timing import LoopStats, PeriodicLoop
 from bellows_ros.models.segment import SegmentModel, load_segment_params
+from bellows_ros.runtime import realtime
 
 CONFIG = Path(__file__).resolve().parent.parent.parent / 'config' / 'nodes_sim.yaml'
 ROBOT_CONFIG = CONFIG.with_name('nodes_hw.yaml')
@@ -76,15 +82,22 @@ def run(quick=False, segments=4):
     results = [reference]
     host = {name: params.read_file(ROBOT_CONFIG, name)['realtime_priority']
             for name in ('driver_node', 'model_node')}
-    realtime = dict(host, sim_arm_node=max(host.values()) + 10)
-    results.append(_wakeup_reference(window, host['model_node']))
-    for prefix, priorities in (('graph', realtime), ('graph.normal', dict.fromkeys(NODES, 0))):
-        results += _measure(prefix, window, segments, priorities, reference)
+    fifo = dict(host, sim_arm_node=max(host.values()) + 10)
+    normal = dict.fromkeys(NODES, 0)
+    limit = params.read_file(CONFIG, 'model_node')['cpu_latency_limit']
+    results.append(_wakeup_reference('graph.platform.wakeup_lateness', window,
+                                     host['model_node'], limit))
+    results.append(_wakeup_reference('graph.platform.wakeup_lateness_no_latency_limit', window,
+                                     host['model_node'], -1.0))
+    for prefix, priorities, latency in (('graph', fifo, limit), ('graph.normal', normal, limit),
+                                        ('graph.no_latency_limit', normal, -1.0)):
+        results += _measure(prefix, window, segments, priorities, latency, reference)
     return results
 
 
-def _measure(prefix, window, segments, priorities, reference):
-    """Run the three nodes for `window` s at the given `realtime_priority` each; their figures."""
+def _measure(prefix, window, segments, priorities, latency_limit, reference):
+    """Run the three nodes for `window` s at the given `realtime_priority` each and
+    `cpu_latency_limit`; their figures."""
     from bellows_ros.runtime import dds_node
     from bellows_ros.runtime.messages import msg
 
@@ -117,7 +130,8 @@ def _measure(prefix, window, segments, priorities, reference):
             log = open(Path(logs.name) / f'{name}.log', 'w')
             processes[name] = subprocess.Popen(
                 [str(binary / name), '--ros-args', '--params-file', str(CONFIG), *args[name],
-                 '-p', f'realtime_priority:={priorities[name]}'],
+                 '-p', f'realtime_priority:={priorities[name]}',
+                 '-p', f'cpu_latency_limit:={float(latency_limit)}'],
                 env=env, stdout=log, stderr=subprocess.STDOUT)
             if name == 'model_node':
                 # The driver publishes from its first sample on: the model must listen by then
@@ -132,6 +146,7 @@ def _measure(prefix, window, segments, priorities, reference):
         windows.clear()
         times = _cpu_times()
         start = time.monotonic()
+        limit_in_force = realtime.cpu_latency_in_force()
         _spin(dds_node, node, window)
         elapsed = time.monotonic() - start
         stolen = _steal_fraction(times, _cpu_times())
@@ -168,8 +183,9 @@ def _measure(prefix, window, segments, priorities, reference):
                   for name, values in final.items() if name.split(':')[0] in NODES}
     results = [Result(f'{prefix}.rate', statistics.median(rates) if rates else 0.0, 'Hz',
                       len(rates), target=1000.0,
-                      extra={'scheduling': scheduling, 'steal': stolen},
-                      extra_units={'steal': ''})]
+                      extra={'scheduling': scheduling, 'steal': stolen,
+                             'cpu_latency_limit': limit_in_force},
+                      extra_units={'steal': '', 'cpu_latency_limit': 's'})]
     results.append(Result(f'{prefix}.fraction_evaluated',
                           evaluated / published if published else 0.0, '', published,
                           target=0.99,
@@ -192,9 +208,10 @@ def _measure(prefix, window, segments, priorities, reference):
     return results
 
 
-def _wakeup_reference(seconds, priority):
+def _wakeup_reference(name, seconds, priority, latency_limit):
     """Lateness of a lone 1 kHz sleeping loop (PeriodicLoop, as the simulated devices use) on a
-    thread at SCHED_FIFO `priority` when granted, for `seconds` s."""
+    thread at SCHED_FIFO `priority` when granted, for `seconds` s, with this process holding
+    `latency_limit` (s; negative = none) as a node would."""
     stats = LoopStats(window=int(seconds * 1000) + 1000)
     stop = threading.Event()
     granted = []
@@ -208,20 +225,39 @@ def _wakeup_reference(seconds, priority):
         for _ in PeriodicLoop(1e-3, stats).ticks(stop):
             pass
     thread = threading.Thread(target=loop, name='wakeup-reference', daemon=True)
-    times = _cpu_times()
-    thread.start()
-    time.sleep(seconds)
-    stop.set()
-    thread.join()
+    request = _hold_latency_limit(latency_limit)
+    try:
+        limit_in_force = realtime.cpu_latency_in_force()
+        times = _cpu_times()
+        thread.start()
+        time.sleep(seconds)
+        stop.set()
+        thread.join()
+    finally:
+        if request is not None:
+            os.close(request)
     summary = stats.summary()
     slots = int(summary['count'] + summary['misses'])
-    return Result('graph.platform.wakeup_lateness', summary['lateness_p99'], 's',
+    return Result(name, summary['lateness_p99'], 's',
                   int(summary['count']),
                   extra={'p50': summary['lateness_p50'], 'max': summary['lateness_max'],
                          'slots': slots, 'slots_missed': summary['misses'] / slots,
                          'scheduling': f'SCHED_FIFO {priority}' if granted else 'SCHED_OTHER',
-                         'steal': _steal_fraction(times, _cpu_times())},
-                  extra_units={'slots': '', 'slots_missed': '', 'steal': ''})
+                         'steal': _steal_fraction(times, _cpu_times()),
+                         'cpu_latency_limit': limit_in_force},
+                  extra_units={'slots': '', 'slots_missed': '', 'steal': '',
+                               'cpu_latency_limit': 's'})
+
+
+def _hold_latency_limit(limit):
+    """The bench's own CPU latency request (an fd to close), or None when off or not permitted:
+    the reference then runs without it, which its `cpu_latency_limit` figure shows."""
+    if limit < 0:
+        return None
+    try:
+        return realtime.hold_cpu_latency(limit)
+    except OSError:
+        return None
 
 
 def _cpu_times():

@@ -2,6 +2,7 @@
 
 Reported per loop: achieved rate, loop compute time p50/p99, period p99, lateness p99, deadline
 misses (from `hardware.loop_timing.LoopStats`), the scheduling policy (SCHED_FIFO when granted),
+the CPU latency limit in force (the least of every process's request; nan where not readable),
 plus whatever counters the node passes (link health, stale data, rejected samples). Level: ERROR
 when the link is down, WARN on new deadline misses or stale data since the last report, else OK.
 """
@@ -29,7 +30,8 @@ class LoopReport:
         new_misses = misses - self._misses
         self._count, self._misses, self._time = count, misses, now
         values = {'rate_hz': f'{rate:.1f}', 'samples': str(count), 'deadline_misses': str(misses),
-                  'new_deadline_misses': str(new_misses), 'scheduling': realtime.describe()}
+                  'new_deadline_misses': str(new_misses), 'scheduling': realtime.describe(),
+                  'cpu_latency_limit_us': f'{realtime.cpu_latency_in_force() * 1e6:.0f}'}
         for key in ('compute_p50', 'compute_p99', 'period_p99', 'lateness_p99'):
             values[f'{key}_us'] = f'{summary[key] * 1e6:.1f}'
         return values, rate, new_misses

@@ -20,6 +20,8 @@ Parameters (config/nodes_*.yaml, section `driver_node`):
       wait (the default: a robot's driver publishes whoever listens).
   realtime_priority (int): SCHED_FIFO priority for the node's threads, 1-99; 0 = normal
       scheduling (runtime/realtime.py).
+  cpu_latency_limit (s): CPU wake-up latency held while the node runs, 0 = idle CPUs poll;
+      negative = off (runtime/realtime.py).
 """
 import dataclasses
 import os
@@ -69,7 +71,7 @@ class DriverNode(rt.Node):
         n_segments = self.declare_parameter('arm.n_segments', 0).value
         self.startup_timeout = self.declare_parameter('startup_timeout', 2.0).value
         wait_for_subscribers = self.declare_parameter('wait_for_subscribers', 0.0).value
-        realtime.declare(self)  # SCHED_FIFO priority, applied by rt.main once the node is built
+        realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: rt.main applies them
         rt.check_parameters(self)
         if not (self.use_arm or self.use_actuator):
             raise BellowsError('driver_node: neither arm.enabled nor actuator.enabled is set')

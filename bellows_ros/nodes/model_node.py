@@ -13,7 +13,9 @@ Parameters: segments (int array, which segments to evaluate), params_file (str: 
 parameters from `bellows identify`, laid over config/segment.yaml; '' = defaults),
 max_pending (int: unmatched half-samples kept before the oldest is dropped and counted),
 latency_budget (s: a torque published later than this after its sample's stamp is counted `late`),
-realtime_priority (int: SCHED_FIFO priority 1-99 for the node's threads, 0 = normal scheduling).
+realtime_priority (int: SCHED_FIFO priority 1-99 for the node's threads, 0 = normal scheduling),
+cpu_latency_limit (s: CPU wake-up latency held while the node runs, 0 = idle CPUs poll, negative =
+off; runtime/realtime.py).
 A sample with a non-finite value or a pressure outside [0, 2 p_max] is rejected and counted.
 """
 import math
@@ -36,7 +38,7 @@ class ModelNode(rt.Node):
         params_file = self.declare_parameter('params_file', '').value or None
         self.max_pending = self.declare_parameter('max_pending', 100).value
         latency_budget = self.declare_parameter('latency_budget', 0.002).value
-        realtime.declare(self)  # SCHED_FIFO priority, applied by rt.main once the node is built
+        realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: rt.main applies them
         rt.check_parameters(self)
         if not segments or any(s < 1 for s in segments):
             raise BellowsError(f'model_node: parameter segments must list segment numbers >= 1, '

@@ -15,7 +15,8 @@ Parameters: duration (s), step_time (s), stiffness_low, stiffness_high (N/m), pr
 excursion_start, excursion_length (s), output_dir (str), actuator_params (str), realtime_priority
 (SCHED_FIFO priority, 0 = normal scheduling; when the 1 kHz nodes run SCHED_FIFO give it one too,
 below theirs: it stands in for the arm controller, and when its 50 Hz set-points starve the
-driver's watchdog vents the arm).
+driver's watchdog vents the arm), cpu_latency_limit (s: CPU wake-up latency held while the node
+runs, 0 = idle CPUs poll, negative = off; runtime/realtime.py).
 """
 import csv
 import math
@@ -44,7 +45,7 @@ class ScenarioNode(rt.Node):
         self.excursion_length = self.declare_parameter('excursion_length', 20.0).value
         self.output_dir = Path(self.declare_parameter('output_dir', 'scenario_out').value)
         actuator_params = self.declare_parameter('actuator_params', '').value or None
-        realtime.declare(self)  # SCHED_FIFO priority, applied by rt.main once the node is built
+        realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: rt.main applies them
         self.p0 = load_segment_params().p0  # ambient: the vented chain's pressure, Pa abs
         rt.check_parameters(self)
         k_min, k_max = stiffness_range(load_actuator_params(actuator_params))

@@ -18,6 +18,8 @@ Parameters:
   clock_rate (Hz): /clock publication rate when use_sim_time is on.
   realtime_priority (int): SCHED_FIFO priority for the node's threads, 1-99; 0 = normal
       scheduling (runtime/realtime.py).
+  cpu_latency_limit (s): CPU wake-up latency held while the node runs, 0 = idle CPUs poll;
+      negative = off (runtime/realtime.py).
 With use_sim_time the node is the clock source: it publishes the plant's time on /clock.
 """
 import math
@@ -44,7 +46,7 @@ class SimActuatorNode(rt.Node):
         self.amplitude = self.declare_parameter('spring.amplitude', 0.0).value
         self.spring_period = self.declare_parameter('spring.period', 4.0).value
         clock_rate = self.declare_parameter('clock_rate', 100.0).value
-        realtime.declare(self)  # SCHED_FIFO priority, applied by rt.main once the node is built
+        realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: rt.main applies them
         rt.check_parameters(self)
         if not port:
             raise BellowsError('sim_actuator_node: parameter port is empty')

@@ -14,6 +14,8 @@ Parameters:
   clock_rate (Hz): /clock publication rate when use_sim_time is on (the node is then the clock).
   realtime_priority (int): SCHED_FIFO priority for the node's threads, 1-99; 0 = normal
       scheduling (runtime/realtime.py).
+  cpu_latency_limit (s): CPU wake-up latency held while the node runs, 0 = idle CPUs poll;
+      negative = off (runtime/realtime.py).
 """
 
 from bellows_ros.errors import BellowsError
@@ -37,7 +39,7 @@ class SimArmNode(rt.Node):
         seed = self.declare_parameter('seed', 1).value
         self.load_torque = self.declare_parameter('load_torque', 0.0).value
         clock_rate = self.declare_parameter('clock_rate', 100.0).value
-        realtime.declare(self)  # SCHED_FIFO priority, applied by rt.main once the node is built
+        realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: rt.main applies them
         rt.check_parameters(self)
         params = load_segment_params(segment_params)
         self.plants = [SegmentPlant(params, effects=effects, seed=seed + i)

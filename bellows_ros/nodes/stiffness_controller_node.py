@@ -16,7 +16,8 @@ pd.velocity_cutoff (Hz), pd.duty_max, pd.deadband (m), gas_time_constant (s),
 control_every (samples per control step), target_every (control steps between re-computations
 of x_c* from the gas estimate), publish_every,
 initial_stiffness (N/m; 0 = hold still until the first set-point), realtime_priority (SCHED_FIFO
-priority 1-99 for the node's threads; 0 = normal scheduling).
+priority 1-99 for the node's threads; 0 = normal scheduling), cpu_latency_limit (s: CPU wake-up
+latency held while the node runs, 0 = idle CPUs poll, negative = off; runtime/realtime.py).
 """
 import time
 
@@ -45,7 +46,7 @@ class StiffnessControllerNode(rt.Node):
         self.target_every = self.declare_parameter('target_every', 4).value
         self.publish_every = self.declare_parameter('publish_every', 2).value
         initial = self.declare_parameter('initial_stiffness', 0.0).value
-        realtime.declare(self)  # SCHED_FIFO priority, applied by rt.main once the node is built
+        realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: rt.main applies them
         rt.check_parameters(self)
         if not (0 < gains.duty_max <= 1 and gains.kp >= 0 and gains.kd >= 0):
             raise BellowsError('stiffness_controller_node: need 0 < pd.duty_max <= 1, '

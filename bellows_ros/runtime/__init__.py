@@ -97,7 +97,8 @@ def main(node_class, args=None):
 
     `node_class()` must declare its parameters up front; `check_parameters` runs right after.
     A node may define `close()` for its own clean-up (devices, threads); it runs before shutdown.
-    A node that declares `realtime_priority` gets it here (`realtime.request`).
+    A node that declares `realtime_priority` and `cpu_latency_limit` gets them here
+    (`realtime.request`, `realtime.limit_cpu_latency`), the latter until it shuts down.
     """
     from bellows_ros.runtime import realtime
 
@@ -106,11 +107,13 @@ def main(node_class, args=None):
     # A shell starts background jobs with SIGINT ignored; ros2 launch stops nodes with SIGINT.
     signal.signal(signal.SIGINT, signal.default_int_handler)
     node = None
+    latency_request = None
     try:
         rt.init(args=args)
         node = node_class()
         check_parameters(node)
         realtime.request(node)
+        latency_request = realtime.limit_cpu_latency(node)
         # Everything built so far (modules, type store, model tables) lives as long as the node:
         # keep the cyclic collector from walking it again and again in the 1 kHz callbacks.
         gc.freeze()
@@ -128,6 +131,8 @@ def main(node_class, args=None):
             node.destroy_node()
         if rt.ok():
             rt.shutdown()
+        if latency_request is not None:
+            os.close(latency_request)
     return 0
 
 
