@@ -13,7 +13,8 @@ import sys
 
 from bellows_ros.runtime import realtime
 
-CHILD = r'''
+# What `realtime` asks of a node: its declared parameters and its logger (printed here).
+NODE = r'''
 import os, sys, threading
 from bellows_ros.runtime import realtime
 
@@ -25,14 +26,16 @@ class Log:
     def warn(self, m): print('WARN', m)
 
 class Node:
-    def __init__(self, p): self.p = p
-    def has_parameter(self, name): return name == 'realtime_priority'
-    def get_parameter(self, name): return Param(self.p)
+    def __init__(self, **parameters): self.parameters = parameters
+    def has_parameter(self, name): return name in self.parameters
+    def get_parameter(self, name): return Param(self.parameters[name])
     def get_logger(self): return Log()
+'''
 
+CHILD = NODE + r'''
 before = threading.Thread(target=threading.Event().wait, args=(5,), daemon=True)
 before.start()                                    # a thread that exists before the request
-granted = realtime.request(Node(int(sys.argv[1])))
+granted = realtime.request(Node(realtime_priority=int(sys.argv[1])))
 policies = {}
 def report():
     policies['later'] = realtime.describe()       # a thread started after the request
@@ -78,28 +81,12 @@ def test_zero_leaves_scheduling_alone():
     assert 'WARN' not in out and 'INFO' not in out, out
 
 
-LATENCY_CHILD = r'''
-import os, sys
-from bellows_ros.runtime import realtime
-
-class Param:
-    def __init__(self, value): self.value = value
-
-class Log:
-    def info(self, m): print('INFO', m)
-    def warn(self, m): print('WARN', m)
-
-class Node:
-    def __init__(self, limit): self.limit = limit
-    def has_parameter(self, name): return name == 'cpu_latency_limit'
-    def get_parameter(self, name): return Param(self.limit)
-    def get_logger(self): return Log()
-
+LATENCY_CHILD = NODE + r'''
 if 'unprivileged' in sys.argv:    # root drops to nobody: the device is then as closed as to a user
     os.setgid(65534)
     os.setuid(65534)
 before = realtime.cpu_latency_in_force()
-fd = realtime.limit_cpu_latency(Node(float(sys.argv[1])))
+fd = realtime.limit_cpu_latency(Node(cpu_latency_limit=float(sys.argv[1])))
 held = realtime.cpu_latency_in_force()
 if fd is not None:
     os.close(fd)
