@@ -11,9 +11,9 @@ A loop that sleeps between ticks also pays for waking its CPU. An idle CPU sleep
 tens of microseconds to milliseconds. The kernel's PM QoS request `/dev/cpu_dma_latency` bounds
 that exit latency for as long as the requesting file stays open; 0 keeps idle CPUs polling.
 cyclictest makes the same request by default, and real-time tuning guides (tuned's
-latency-performance profile) set it. Measured on this project's 2-core VM: a lone 1 kHz loop's
-p99 wake-up lateness 270-855 µs without it, 78-89 µs with 0 (docs/nodes.md). The price is power:
-idle CPUs spin while the node runs.
+latency-performance profile) set it. Measured on this project's 2-core VM on one day: a lone 1 kHz
+loop's p99 wake-up lateness 0.27-11.6 ms without it, 0.08-1.5 ms with 0 (docs/nodes.md). The price
+is power: idle CPUs spin while the node runs.
 
 API
 ---
