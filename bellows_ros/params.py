@@ -14,6 +14,7 @@ defaults do not have is an error, never silently ignored.
 import dataclasses
 import math
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -75,19 +76,36 @@ def unflatten(flat):
     return tree
 
 
-def read_file(path, node_name=None):
-    """Read a ROS 2 parameter file into a flat dict of dotted names.
+class _RosLoader(yaml.SafeLoader):
+    """YAML as rcl's parameter parser reads it: `1e-5` is a double (YAML 1.1 would say string)."""
 
-    Sections for ``/**`` apply to every node; a section named `node_name` (with or without a leading
-    slash) is laid on top of them. Other nodes' sections are skipped.
+
+_RosLoader.add_implicit_resolver(
+    'tag:yaml.org,2002:float',
+    re.compile(r'^[-+]?(?:[0-9][0-9_]*)?(?:\.[0-9_]*)?(?:[eE][-+]?[0-9]+)$'),
+    list('-+0123456789.'))
+
+
+def parse_yaml(text):
+    """Parse YAML text with rcl's reading of numbers (`yaml.YAMLError` on a syntax error)."""
+    return yaml.load(text, Loader=_RosLoader)
+
+
+def read_sections(path):
+    """Read a ROS 2 parameter file: {section name: flat parameters}, in the file's order.
+
+    Section names are normalised as rcl does (a leading slash added: `model_node` is
+    `/model_node`). A malformed file raises ParameterError naming the file and line.
     """
     path = Path(path)
     try:
         text = path.read_text()
     except OSError as exc:
         raise ParameterError(f'{path}: cannot read parameter file ({exc.strerror})') from None
+    except UnicodeDecodeError:
+        raise ParameterError(f'{path}: not a text file') from None
     try:
-        document = yaml.safe_load(text)
+        document = parse_yaml(text)
     except yaml.YAMLError as exc:
         mark = getattr(exc, 'problem_mark', None)
         where = f'{path}:{mark.line + 1}' if mark else str(path)
@@ -95,21 +113,51 @@ def read_file(path, node_name=None):
         raise ParameterError(f'{where}: {problem}') from None
     if not isinstance(document, dict):
         raise ParameterError(f"{path}: expected a map of node names to 'ros__parameters'")
-    flat = {}
-    sections = [WILDCARD] + ([node_name, '/' + node_name.lstrip('/')] if node_name else [])
-    matched = False
-    for section in sections:
-        body = document.get(section)
-        if body is None:
-            continue
+    sections = {}
+    for section, body in document.items():
         if not isinstance(body, dict) or not isinstance(body.get('ros__parameters'), dict):
             raise ParameterError(f"{path}: section '{section}' has no 'ros__parameters' map")
-        matched = True
-        flat.update(flatten(body['ros__parameters']))
-    if not matched and node_name is None:
-        raise ParameterError(f"{path}: no '/**' section with 'ros__parameters'")
-    for name, value in flat.items():
-        _check_value(path, name, value)
+        flat = flatten(body['ros__parameters'])
+        for name, value in flat.items():
+            _check_value(path, name, value)
+        key = '/' + str(section).lstrip('/')
+        sections[key] = {**sections.get(key, {}), **flat}
+    return sections
+
+
+def section_matches(section, node_fqn):
+    """Does parameter-file section `section` apply to the node `node_fqn` (e.g. `/ns/name`)?
+
+    rcl's rule: a section is the node's fully qualified name, where `*` stands for one name token
+    and `**` for any number of them (`/**` = every node, `/*` = every node in `/`).
+    """
+    def match(pattern, tokens):
+        if not pattern:
+            return not tokens
+        head, rest = pattern[0], pattern[1:]
+        if head == '**':
+            return any(match(rest, tokens[i:]) for i in range(len(tokens) + 1))
+        return bool(tokens) and head in ('*', tokens[0]) and match(rest, tokens[1:])
+    return match(section.strip('/').split('/'), node_fqn.strip('/').split('/'))
+
+
+def read_file(path, node_name=None):
+    """Read a ROS 2 parameter file into a flat dict of dotted names.
+
+    Without `node_name`: the ``/**`` section. With it: every section that applies to that node
+    (`section_matches`; a bare name is a node in `/`), later sections over earlier ones, as rcl
+    merges them. Other nodes' sections are skipped.
+    """
+    sections = read_sections(path)
+    if node_name is None:
+        if WILDCARD not in sections:
+            raise ParameterError(f"{path}: no '/**' section with 'ros__parameters'")
+        return dict(sections[WILDCARD])
+    fqn = '/' + node_name.lstrip('/')
+    flat = {}
+    for section, values in sections.items():
+        if section_matches(section, fqn):
+            flat.update(values)
     return flat
 
 

@@ -8,10 +8,10 @@ when the link is down, WARN on new deadline misses or stale data since the last 
 """
 import time
 
-from bellows_ros.runtime import realtime, rt
+from bellows_ros.runtime import realtime
 
-_S = rt.msg.DiagnosticStatus
-OK, WARN, ERROR, STALE = _S.OK, _S.WARN, _S.ERROR, _S.STALE
+# diagnostic_msgs/DiagnosticStatus levels (a `byte`: bytes in rclpy, int on the DDS runtime).
+OK, WARN, ERROR, STALE = 0, 1, 2, 3
 PERIOD = 1.0  # s between reports
 
 
@@ -37,17 +37,16 @@ class LoopReport:
         return values, rate, new_misses
 
 
-def status(name, values, level=OK, message='', hardware_id=''):
-    """A DiagnosticStatus with `values` (dict) as string key-values."""
-    if rt.USING_RCLPY:
-        level = bytes([level]) if isinstance(level, int) else level
-    return rt.msg.DiagnosticStatus(
-        level=level, name=name, message=message or ('OK' if level in (OK, bytes([0])) else ''),
-        hardware_id=hardware_id,
-        values=[rt.msg.KeyValue(key=str(k), value=str(v)) for k, v in values.items()])
+def status(node, name, values, level=OK, message='', hardware_id=''):
+    """A DiagnosticStatus of `node`'s runtime with `values` (dict) as string key-values."""
+    msg = node.msg
+    return msg.DiagnosticStatus(
+        level=bytes([level]) if isinstance(msg.DiagnosticStatus.OK, bytes) else level,
+        name=name, message=message or ('OK' if level == OK else ''), hardware_id=hardware_id,
+        values=[msg.KeyValue(key=str(k), value=str(v)) for k, v in values.items()])
 
 
 def publish(node, publisher, statuses):
-    array = rt.msg.DiagnosticArray(status=list(statuses))
+    array = node.msg.DiagnosticArray(status=list(statuses))
     array.header.stamp = node.get_clock().now().to_msg()
     publisher.publish(array)

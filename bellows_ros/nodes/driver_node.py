@@ -32,7 +32,7 @@ from bellows_ros.errors import BellowsError
 from bellows_ros.hardware import actuator_board, arm_bus
 from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.nodes import diagnostics
-from bellows_ros.runtime import realtime, rt
+from bellows_ros.runtime import Node, realtime, run
 from bellows_ros.runtime.topics import ACTUATOR_FRAME, SAMPLE_DEPTH
 
 
@@ -58,10 +58,10 @@ class SampleClock:
         self._last_time, self._last_index = arrival, index
 
 
-class DriverNode(rt.Node):
+class DriverNode(Node):
 
-    def __init__(self):
-        super().__init__('driver_node')
+    def __init__(self, runtime):
+        super().__init__('driver_node', runtime)
         self.use_arm = self.declare_parameter('arm.enabled', False).value
         self.use_actuator = self.declare_parameter('actuator.enabled', False).value
         hardware_params = self.declare_parameter('hardware_params', '').value or None
@@ -72,16 +72,16 @@ class DriverNode(rt.Node):
         self.startup_timeout = self.declare_parameter('startup_timeout', 2.0).value
         wait_for_subscribers = self.declare_parameter('wait_for_subscribers', 0.0).value
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: rt.main applies them
-        rt.check_parameters(self)
+        self.check_parameters()
         if not (self.use_arm or self.use_actuator):
             raise BellowsError('driver_node: neither arm.enabled nor actuator.enabled is set')
 
-        self.state_pub = self.create_publisher(rt.msg.JointState, '/joint_states', SAMPLE_DEPTH)
-        self.chamber_pub = self.create_publisher(rt.msg.JointState, '/bellows/chambers',
+        self.state_pub = self.create_publisher(self.msg.JointState, '/joint_states', SAMPLE_DEPTH)
+        self.chamber_pub = self.create_publisher(self.msg.JointState, '/bellows/chambers',
                                                  SAMPLE_DEPTH)
-        self.wrench_pub = self.create_publisher(rt.msg.WrenchStamped, '/bellows/wrench',
+        self.wrench_pub = self.create_publisher(self.msg.WrenchStamped, '/bellows/wrench',
                                                 SAMPLE_DEPTH)
-        self.diag_pub = self.create_publisher(rt.msg.DiagnosticArray, '/diagnostics', 10)
+        self.diag_pub = self.create_publisher(self.msg.DiagnosticArray, '/diagnostics', 10)
         self._publish_lock = threading.Lock()  # both reader threads publish
         self.arm = self.actuator = None
         self.reports = {}
@@ -98,9 +98,9 @@ class DriverNode(rt.Node):
         except BaseException:
             self.close()
             raise
-        self.create_subscription(rt.msg.JointState, '/bellows/pressure_command',
+        self.create_subscription(self.msg.JointState, '/bellows/pressure_command',
                                  self.on_pressure_command, 10)
-        self.create_subscription(rt.msg.Float64, '/actuator/motor_command',
+        self.create_subscription(self.msg.Float64, '/actuator/motor_command',
                                  self.on_motor_command, 10)
         self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
         self.get_logger().info(
@@ -176,7 +176,7 @@ class DriverNode(rt.Node):
             end = time.monotonic() + 1.0
             for publisher in (self.state_pub, self.chamber_pub, self.wrench_pub, self.diag_pub):
                 left = max(0.0, end - time.monotonic())
-                publisher.wait_for_all_acked(rt.Duration(seconds=left))
+                publisher.wait_for_all_acked(self.runtime.Duration(seconds=left))
         self.actuator = self.arm = None
 
     # --- samples -> topics (called from the drivers' reader threads) ----------------------------
@@ -188,10 +188,10 @@ class DriverNode(rt.Node):
     def on_actuator_sample(self, sample):
         start = time.monotonic()
         stamp = self.get_clock().now().to_msg()
-        state = self._header(rt.msg.JointState(name=['air_chamber', 'spring'],
+        state = self._header(self.msg.JointState(name=['air_chamber', 'spring'],
                                                position=[sample.x_c, sample.x_s]), stamp)
-        chambers = self._header(rt.msg.JointState(name=['actuator'], effort=[sample.p]), stamp)
-        wrench = self._header(rt.msg.WrenchStamped(), stamp, ACTUATOR_FRAME)
+        chambers = self._header(self.msg.JointState(name=['actuator'], effort=[sample.p]), stamp)
+        wrench = self._header(self.msg.WrenchStamped(), stamp, ACTUATOR_FRAME)
         wrench.wrench.force.z = sample.f
         with self._publish_lock:
             self.state_pub.publish(state)
@@ -209,10 +209,10 @@ class DriverNode(rt.Node):
             dt = sample.t_device - previous.t_device
             self._psi_dot = [(a - b) / dt for a, b in zip(sample.psi, previous.psi)]
         self._last_arm = sample
-        state = self._header(rt.msg.JointState(name=list(self.arm_names),
+        state = self._header(self.msg.JointState(name=list(self.arm_names),
                                                position=[float(v) for v in sample.psi],
                                                velocity=list(self._psi_dot)), stamp)
-        chambers = self._header(rt.msg.JointState(name=list(self.chain_names),
+        chambers = self._header(self.msg.JointState(name=list(self.chain_names),
                                                   effort=[float(v) for v in sample.pressures]),
                                 stamp)
         with self._publish_lock:
@@ -253,13 +253,13 @@ class DriverNode(rt.Node):
                 level, message = diagnostics.ERROR, 'no data (link down or device stopped)'
             elif new_misses:
                 level, message = diagnostics.WARN, f'{new_misses} samples missed'
-            statuses.append(diagnostics.status(f'driver_node: {name}', values, level, message,
+            statuses.append(diagnostics.status(self, f'driver_node: {name}', values, level, message,
                                                hardware_id=link))
         diagnostics.publish(self, self.diag_pub, statuses)
 
 
 def main(args=None):
-    return rt.main(DriverNode, args)
+    return run(DriverNode, args)
 
 
 if __name__ == '__main__':

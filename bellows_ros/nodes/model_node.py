@@ -26,20 +26,20 @@ from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.models.segment import SegmentModel, external_torque, load_segment_params
 from bellows_ros.nodes import diagnostics
-from bellows_ros.runtime import realtime, rt
+from bellows_ros.runtime import Node, realtime, run, stamp_ns
 from bellows_ros.runtime.topics import SAMPLE_DEPTH
 
 
-class ModelNode(rt.Node):
+class ModelNode(Node):
 
-    def __init__(self):
-        super().__init__('model_node')
+    def __init__(self, runtime):
+        super().__init__('model_node', runtime)
         segments = self.declare_parameter('segments', [1, 2, 3, 4]).value
         params_file = self.declare_parameter('params_file', '').value or None
         self.max_pending = self.declare_parameter('max_pending', 100).value
         latency_budget = self.declare_parameter('latency_budget', 0.002).value
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: rt.main applies them
-        rt.check_parameters(self)
+        self.check_parameters()
         if not segments or any(s < 1 for s in segments):
             raise BellowsError(f'model_node: parameter segments must list segment numbers >= 1, '
                                f'got {list(segments)}')
@@ -57,14 +57,14 @@ class ModelNode(rt.Node):
         self._last_stamp = None
         self._p_limit = 2.0 * self.params.p_max
 
-        self.drive_pub = self.create_publisher(rt.msg.JointState, '/bellows/driving_torque',
+        self.drive_pub = self.create_publisher(self.msg.JointState, '/bellows/driving_torque',
                                                SAMPLE_DEPTH)
-        self.external_pub = self.create_publisher(rt.msg.JointState, '/bellows/external_torque',
+        self.external_pub = self.create_publisher(self.msg.JointState, '/bellows/external_torque',
                                                   SAMPLE_DEPTH)
-        self.diag_pub = self.create_publisher(rt.msg.DiagnosticArray, '/diagnostics', 10)
-        self.create_subscription(rt.msg.JointState, '/joint_states', self.on_joint_states,
+        self.diag_pub = self.create_publisher(self.msg.DiagnosticArray, '/diagnostics', 10)
+        self.create_subscription(self.msg.JointState, '/joint_states', self.on_joint_states,
                                  SAMPLE_DEPTH)
-        self.create_subscription(rt.msg.JointState, '/bellows/chambers', self.on_chambers,
+        self.create_subscription(self.msg.JointState, '/bellows/chambers', self.on_chambers,
                                  SAMPLE_DEPTH)
         self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
         self.get_logger().info(f"evaluating {', '.join(self.names)}"
@@ -80,7 +80,7 @@ class ModelNode(rt.Node):
             self._half(msg, 1)
 
     def _half(self, msg, slot):
-        stamp = rt.stamp_ns(msg.header.stamp)
+        stamp = stamp_ns(msg.header.stamp)
         entry = self.pending.get(stamp)
         if entry is None:
             entry = self.pending[stamp] = [None, None]
@@ -118,8 +118,8 @@ class ModelNode(rt.Node):
             self.previous_psi_dot[i] = psi_dot
             drive.append(tau_drive)
             external.append(float(external_torque(self.params, psi, psi_dot, psi_ddot, tau_drive)))
-        out_drive = rt.msg.JointState(name=list(self.names), effort=drive)
-        out_external = rt.msg.JointState(name=list(self.names), effort=external)
+        out_drive = self.msg.JointState(name=list(self.names), effort=drive)
+        out_external = self.msg.JointState(name=list(self.names), effort=external)
         out_drive.header = joints.header
         out_external.header = joints.header
         self.drive_pub.publish(out_drive)
@@ -146,12 +146,12 @@ class ModelNode(rt.Node):
         level = diagnostics.WARN if stale or self.counts['rejected'] else diagnostics.OK
         message = 'no samples (stale)' if stale else 'OK'
         diagnostics.publish(self, self.diag_pub,
-                            [diagnostics.status('model_node: driving torque', values, level,
+                            [diagnostics.status(self, 'model_node: driving torque', values, level,
                                                 message)])
 
 
 def main(args=None):
-    return rt.main(ModelNode, args)
+    return run(ModelNode, args)
 
 
 if __name__ == '__main__':

@@ -20,7 +20,6 @@ runs, 0 = idle CPUs poll, negative = off; runtime/realtime.py).
 """
 import csv
 import math
-import sys
 import time
 from pathlib import Path
 
@@ -28,14 +27,14 @@ from bellows_ros.errors import BellowsError
 from bellows_ros.models.actuator import load_actuator_params
 from bellows_ros.models.segment import load_segment_params
 from bellows_ros.models.stiffness_map import stiffness_range
-from bellows_ros.runtime import realtime, rt
+from bellows_ros.runtime import Node, realtime, run
 
 
 
-class ScenarioNode(rt.Node):
+class ScenarioNode(Node):
 
-    def __init__(self):
-        super().__init__('scenario_node')
+    def __init__(self, runtime):
+        super().__init__('scenario_node', runtime)
         self.duration = self.declare_parameter('duration', 40.0).value
         self.step_time = self.declare_parameter('step_time', 5.0).value
         k_low = self.declare_parameter('stiffness_low', 1400.0).value
@@ -47,7 +46,7 @@ class ScenarioNode(rt.Node):
         actuator_params = self.declare_parameter('actuator_params', '').value or None
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: rt.main applies them
         self.p0 = load_segment_params().p0  # ambient: the vented chain's pressure, Pa abs
-        rt.check_parameters(self)
+        self.check_parameters()
         k_min, k_max = stiffness_range(load_actuator_params(actuator_params))
         self.k_low = max(k_low, 1.01 * k_min)
         if self.k_low != k_low:
@@ -57,14 +56,14 @@ class ScenarioNode(rt.Node):
             raise BellowsError(f'scenario_node: stiffness_high {self.k_high:.0f} N/m is outside '
                                f'the actuator range [{k_min:.0f}, {k_max:.0f}] N/m')
         self.output_dir.mkdir(parents=True, exist_ok=True)
-        self.setpoint_pub = self.create_publisher(rt.msg.Float64, '/actuator/stiffness_setpoint', 10)
-        self.pressure_pub = self.create_publisher(rt.msg.JointState, '/bellows/pressure_command', 10)
+        self.setpoint_pub = self.create_publisher(self.msg.Float64, '/actuator/stiffness_setpoint', 10)
+        self.pressure_pub = self.create_publisher(self.msg.JointState, '/bellows/pressure_command', 10)
         self.series = {name: [] for name in ('stiffness', 'x_c', 'psi', 'p1', 'p2', 'tau_drive')}
-        self.create_subscription(rt.msg.Float64, '/actuator/stiffness',
+        self.create_subscription(self.msg.Float64, '/actuator/stiffness',
                                  lambda m: self._add('stiffness', m.data), 10)
-        self.create_subscription(rt.msg.JointState, '/joint_states', self.on_joint_states, 200)
-        self.create_subscription(rt.msg.JointState, '/bellows/chambers', self.on_chambers, 200)
-        self.create_subscription(rt.msg.JointState, '/bellows/driving_torque', self.on_torque, 200)
+        self.create_subscription(self.msg.JointState, '/joint_states', self.on_joint_states, 200)
+        self.create_subscription(self.msg.JointState, '/bellows/chambers', self.on_chambers, 200)
+        self.create_subscription(self.msg.JointState, '/bellows/driving_torque', self.on_torque, 200)
         self.start = time.monotonic()
         self.done = False
         self._last_setpoint, self._ticks = None, 0
@@ -108,15 +107,23 @@ class ScenarioNode(rt.Node):
             return
         k = self.stiffness_setpoint(t)
         if k != self._last_setpoint or self._ticks % 50 == 0:  # on change, and 1 Hz for late joiners
-            self.setpoint_pub.publish(rt.msg.Float64(data=k))
+            self.setpoint_pub.publish(self.msg.Float64(data=k))
             self._last_setpoint = k
         self._ticks += 1
-        command = rt.msg.JointState(name=['segment_1/chain_1', 'segment_1/chain_2'],
+        command = self.msg.JointState(name=['segment_1/chain_1', 'segment_1/chain_2'],
                                     effort=[self.chain_1_pressure(t), self.p0])
         command.header.stamp = self.get_clock().now().to_msg()
         self.pressure_pub.publish(command)
 
     # --- results -----------------------------------------------------------------------------------
+    def finish(self):
+        """Print the summary, write the CSV and the plot."""
+        for line in self.summary():
+            print(line, flush=True)
+        self.write()
+        print(f'wrote {self.output_dir / "scenario.png"} and {self.output_dir / "scenario.csv"}',
+              flush=True)
+
     def summary(self):
         lines = []
         after = [(t - self.step_time, k) for t, k in self.series['stiffness'] if t >= self.step_time]
@@ -171,26 +178,7 @@ class ScenarioNode(rt.Node):
 
 
 def main(args=None):
-    rt.init(args=args)
-    node = None
-    try:
-        node = ScenarioNode()
-        while not node.done:
-            rt.spin_once(node, timeout_sec=0.05)
-        for line in node.summary():
-            print(line, flush=True)
-        node.write()
-        print(f'wrote {node.output_dir / "scenario.png"} and {node.output_dir / "scenario.csv"}')
-    except BellowsError as exc:
-        print(f'scenario_node: error: {exc}', file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        pass
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rt.shutdown()
-    return 0
+    return run(ScenarioNode, args)
 
 
 if __name__ == '__main__':

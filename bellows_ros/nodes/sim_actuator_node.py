@@ -30,13 +30,13 @@ from bellows_ros.hardware.sim_actuator_board import SimActuatorBoard
 from bellows_ros.models.actuator import load_actuator_params
 from bellows_ros.models.actuator_plant import ActuatorPlant
 from bellows_ros.nodes import diagnostics
-from bellows_ros.runtime import realtime, rt
+from bellows_ros.runtime import Node, realtime, run
 
 
-class SimActuatorNode(rt.Node):
+class SimActuatorNode(Node):
 
-    def __init__(self):
-        super().__init__('sim_actuator_node')
+    def __init__(self, runtime):
+        super().__init__('sim_actuator_node', runtime)
         port = self.declare_parameter('port', '/tmp/bellows_actuator').value
         actuator_params = self.declare_parameter('actuator_params', '').value or None
         hardware_params = self.declare_parameter('hardware_params', '').value or None
@@ -47,7 +47,7 @@ class SimActuatorNode(rt.Node):
         self.spring_period = self.declare_parameter('spring.period', 4.0).value
         clock_rate = self.declare_parameter('clock_rate', 100.0).value
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: rt.main applies them
-        rt.check_parameters(self)
+        self.check_parameters()
         if not port:
             raise BellowsError('sim_actuator_node: parameter port is empty')
         params = load_actuator_params(actuator_params)
@@ -55,7 +55,7 @@ class SimActuatorNode(rt.Node):
                                    x_c0=None if math.isnan(x_c0) else x_c0)
         self.sim_time = self.get_parameter('use_sim_time').value
         if self.sim_time:
-            self.clock_pub = self.create_publisher(rt.msg.Clock, '/clock', 10)
+            self.clock_pub = self.create_publisher(self.msg.Clock, '/clock', 10)
             self._clock_every = max(1, round(1.0 / (clock_rate * 1e-3)))
         self._ticks = 0
         self.end_stop_hits = 0
@@ -63,7 +63,7 @@ class SimActuatorNode(rt.Node):
         self.board = SimActuatorBoard(self.step, config=actuator_board.load_config(hardware_params),
                                       link_path=port)
         self.board.start()
-        self.diag_pub = self.create_publisher(rt.msg.DiagnosticArray, '/diagnostics', 10)
+        self.diag_pub = self.create_publisher(self.msg.DiagnosticArray, '/diagnostics', 10)
         self.report = diagnostics.LoopReport(self.board.stats)
         self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
         self.get_logger().info(f'simulated actuator board on {self.board.port}, effects: '
@@ -80,7 +80,7 @@ class SimActuatorNode(rt.Node):
         self.x_c_seen = [min(self.x_c_seen[0], sample.x_c), max(self.x_c_seen[1], sample.x_c)]
         self._ticks += 1
         if self.sim_time and self._ticks % self._clock_every == 0:
-            self.clock_pub.publish(rt.msg.Clock(clock=rt.Time(seconds=self.plant.t).to_msg()))
+            self.clock_pub.publish(self.msg.Clock(clock=self.runtime.Time(seconds=self.plant.t).to_msg()))
         return sample
 
     def publish_diagnostics(self):
@@ -91,7 +91,7 @@ class SimActuatorNode(rt.Node):
                       x_c_min_seen=f'{self.x_c_seen[0]:.6f}', x_c_max_seen=f'{self.x_c_seen[1]:.6f}',
                       end_stop_hits=str(self.end_stop_hits), t_plant=f'{self.plant.t:.3f}')
         level = diagnostics.WARN if new_misses else diagnostics.OK
-        diagnostics.publish(self, self.diag_pub, [diagnostics.status(
+        diagnostics.publish(self, self.diag_pub, [diagnostics.status(self,
             'sim_actuator_node: plant', values, level,
             f'{new_misses} ticks missed' if new_misses else 'OK', hardware_id=self.board.port)])
 
@@ -100,7 +100,7 @@ class SimActuatorNode(rt.Node):
 
 
 def main(args=None):
-    return rt.main(SimActuatorNode, args)
+    return run(SimActuatorNode, args)
 
 
 if __name__ == '__main__':

@@ -24,13 +24,13 @@ from bellows_ros.hardware.sim_arm_bus import SimArmBus
 from bellows_ros.models.segment import load_segment_params
 from bellows_ros.models.segment_plant import SegmentPlant
 from bellows_ros.nodes import diagnostics
-from bellows_ros.runtime import realtime, rt
+from bellows_ros.runtime import Node, realtime, run
 
 
-class SimArmNode(rt.Node):
+class SimArmNode(Node):
 
-    def __init__(self):
-        super().__init__('sim_arm_node')
+    def __init__(self, runtime):
+        super().__init__('sim_arm_node', runtime)
         interface = self.declare_parameter('can.interface', 'udp_multicast').value
         channel = self.declare_parameter('can.channel', '239.74.163.2').value
         n_segments = self.declare_parameter('n_segments', 4).value
@@ -40,13 +40,13 @@ class SimArmNode(rt.Node):
         self.load_torque = self.declare_parameter('load_torque', 0.0).value
         clock_rate = self.declare_parameter('clock_rate', 100.0).value
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: rt.main applies them
-        rt.check_parameters(self)
+        self.check_parameters()
         params = load_segment_params(segment_params)
         self.plants = [SegmentPlant(params, effects=effects, seed=seed + i)
                        for i in range(n_segments)]
         self.sim_time = self.get_parameter('use_sim_time').value
         if self.sim_time:
-            self.clock_pub = self.create_publisher(rt.msg.Clock, '/clock', 10)
+            self.clock_pub = self.create_publisher(self.msg.Clock, '/clock', 10)
             self._clock_every = max(1, round(1.0 / (clock_rate * 1e-3)))
         self._ticks = 0
         try:
@@ -57,7 +57,7 @@ class SimArmNode(rt.Node):
         self.sim = SimArmBus(bus, self.step, n_segments=n_segments, vent_pressure=params.p0)
         self.sim.start()
         self.link = f'{interface}:{channel}'
-        self.diag_pub = self.create_publisher(rt.msg.DiagnosticArray, '/diagnostics', 10)
+        self.diag_pub = self.create_publisher(self.msg.DiagnosticArray, '/diagnostics', 10)
         self.report = diagnostics.LoopReport(self.sim.stats)
         self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
         self.get_logger().info(f'simulated arm ({n_segments} segments) on {self.link}, effects: '
@@ -72,7 +72,7 @@ class SimArmNode(rt.Node):
             measured.append((sample.p1, sample.p2, sample.psi))
         self._ticks += 1
         if self.sim_time and self._ticks % self._clock_every == 0:
-            self.clock_pub.publish(rt.msg.Clock(clock=rt.Time(seconds=self.plants[0].t).to_msg()))
+            self.clock_pub.publish(self.msg.Clock(clock=self.runtime.Time(seconds=self.plants[0].t).to_msg()))
         return measured
 
     def publish_diagnostics(self):
@@ -81,7 +81,7 @@ class SimArmNode(rt.Node):
         for i, plant in enumerate(self.plants):
             values[f'segment_{i + 1}.psi'] = f'{plant.psi:.4f}'
         level = diagnostics.WARN if new_misses else diagnostics.OK
-        diagnostics.publish(self, self.diag_pub, [diagnostics.status(
+        diagnostics.publish(self, self.diag_pub, [diagnostics.status(self,
             'sim_arm_node: plant', values, level,
             f'{new_misses} ticks missed' if new_misses else 'OK', hardware_id=self.link)])
 
@@ -90,7 +90,7 @@ class SimArmNode(rt.Node):
 
 
 def main(args=None):
-    return rt.main(SimArmNode, args)
+    return run(SimArmNode, args)
 
 
 if __name__ == '__main__':

@@ -27,14 +27,14 @@ from bellows_ros.control.stiffness import StiffnessSetpoint
 from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.models.actuator import load_actuator_params
 from bellows_ros.nodes import diagnostics
-from bellows_ros.runtime import realtime, rt
+from bellows_ros.runtime import Node, realtime, run, stamp_ns
 from bellows_ros.runtime.topics import SAMPLE_DEPTH
 
 
-class StiffnessControllerNode(rt.Node):
+class StiffnessControllerNode(Node):
 
-    def __init__(self):
-        super().__init__('stiffness_controller_node')
+    def __init__(self, runtime):
+        super().__init__('stiffness_controller_node', runtime)
         actuator_params = self.declare_parameter('actuator_params', '').value or None
         gains = PDGains(kp=self.declare_parameter('pd.kp', 400.0).value,
                         kd=self.declare_parameter('pd.kd', 0.0).value,
@@ -47,7 +47,7 @@ class StiffnessControllerNode(rt.Node):
         self.publish_every = self.declare_parameter('publish_every', 2).value
         initial = self.declare_parameter('initial_stiffness', 0.0).value
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: rt.main applies them
-        rt.check_parameters(self)
+        self.check_parameters()
         if not (0 < gains.duty_max <= 1 and gains.kp >= 0 and gains.kd >= 0):
             raise BellowsError('stiffness_controller_node: need 0 < pd.duty_max <= 1, '
                                'pd.kp >= 0, pd.kd >= 0')
@@ -64,14 +64,14 @@ class StiffnessControllerNode(rt.Node):
         self.stats = LoopStats()
         self.report = diagnostics.LoopReport(self.stats)
 
-        self.motor_pub = self.create_publisher(rt.msg.Float64, '/actuator/motor_command', 10)
-        self.stiffness_pub = self.create_publisher(rt.msg.Float64, '/actuator/stiffness', 10)
-        self.diag_pub = self.create_publisher(rt.msg.DiagnosticArray, '/diagnostics', 10)
-        self.create_subscription(rt.msg.Float64, '/actuator/stiffness_setpoint',
+        self.motor_pub = self.create_publisher(self.msg.Float64, '/actuator/motor_command', 10)
+        self.stiffness_pub = self.create_publisher(self.msg.Float64, '/actuator/stiffness', 10)
+        self.diag_pub = self.create_publisher(self.msg.DiagnosticArray, '/diagnostics', 10)
+        self.create_subscription(self.msg.Float64, '/actuator/stiffness_setpoint',
                                  self.on_setpoint, 10)
-        self.create_subscription(rt.msg.JointState, '/bellows/chambers', self.on_chambers,
+        self.create_subscription(self.msg.JointState, '/bellows/chambers', self.on_chambers,
                                  SAMPLE_DEPTH)
-        self.create_subscription(rt.msg.JointState, '/joint_states', self.on_joint_states,
+        self.create_subscription(self.msg.JointState, '/joint_states', self.on_joint_states,
                                  SAMPLE_DEPTH)
         self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
 
@@ -97,7 +97,7 @@ class StiffnessControllerNode(rt.Node):
         start = time.perf_counter()
         x_c = msg.position[msg.name.index('air_chamber')]
         x_s = msg.position[msg.name.index('spring')]
-        stamp = rt.stamp_ns(msg.header.stamp)
+        stamp = stamp_ns(msg.header.stamp)
         dt = 1e-3 if self._last_stamp is None else max(1e-6, (stamp - self._last_stamp) * 1e-9)
         self._last_stamp = stamp
         if self.pressure is None:
@@ -114,9 +114,9 @@ class StiffnessControllerNode(rt.Node):
                                                    or step % self.target_every == 0):
             self.target = self.setpoint.target()
         duty = 0.0 if self.target is None else self.pd.update(self.target, x_c, dt)
-        self.motor_pub.publish(rt.msg.Float64(data=duty))
+        self.motor_pub.publish(self.msg.Float64(data=duty))
         if step % self.publish_every == 0:
-            self.stiffness_pub.publish(rt.msg.Float64(data=self.setpoint.estimate()))
+            self.stiffness_pub.publish(self.msg.Float64(data=self.setpoint.estimate()))
         self.stats.record(dt, 0.0, time.perf_counter() - start)
 
     def publish_diagnostics(self):
@@ -127,13 +127,13 @@ class StiffnessControllerNode(rt.Node):
         values['stiffness_setpoint'] = str(self.setpoint.k_target)
         stale = rate == 0.0
         level = diagnostics.WARN if stale else diagnostics.OK
-        diagnostics.publish(self, self.diag_pub, [diagnostics.status(
+        diagnostics.publish(self, self.diag_pub, [diagnostics.status(self,
             'stiffness_controller_node: control', values, level,
             'no samples (stale)' if stale else 'OK')])
 
 
 def main(args=None):
-    return rt.main(StiffnessControllerNode, args)
+    return run(StiffnessControllerNode, args)
 
 
 if __name__ == '__main__':

@@ -28,17 +28,21 @@ from dataclasses import dataclass
 
 from cyclonedds.core import DDSException, GuardCondition, InstanceState, Policy, Qos, ReadCondition, \
     SampleState, ViewState, WaitSet
-from cyclonedds.domain import DomainParticipant
+from cyclonedds.domain import Domain, DomainParticipant
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from cyclonedds.internal import InvalidSample
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
-from bellows_ros import params as params_module
 from bellows_ros.errors import ParameterError
 from bellows_ros.runtime import ros_args
-from bellows_ros.runtime.messages import message_class, type_hash
+from bellows_ros.runtime.messages import message_class, msg, type_hash  # noqa: F401 (msg: the interface)
+from bellows_ros.runtime.node import check_override
+
+NAME = 'dds'
+INTERRUPTED = ()  # SIGINT arrives as KeyboardInterrupt, as in plain Python
+USER_ERRORS = ()  # every user mistake is already a ParameterError
 
 # Longest time spin_once blocks in C: Python only handles SIGINT between bytecodes.
 _MAX_WAIT_S = 0.1
@@ -58,6 +62,7 @@ class _Context:
         self.topics = {}
         self.nodes = []
         self.graph_writer = None
+        self.domains = {}  # domain id -> its configured Cyclone domain, kept for the process's life
 
 
 _context = _Context()
@@ -66,11 +71,22 @@ _context = _Context()
 def init(args=None):
     """Parse `--ros-args` from `args` (default `sys.argv`) and join the DDS domain.
 
-    The domain is `$ROS_DOMAIN_ID` (default 0), as in ROS 2. Returns the non-ROS arguments.
+    The domain is `$ROS_DOMAIN_ID` (default 0), as in ROS 2, configured for
+    `$ROS_AUTOMATIC_DISCOVERY_RANGE` and `$ROS_STATIC_PEERS` as rmw_cyclonedds_cpp does
+    (`discovery_config`). Returns the non-ROS arguments.
     """
     argv = list(sys.argv if args is None else args)
     _context.args, rest = ros_args.parse(argv)
-    domain_id = int(os.environ.get('ROS_DOMAIN_ID', '0'))
+    domain_text = os.environ.get('ROS_DOMAIN_ID', '') or '0'
+    if not domain_text.isdigit() or int(domain_text) > 232:
+        raise ParameterError(f"ROS_DOMAIN_ID='{domain_text}': expected an integer 0..232")
+    domain_id = int(domain_text)
+    if domain_id not in _context.domains:
+        # The discovery fragment goes before CYCLONEDDS_URI's configuration, as in the RMW.
+        config = discovery_config(os.environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE', ''),
+                                  os.environ.get('ROS_STATIC_PEERS', ''))
+        config += os.environ.get('CYCLONEDDS_URI', '')
+        _context.domains[domain_id] = Domain(domain_id, config=config) if config else None
     _context.participant = DomainParticipant(
         domain_id, qos=Qos(Policy.Userdata(data=b'enclave=/;')))
     _context.shutdown.clear()
@@ -85,6 +101,36 @@ def init(args=None):
                 Policy.Userdata(data=f'typehash={type_hash(_GRAPH_TYPE)};'.encode())))
     _publish_graph()
     return rest
+
+
+def discovery_config(discovery_range, static_peers):
+    """The Cyclone XML fragment rmw_cyclonedds_cpp (Jazzy) puts before `$CYCLONEDDS_URI`.
+
+    `discovery_range` is `$ROS_AUTOMATIC_DISCOVERY_RANGE`: LOCALHOST (multicast off, this host
+    as the peer), OFF (no discovery beyond the process), SUBNET (the default: multicast), or
+    SYSTEM_DEFAULT (Cyclone's own settings); `static_peers` is `$ROS_STATIC_PEERS` (`;`-separated).
+    """
+    discovery_range = (discovery_range or 'SUBNET').upper()
+    if discovery_range not in ('LOCALHOST', 'OFF', 'SUBNET', 'SYSTEM_DEFAULT'):
+        discovery_range = 'LOCALHOST'  # rcl: an unknown value means localhost only
+    peers = [p for p in static_peers.split(';') if p] if discovery_range in (
+        'LOCALHOST', 'SUBNET') else []
+    if discovery_range == 'LOCALHOST':
+        peers.insert(0, 'localhost')
+    if discovery_range == 'SYSTEM_DEFAULT' or (discovery_range == 'SUBNET' and not peers):
+        return ''
+    config = '<CycloneDDS><Domain>'
+    if discovery_range in ('LOCALHOST', 'OFF'):
+        config += '<General><AllowMulticast>false</AllowMulticast></General>'
+    if discovery_range == 'OFF':
+        config += (f'<Discovery><ParticipantIndex>none</ParticipantIndex>'
+                   f'<Tag>ros_discovery_off_{os.getpid()}</Tag>')
+    else:
+        config += ('<Discovery><ParticipantIndex>auto</ParticipantIndex>'
+                   '<MaxAutoParticipantIndex>32</MaxAutoParticipantIndex>')
+    if peers:
+        config += '<Peers>' + ''.join(f'<Peer address="{p}"/>' for p in peers) + '</Peers>'
+    return config + '</Discovery></Domain></CycloneDDS>,'
 
 
 def ok():
@@ -221,43 +267,6 @@ class Parameter:
     value: object
 
 
-def _coerce(name, default, value):
-    """Give an override the declared parameter's type, as rclpy's typed parameters do."""
-    if default is None or value is None:
-        return value
-    if isinstance(default, bool) or isinstance(value, bool):
-        if isinstance(default, bool) and isinstance(value, bool):
-            return value
-    elif isinstance(default, float) and isinstance(value, (int, float)):
-        return float(value)
-    elif isinstance(default, int) and isinstance(value, int):
-        return value
-    elif isinstance(default, str) and isinstance(value, str):
-        return value
-    elif isinstance(default, list) and isinstance(value, list):
-        if default and isinstance(default[0], float):
-            if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
-                return [float(v) for v in value]
-        elif all(type(v) is type(default[0]) for v in value) if default else True:
-            return value
-    raise ParameterError(f"parameter '{name}': expected {_type_name(default)}, "
-                         f"got {_type_name(value)} {value!r}")
-
-
-def _type_name(value):
-    if isinstance(value, bool):
-        return 'a bool'
-    if isinstance(value, int):
-        return 'an integer'
-    if isinstance(value, float):
-        return 'a double'
-    if isinstance(value, str):
-        return 'a string'
-    if isinstance(value, list):
-        return 'an array'
-    return type(value).__name__
-
-
 # --- entities --------------------------------------------------------------------------------------
 
 class Publisher:
@@ -311,11 +320,12 @@ class Node:
         if _context.participant is None:
             raise RuntimeError('call init() before creating a node')
         args = _context.args
-        self._name = args.node_name or node_name
-        self._namespace = args.namespace or (namespace if namespace.startswith('/')
-                                             else '/' + namespace if namespace else '/')
+        namespace = namespace if namespace.startswith('/') else '/' + namespace
+        self._original_name = node_name
+        self._name, self._namespace = ros_args.node_identity(args, node_name, namespace)
         self._logger = Logger(self._name, args.log_level)
-        self._overrides = self._collect_overrides(args)
+        fqn = self._namespace.rstrip('/') + '/' + self._name
+        self._overrides = ros_args.parameter_overrides(args, fqn)
         self._parameters = {}
         self._subscriptions, self._timers, self._writers = [], [], []
         self._waitset = WaitSet(_context.participant)
@@ -329,16 +339,6 @@ class Node:
             self.create_subscription(message_class('rosgraph_msgs/msg/Clock'), '/clock',
                                      self._on_clock, QoSProfile(depth=1, reliable=False))
 
-    def _collect_overrides(self, args):
-        overrides = {}
-        for path in args.params_files:
-            overrides.update({name: (value, path) for name, value in
-                              params_module.read_file(path, self._name).items()})
-        for node, name, value in args.params:
-            if node is None or node.lstrip('/') == self._name:
-                overrides[name] = (value, '-p')
-        return overrides
-
     def _on_clock(self, msg):
         self._clock.sim_time = Time.from_msg(msg.clock).nanoseconds
 
@@ -350,10 +350,8 @@ class Node:
         return self._namespace
 
     def resolve_topic_name(self, topic):
-        topic = _context.args.remaps.get(topic, topic)
-        if not topic.startswith('/'):
-            topic = self._namespace.rstrip('/') + '/' + topic
-        return _context.args.remaps.get(topic, topic)
+        return ros_args.resolve_topic(_context.args, topic, self._name, self._namespace,
+                                      self._original_name)
 
     # parameters
     def declare_parameter(self, name, value=None, descriptor=None):
@@ -362,9 +360,10 @@ class Node:
         if name in self._overrides:
             override, source = self._overrides[name]
             try:
-                value = _coerce(name, value, override)
+                check_override(self._name, name, value, override)
             except ParameterError as exc:
                 raise ParameterError(f'{source}: {exc}') from None
+            value = override
         self._parameters[name] = Parameter(name, value)
         return self._parameters[name]
 
@@ -469,3 +468,12 @@ def spin(node):
     """Run callbacks until `shutdown()` (or KeyboardInterrupt on SIGINT, as in rclpy)."""
     while ok():
         node._spin_once(None)
+
+
+def create_node(name):
+    return Node(name)
+
+
+def parameter_overrides(node):
+    """{name: value} of every parameter given to `node` (files, -p), declared or not."""
+    return {name: value for name, (value, _) in node._overrides.items()}

@@ -1,16 +1,30 @@
-"""`--ros-args` command-line parsing, the subset of ROS 2's syntax the nodes use.
+"""`--ros-args` on the DDS runtime: the subset of rcl's syntax the nodes use, with rcl's meaning.
 
-    node --ros-args --params-file F.yaml -p name:=value -r from:=to -r __node:=name
-         [--log-level LEVEL] [--]
+    node --ros-args --params-file F.yaml -p [node:]name:=value -r [node:]from:=to
+         -r __node:=name -r __ns:=/ns --log-level LEVEL [--]
 
 Everything outside `--ros-args ... [--]` is handed back untouched, as rclpy does. Values after `-p`
-are YAML (`-p gain:=2.5`, `-p names:="[a, b]"`), as in ROS 2. Mistakes raise `ParameterError`
-with one line naming the argument.
+are YAML (`-p gain:=2.5`, `-p names:="[a, b]"`). Mistakes raise `ParameterError` with one line
+naming the argument.
+
+What rcl does, and this module does the same (test_runtime_parameters.py runs the same cases on
+rclpy and on the DDS runtime):
+
+- Parameters. Every `--params-file` section and every `-p` rule is an entry keyed by a node name
+  (`-p name:=v` is `/**`, `-p node:name:=v` is `/node`). Entries are kept in the order their key
+  first appeared on the command line; a later value for the same key and name replaces the earlier
+  one in place. A node takes every entry that matches its fully qualified name
+  (`params.section_matches`), in that order, the later over the earlier. So a node's own section in
+  a file wins over `-p name:=v` given after it (that lands in the earlier `/**` entry); to override
+  a node's own section from the command line, name the node: `-p node:name:=v`.
+- Remapping. `from` and `to` are expanded in the node's namespace (`joint_states` in `/` is
+  `/joint_states`); the first matching rule wins; `node:from:=to` applies to that node only.
 """
 from dataclasses import dataclass, field
 
 import yaml
 
+from bellows_ros import params as params_module
 from bellows_ros.errors import ParameterError
 
 LOG_LEVELS = ('debug', 'info', 'warn', 'error', 'fatal')
@@ -18,17 +32,20 @@ LOG_LEVELS = ('debug', 'info', 'warn', 'error', 'fatal')
 
 @dataclass
 class RosArgs:
-    """What `--ros-args` said. `params` holds (node name or None, parameter name, value)."""
-    params_files: list = field(default_factory=list)
-    params: list = field(default_factory=list)
-    remaps: dict = field(default_factory=dict)
-    node_name: str = None
-    namespace: str = None
+    """What `--ros-args` said, in order.
+
+    `parameter_rules` holds ('file', path) and ('param', node or None, name, value); `remaps` holds
+    (node or None, from, to); `renames` holds (node or None, '__node' or '__ns', value).
+    """
+
+    parameter_rules: list = field(default_factory=list)
+    remaps: list = field(default_factory=list)
+    renames: list = field(default_factory=list)
     log_level: str = 'info'
 
 
 def parse(argv):
-    """Split `argv` (without the program name) into (RosArgs, the other arguments)."""
+    """Split `argv` into (RosArgs, the other arguments); ParameterError on a malformed argument."""
     ros, rest = RosArgs(), []
     inside = False
     items = iter(argv)
@@ -44,9 +61,9 @@ def parse(argv):
         elif arg == '--ros-args':
             continue
         elif arg == '--params-file':
-            ros.params_files.append(_value(items, arg))
+            ros.parameter_rules.append(('file', _value(items, arg)))
         elif arg in ('-p', '--param'):
-            ros.params.append(_parameter(_value(items, arg)))
+            ros.parameter_rules.append(('param', *_parameter(_value(items, arg))))
         elif arg in ('-r', '--remap'):
             _remap(ros, _value(items, arg))
         elif arg == '--log-level':
@@ -56,8 +73,8 @@ def parse(argv):
                                      f"(one of {', '.join(LOG_LEVELS)})")
             ros.log_level = level
         else:
-            raise ParameterError(f"--ros-args: unsupported argument '{arg}' "
-                                 "(supported: --params-file, -p, -r, --log-level)")
+            raise ParameterError(f"--ros-args: unknown argument '{arg}' (the DDS runtime "
+                                 'takes --params-file, -p, -r and --log-level)')
     return ros, rest
 
 
@@ -68,28 +85,100 @@ def _value(items, flag):
     return value
 
 
+def _is_name_token(text):
+    """rcl's name token: letters, digits and underscores, not starting with a digit."""
+    return bool(text) and text.replace('_', 'a').isalnum() and text.isascii() \
+        and not text[0].isdigit()
+
+
+def _node_prefix(text, flag):
+    """'node:rest' -> ('node', 'rest'); 'rest' -> (None, 'rest'). rcl takes a bare node name only."""
+    node, sep, rest = text.partition(':')
+    if not sep or rest.startswith('='):
+        return None, text
+    if not _is_name_token(node):
+        raise ParameterError(f"--ros-args {flag} '{text}': '{node}' is not a node name")
+    return node, rest
+
+
 def _parameter(text):
     """'name:=value' or 'node:name:=value' -> (node or None, name, value)."""
-    name, sep, value_text = text.partition(':=')
+    node, rule = _node_prefix(text, '-p')
+    name, sep, value_text = rule.partition(':=')
     if not sep or not name:
-        raise ParameterError(f"--ros-args -p '{text}': expected name:=value")
-    node, _, name = name.rpartition(':')
+        raise ParameterError(f"--ros-args -p '{text}': expected [node:]name:=value")
     try:
-        value = yaml.safe_load(value_text) if value_text.strip() else ''
+        value = params_module.parse_yaml(value_text) if value_text.strip() else ''
     except yaml.YAMLError:
         raise ParameterError(f"--ros-args -p '{text}': value is not valid YAML") from None
-    if not name:
-        raise ParameterError(f"--ros-args -p '{text}': empty parameter name")
-    return (node or None, name, value)
+    if isinstance(value, dict) or value is None:
+        raise ParameterError(f"--ros-args -p '{text}': value must be a scalar or a list")
+    return node, name, value
 
 
 def _remap(ros, text):
-    source, sep, target = text.partition(':=')
+    node, rule = _node_prefix(text, '-r')
+    source, sep, target = rule.partition(':=')
     if not sep or not source or not target:
-        raise ParameterError(f"--ros-args -r '{text}': expected from:=to")
-    if source == '__node' or source == '__name':
-        ros.node_name = target
+        raise ParameterError(f"--ros-args -r '{text}': expected [node:]from:=to")
+    if source in ('__node', '__name'):
+        if not _is_name_token(target):
+            raise ParameterError(f"--ros-args -r '{text}': '{target}' is not a valid node name")
+        ros.renames.append((node, '__node', target))
     elif source == '__ns':
-        ros.namespace = target if target.startswith('/') else '/' + target
+        namespace = target if target.startswith('/') else '/' + target
+        if namespace != '/' and not all(_is_name_token(t) for t in namespace[1:].split('/')):
+            raise ParameterError(f"--ros-args -r '{text}': '{target}' is not a valid namespace")
+        ros.renames.append((node, '__ns', namespace))
     else:
-        ros.remaps[source] = target
+        ros.remaps.append((node, source, target))
+
+
+def node_identity(ros, name, namespace='/'):
+    """(name, namespace) of a node created as `name` in `namespace`, after `__node` / `__ns`."""
+    original = name
+    for node, kind, value in ros.renames:
+        if node is None or node == original:
+            if kind == '__node':
+                name = value
+            else:
+                namespace = value
+    return name, namespace
+
+
+def expand(topic, node_name, namespace):
+    """A topic name made fully qualified in the node's namespace (`~` is the node's own name)."""
+    base = namespace.rstrip('/')
+    if topic.startswith('~'):
+        return f'{base}/{node_name}' + topic[1:]
+    return topic if topic.startswith('/') else f'{base}/{topic}'
+
+
+def resolve_topic(ros, topic, node_name, namespace, original_name=None):
+    """The fully qualified topic a node publishes or subscribes to, after remapping."""
+    resolved = expand(topic, node_name, namespace)
+    for node, source, target in ros.remaps:
+        if node is not None and node not in (node_name, original_name):
+            continue
+        if expand(source, node_name, namespace) == resolved:
+            return expand(target, node_name, namespace)
+    return resolved
+
+
+def parameter_overrides(ros, node_fqn):
+    """{name: (value, source)} of every parameter given for the node `node_fqn` (rcl's order)."""
+    entries = {}  # node key -> {name: (value, source)}, in order of first appearance
+    for rule in ros.parameter_rules:
+        if rule[0] == 'file':
+            for section, values in params_module.read_sections(rule[1]).items():
+                entry = entries.setdefault(section, {})
+                entry.update({name: (value, rule[1]) for name, value in values.items()})
+        else:
+            _, node, name, value = rule
+            entries.setdefault('/' + node if node else params_module.WILDCARD, {})[name] = \
+                (value, '-p')
+    overrides = {}
+    for section, values in entries.items():
+        if params_module.section_matches(section, node_fqn):
+            overrides.update(values)
+    return overrides

@@ -1,0 +1,211 @@
+"""The one interface every bellows node is written against, and `main`, which picks the runtime.
+
+A bellows node subclasses `Node` and gets the runtime it runs on as its constructor's argument::
+
+    class Talker(Node):
+        def __init__(self, runtime):
+            super().__init__('talker', runtime)
+            self.pub = self.create_publisher(self.msg.Float64, '/x', 10)
+
+    def main(args=None):
+        return run(Talker, args)
+
+`Node` is narrow on purpose: parameters (`declare_parameter`, `get_parameter`, `has_parameter`),
+`create_publisher`, `create_subscription`, `create_timer`, `get_logger`, `get_clock`, `get_name`,
+`get_namespace`, `destroy_node`, and `msg` (the message classes: JointState, WrenchStamped,
+Float64, DiagnosticArray, DiagnosticStatus, KeyValue, Clock, Header, Time). Publishers,
+subscriptions, timers, loggers and clocks are the runtime's own objects with rclpy's methods
+(`publish`, `wait_for_all_acked`, `get_subscription_count`, `now`, ...).
+
+A runtime is a module with the same names in both implementations (`rclpy_runtime`, `dds_node`):
+`NAME`, `msg`, `Time`, `Duration`, `SENSOR_DATA`, `init(args)`, `create_node(name)`, `spin(node)`,
+`spin_once(node, timeout_sec)`, `ok()`, `shutdown()`, `parameter_overrides(node)` and the
+exception tuples `INTERRUPTED` and `USER_ERRORS`. `select_runtime` picks one, once, in `run`:
+`$BELLOWS_RUNTIME` = `rclpy` or `dds`, else rclpy when it imports.
+"""
+import gc
+import importlib
+import os
+import signal
+import sys
+
+from bellows_ros.errors import BellowsError, ParameterError
+
+RUNTIMES = {'rclpy': 'bellows_ros.runtime.rclpy_runtime', 'dds': 'bellows_ros.runtime.dds_node'}
+
+
+def select_runtime(choice=None):
+    """The runtime module: `choice` or `$BELLOWS_RUNTIME` ('rclpy', 'dds'), else rclpy if it imports.
+
+    Raises ParameterError for an unknown choice, or when rclpy was asked for and does not import.
+    """
+    choice = (choice or os.environ.get('BELLOWS_RUNTIME', '')).strip().lower()
+    if choice and choice not in RUNTIMES:
+        raise ParameterError(f"BELLOWS_RUNTIME='{choice}': expected one of {', '.join(RUNTIMES)}")
+    if choice != 'dds':
+        try:
+            return importlib.import_module(RUNTIMES['rclpy'])
+        except ImportError as exc:
+            if choice == 'rclpy':
+                raise ParameterError(f'BELLOWS_RUNTIME=rclpy: rclpy does not import ({exc}); '
+                                     'source your ROS 2 setup.bash') from None
+    return importlib.import_module(RUNTIMES['dds'])
+
+
+def stamp_ns(stamp):
+    """builtin_interfaces/Time -> integer nanoseconds."""
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
+
+
+# rcl's parameter types, as rclpy names them in its errors.
+def parameter_type(value):
+    """rcl's type name for a parameter value ('double', 'integer_array', ...)."""
+    if isinstance(value, (list, tuple)):
+        if not value:
+            return 'array'
+        kinds = {parameter_type(v) for v in value}
+        return f'{kinds.pop()}_array' if len(kinds) == 1 else 'mixed array'
+    for kind, name in ((bool, 'bool'), (int, 'integer'), (float, 'double'), (str, 'string')):
+        if isinstance(value, kind):
+            return name
+    return type(value).__name__
+
+
+def check_override(node_name, name, default, override):
+    """ParameterError when `override` does not have the type of the declared `default` (rcl's rule:
+    no conversion, not even integer to double)."""
+    if default is None:
+        return
+    expected, given = parameter_type(default), parameter_type(override)
+    if given == expected or (given == 'array' and expected.endswith('_array')) \
+            or (expected == 'array' and given.endswith('_array')):
+        return
+    hint = ' (write it with a decimal point)' if (expected, given) == ('double', 'integer') else ''
+    raise ParameterError(f"{node_name}: parameter '{name}' must be {_article(expected)}, "
+                         f'got {_article(given)} {override!r}{hint}')
+
+
+def _article(kind):
+    return ('an ' if kind[0] in 'aeiou' else 'a ') + kind.replace('_', ' ')
+
+
+class Node:
+    """A bellows node on either runtime: the narrow interface (see the module docstring)."""
+
+    def __init__(self, node_name, runtime):
+        self.runtime = runtime
+        self.msg = runtime.msg
+        self._node = runtime.create_node(node_name)
+        self._overrides = runtime.parameter_overrides(self._node)
+
+    # parameters
+    def declare_parameter(self, name, value):
+        """Declare `name` with default `value`; an override of another type is a ParameterError."""
+        if name in self._overrides:
+            check_override(self.get_name(), name, value, self._overrides[name])
+        return self._node.declare_parameter(name, value)
+
+    def get_parameter(self, name):
+        return self._node.get_parameter(name)
+
+    def has_parameter(self, name):
+        return self._node.has_parameter(name)
+
+    def check_parameters(self):
+        """ParameterError for a given parameter (file or -p) the node does not declare."""
+        unknown = [name for name in self._overrides if not self.has_parameter(name)]
+        if unknown:
+            raise ParameterError(f"parameters: unknown parameter '{unknown[0]}' for node "
+                                 f"'{self.get_name()}'")
+
+    # communication
+    def create_publisher(self, msg_type, topic, qos_profile):
+        return self._node.create_publisher(msg_type, topic, qos_profile)
+
+    def create_subscription(self, msg_type, topic, callback, qos_profile):
+        return self._node.create_subscription(msg_type, topic, callback, qos_profile)
+
+    def create_timer(self, period, callback):
+        return self._node.create_timer(period, callback)
+
+    # the rest
+    def get_logger(self):
+        return self._node.get_logger()
+
+    def get_clock(self):
+        return self._node.get_clock()
+
+    def get_name(self):
+        return self._node.get_name()
+
+    def get_namespace(self):
+        return self._node.get_namespace()
+
+    def destroy_node(self):
+        self._node.destroy_node()
+
+
+def _raise_interrupt(signum, frame):
+    raise KeyboardInterrupt
+
+
+def run(node_class, args=None, runtime=None):
+    """Run one node until Ctrl-C/SIGTERM; a user mistake is one line on stderr and exit status 2.
+
+    Picks the runtime (`select_runtime`) unless one is given, builds `node_class(runtime)`, which
+    must declare its parameters up front, then checks that every given parameter was declared.
+    A node with a `done` attribute runs until it is true, then `finish()` is called (the scenario).
+    A node may define `close()` for its own clean-up (devices, threads); it runs before shutdown.
+    A node that declares `realtime_priority` and `cpu_latency_limit` gets them here
+    (`realtime.request`, `realtime.limit_cpu_latency`), the latter until it shuts down.
+    """
+    from bellows_ros.runtime import realtime
+
+    program = os.path.basename(sys.argv[0]) if args is None else node_class.__name__
+    signal.signal(signal.SIGTERM, _raise_interrupt)
+    # A shell starts background jobs with SIGINT ignored; ros2 launch stops nodes with SIGINT.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    node = None
+    latency_request = None
+    try:
+        runtime = runtime or select_runtime()
+        runtime.init(args)
+        node = node_class(runtime)
+        node.check_parameters()
+        realtime.request(node)
+        latency_request = realtime.limit_cpu_latency(node)
+        # Everything built so far (modules, type store, model tables) lives as long as the node:
+        # keep the cyclic collector from walking it again and again in the 1 kHz callbacks.
+        gc.freeze()
+        if hasattr(node, 'done'):  # a node with an end: spin until it says so, then finish
+            while not node.done:
+                runtime.spin_once(node._node, timeout_sec=0.05)
+            node.finish()
+        else:
+            runtime.spin(node._node)
+    except KeyboardInterrupt:
+        pass
+    except Exception as exc:
+        # rcl's own argument and parameter errors are user mistakes too; a signal that shut
+        # rclpy's context down ends the spin with its own exception.
+        if isinstance(exc, BellowsError) or (runtime and isinstance(exc, runtime.USER_ERRORS)):
+            return _user_error(program, exc)
+        if not (runtime and isinstance(exc, runtime.INTERRUPTED)):
+            raise
+    finally:
+        if node is not None:
+            if hasattr(node, 'close'):
+                node.close()
+            node.destroy_node()
+        if runtime is not None and runtime.ok():
+            runtime.shutdown()
+        if latency_request is not None:
+            os.close(latency_request)
+    return 0
+
+
+def _user_error(program, exc):
+    message = ' '.join(str(exc).split())  # rcl's messages span lines
+    message = message.removeprefix(f'{program}: ')  # node errors often name the node already
+    print(f'{program}: error: {message}', file=sys.stderr, flush=True)
+    return 2
