@@ -1,5 +1,8 @@
-"""The documentation stays true: no file points outside the repository, and docs/equations.md names
-only functions and tests that exist."""
+"""The documentation stays true to the repository.
+
+No tracked file points at notes or paths outside the repository, and docs/equations.md names only
+functions and tests that exist, so the reference cannot rot silently.
+"""
 import ast
 import importlib
 import re
