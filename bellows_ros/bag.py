@@ -1,4 +1,4 @@
-"""rosbag2 recordings (sqlite3 or MCAP) as data tables (DESIGN.md "Data files").
+"""rosbag2 recordings (sqlite3 or MCAP) as data tables (docs/interfaces.md "Data files").
 
 The rows are the `/joint_states` samples of the wanted device group; pressures (`/bellows/chambers`)
 and the force/torque sensor (`/bellows/wrench`) are aligned onto them by stamp, zero-order hold:
@@ -79,7 +79,7 @@ def _hold(sample_stamps, stamps, values):
 
 
 def read_bag_table(path, system):
-    """Read a rosbag2 directory into a `Table` with the DESIGN.md columns of `system`."""
+    """A rosbag2 directory as a `Table` with the columns of `system` (docs/interfaces.md)."""
     path = Path(path)
     typestore = get_typestore(Stores.ROS2_JAZZY)
     try:

@@ -1,4 +1,4 @@
-"""Measured and simulated data files (DESIGN.md "Data files").
+"""Measured and simulated data files (docs/interfaces.md "Data files").
 
 CSV with a header row, SI units, one row per sample. Every problem is reported as a `DataError`
 naming the file, the line (header = line 1) and the column. Extra columns are carried along

@@ -14,7 +14,7 @@ from bellows_ros.cli import main
 from bellows_ros.models.actuator import load_actuator_params
 from bellows_ros.models.actuator_experiments import actuator_record
 
-DESIGN_KEYS = {'system', 'baseline', 'cause', 'extended', 'gain', 'causes', 'unexplained', 'candidates'}
+REPORT_KEYS = {'system', 'baseline', 'cause', 'extended', 'gain', 'causes', 'unexplained', 'candidates'}
 DURATION = 30.0
 
 # Realistic magnitudes of each effect, drawn at random; 'truth' names the fitted parameter to check.
@@ -58,7 +58,7 @@ def hidden(tmp_path, effects, seed):
 def test_names_the_hidden_cause(tmp_path, cause):
     data, chosen = hidden(tmp_path, [cause], seed=100 + sorted(EFFECTS).index(cause))
     report, _ = diagnose(tmp_path, data)
-    assert set(report) == DESIGN_KEYS
+    assert set(report) == REPORT_KEYS
     assert report['cause'] == cause
     assert report['causes'] == [cause]
     assert report['gain'] >= 0.30

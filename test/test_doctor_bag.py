@@ -1,4 +1,4 @@
-"""The model doctor reads a rosbag2 recording with the DESIGN.md topics and names a hidden effect.
+"""The model doctor reads a rosbag2 recording (topics: docs/interfaces.md), names a hidden effect.
 
 The bag is written here with rosbags' own writer and the ROS 2 Jazzy type store: joint states
 (`air_chamber`, `spring`), chamber pressure (`actuator`) and the spring force (wrench, frame

@@ -1,4 +1,4 @@
-"""The simulated segment: effects (DESIGN.md vocabulary), valve lag, sensor lag, noise, free motion."""
+"""The simulated segment: effects (doctor's vocabulary), valve and sensor lag, noise, free motion."""
 import math
 
 import numpy as np

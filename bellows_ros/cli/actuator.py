@@ -1,4 +1,4 @@
-"""`bellows simulate actuator` and `bellows identify actuator` (DESIGN.md, docs/actuator.md)."""
+"""`bellows simulate|identify actuator` (docs/interfaces.md, docs/actuator.md)."""
 import sys
 
 import numpy as np

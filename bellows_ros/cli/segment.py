@@ -1,4 +1,4 @@
-"""`bellows simulate segment` and `bellows identify segment` (DESIGN.md "The bellows command").
+"""`bellows simulate segment` and `bellows identify segment` (docs/interfaces.md).
 
 simulate: without --effect the paper-A model runs over the input rows (strain memory carried from
 row to row) and the columns sa1, sa2, tau_a, tau_s, tau_f, tau_drive, tau_prev are appended. With

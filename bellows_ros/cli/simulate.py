@@ -6,7 +6,7 @@ from bellows_ros.cli.effects import parse_effect
 
 def add_arguments(parser):
     parser.add_argument('system', choices=('segment', 'actuator'))
-    parser.add_argument('--input', required=True, metavar='IN.csv', help='input samples (DESIGN.md columns)')
+    parser.add_argument('--input', required=True, metavar='IN.csv', help='input samples (docs/interfaces.md)')
     parser.add_argument('--output', required=True, metavar='OUT.csv', help='input columns plus model outputs')
     parser.add_argument('--params', metavar='P.yaml', help='parameters laid over config/<system>.yaml')
     parser.add_argument('--effect', action='append', default=[], metavar='NAME[:k=v,...]',

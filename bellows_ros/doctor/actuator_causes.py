@@ -1,13 +1,13 @@
 """The actuator's baseline and its candidate causes, as physically parameterised extensions.
 
-Baseline (DESIGN.md "Baselines"): paper B's gas law (17) with the purely geometric volume (2-4, no
+Baseline (docs/doctor.md): paper B's gas law (17) with the purely geometric volume (2-4, no
 E_V), isothermal sealed gas; the gas amount (as `p_ref`), `v_tube` and the zero of the motor
 encoder (`x_c_offset`, within ±1 mm: on a rig the encoder's zero is set by homing and is as unknown
 as the tube volume) are refitted to the data. The doctor compares the predicted system pressure
 with the measured one (Pa); the force follows from the pressure (7-12), so every cause below shows
 first in the pressure.
 
-Each cause adds the missing physics with its own physical parameters (MODEL.md, config/actuator.yaml
+Each cause adds the missing physics with its own parameters (docs/doctor.md, config/actuator.yaml
 `actuator.effects`):
 - air_leak: volume flow C (P - P_atm) out of the sealed gas; the gas amount N = P V then follows
   dN/dt = -C P (P - P_atm) (isothermal outflow at the chamber pressure).

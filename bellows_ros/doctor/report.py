@@ -1,7 +1,7 @@
 """`bellows diagnose`: run the doctor and write DIR/report.json, report.md, extended.yaml, details.json
 and the PNG plots.
 
-report.json has exactly the keys of DESIGN.md; everything else (per-candidate gains, the decision,
+report.json has just the keys of docs/interfaces.md; all else (per-candidate gains, the decision,
 the residual evidence, timings) goes to details.json.
 """
 import json
@@ -35,7 +35,7 @@ def _number(value):
 
 
 def report_dict(d):
-    """report.json (DESIGN.md keys)."""
+    """report.json (the keys of docs/interfaces.md)."""
     candidates = []
     for cause, candidate in d.candidates.items():
         params = {}

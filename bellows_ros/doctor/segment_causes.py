@@ -4,11 +4,11 @@ What is compared: the driving torque the record implies, Y = τ_motion - τ_ext 
 driving torque. τ_motion comes from the record's `tau_motion` column, else from the equation of
 motion (2) with `segment.dynamics` (quasi-static by default: Y = -τ_ext).
 
-Baseline (DESIGN.md "Baselines"): paper A's previous model (34) with constant friction (c_f only)
+Baseline (docs/doctor.md): paper A's previous model (34) with constant friction (c_f only)
 and no natural curvature (Ψ_j0 = 0, no k_s,p): Y = X_prev θ_prev + 2Ψ k_s + tanh(c_vel Ψ̇) c_f, all
 linear coefficients solved by least squares (32) on the training rows.
 
-Each cause adds the missing piece (paper A; MODEL.md):
+Each cause adds the missing piece (paper A; docs/equations.md):
 - contact_hysteresis: X_prev is swapped for the membrane-contact actuator torque (29), X_a(s̃_a),
   with s̃_a carried along the record by the no-slip strain memory (Algorithm 1) for the material and
   geometry of the parameter file; θ_a refitted.

@@ -68,7 +68,7 @@ def load_config(params_path=None, actuator_params_path=None):
 
 @dataclasses.dataclass(frozen=True)
 class ActuatorSample:
-    """One good telemetry frame in SI units (names as the `actuator` data columns of DESIGN.md).
+    """One good telemetry frame in SI units (names: `actuator` columns of docs/interfaces.md).
 
     t_receive: time.monotonic() at reception, s; t_device: board clock (unwrapped), s; index:
     sequence number, unwrapped (starts at the first frame's seq when the port (re)opens); x_c:

@@ -1,6 +1,6 @@
 """Absolute-deadline periodic loops and their timing statistics (no ROS).
 
-Used by the simulated devices, the drivers and the nodes for every 1 kHz loop (DESIGN.md "Timing")::
+Used by the simulated devices, drivers and nodes for every 1 kHz loop (docs/nodes.md, "Timing")::
 
     stats = LoopStats()
     loop = PeriodicLoop(period=1e-3, stats=stats)

@@ -185,7 +185,7 @@ def _bounds():
 def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=150, screen=32,
                 progress=True, input_cutoff=None, search_rows=SEARCH_ROWS, refine_rows=REFINE_ROWS,
                 polish_evaluations=POLISH_EVALUATIONS):
-    """Fit paper A's model to `record` (dict of arrays, DESIGN.md segment columns); returns a `Fit`.
+    """Fit paper A's model to `record` (arrays, columns of docs/interfaces.md); returns a `Fit`.
 
     `params` gives the fixed geometry and one candidate start. Search, on at most `search_rows` evenly
     strided rows of the training part:

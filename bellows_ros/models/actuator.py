@@ -317,7 +317,7 @@ def _forward(params, x_c, x_s, amount, exp):
     gauge = p - P_ATM
     force = gauge * area                                # (9)
     stiffness = dp_dx * area + gauge * (d_area_dx + d_area_dp * dp_dx)
-    # F_MTS: polynomial fitted to the unpressurised spring (MODEL.md [choice] for the FEA curve).
+    # F_MTS: polynomial fitted to the unpressurised spring ([choice] for paper B's FEA curve).
     power, f_mts, k_mts = 1.0, 0.0, 0.0
     for i, coefficient in enumerate(params.f_mts):
         k_mts = k_mts + (i + 1) * coefficient * power

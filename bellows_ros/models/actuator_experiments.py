@@ -5,7 +5,7 @@
   steps at full speed, ramps at several speeds, holds, frequent direction reversals;
 - spring, moved like the paper's MTS test machine: triangle compression cycles 0 -> 8..20 mm at
   several rates, holds, and fast 50 ms compressions held for a few seconds (these show heating).
-Columns are DESIGN.md's `t, x_c, x_s, p, f`, with x_c read from the motor encoder (the nut, not the
+Columns `t, x_c, x_s, p, f` (docs/interfaces.md), x_c read from the motor encoder (the nut, not the
 plate: with backlash they differ).
 """
 import numpy as np
@@ -96,7 +96,7 @@ def spring_programme(rng, n, dt):
 
 def actuator_record(params, effects=None, noise=None, seed=None, duration=60.0, dt=1e-3,
                     x_c_range=(-0.020, 0.040), gas=None, x_c0=None, monotone=False):
-    """Simulated measurement: dict of arrays `t, x_c, x_s, p, f` (DESIGN.md actuator columns).
+    """Simulated measurement: dict of arrays `t, x_c, x_s, p, f` (docs/interfaces.md).
 
     params: ActuatorParams; effects/noise: as `ActuatorPlant`; seed: for the programme and noise;
     duration s; dt s; x_c_range: the span of chamber targets, m; gas: the sealed gas amount as p_ref,

@@ -2,7 +2,7 @@
 
 A bellows is n identical segments, each two conical frusta of opposite orientation (Table II). The
 per-segment compression is Δh = h0 - h; the bellows' total compression is x = n Δh (positive =
-compressed, negative = extended), as in MODEL.md.
+compressed, negative = extended), as in docs/equations.md.
 
 Every function here accepts Python floats or NumPy arrays alike (only `+ - * / **` are used), so
 the fast scalar path of `actuator.evaluate` and the vectorised `evaluate_array` share one set of

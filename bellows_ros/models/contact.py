@@ -5,8 +5,8 @@ The material lying on the rib keeps the stretch it had when it touched down (no 
 arc follows the current pressure and joint angle. That memory is why the same (p, Ψ) reached along two
 paths gives two contact lengths s̃_a and two actuator torques (the hysteresis of paper A, Fig. 10/11).
 
-Geometry of one chain (MODEL.md "Contact geometry"), lengths in m, angles in rad:
-    α = -½ σ_j ψ_4 with ψ_4 = Ψ/4 (13, MODEL.md [choice] sign and equal joints)
+Geometry of one chain (docs/equations.md, A(20)-A(28)), lengths in m, angles in rad:
+    α = -½ σ_j ψ_4 with ψ_4 = Ψ/4 (13; [choice] sign and equal joints)
     R = l0 + (s0 + s̃_a) tan α (20),   β = π/2 + α (21)
     a = 1 - R β / (λ1 l0 π/2) (23-25), clamped to [0, 1)
 """
@@ -18,7 +18,7 @@ HALF_PI = 0.5 * math.pi
 
 
 def contact_angle(psi, sign):
-    """α_j = -½ σ_j ψ_4 with ψ_4 = Ψ/4 (13; MODEL.md [choice]: equal joints, sign from Fig. 10), rad."""
+    """α_j = -½ σ_j ψ_4 with ψ_4 = Ψ/4 (13; [choice]: equal joints, sign from Fig. 10), rad."""
     return -0.125 * sign * psi
 
 
@@ -59,7 +59,7 @@ class StrainMemory:
         (rad); returns the contact length s̃_a (m) after the update.
 
         1. s̃_a from the stored profile (28), clamped to [0, sa_max]; 2. R, β (20, 21);
-        3. λ1 of the free membrane (22); 4. a (25) and n = ceil(a Nλ) (MODEL.md [choice], 0-based);
+        3. λ1 of the free membrane (22); 4. a (25) and n = ceil(a Nλ) ([choice], 0-based);
         5. release samples beyond n, give λ1 to empty samples ≤ n and to sample n (continuity, 26);
         then s̃_a again from the updated profile (28). One iteration per time step (Appendix A/B).
         """

@@ -3,7 +3,7 @@
 The membrane is incompressible (λ1 λ2 λ3 = 1) with no transverse strain (λ2 = 1), so everything is a
 function of the longitudinal stretch λ1 alone. Paper A uses N = 2 Ogden terms with μ_k > 0 and γ_k > 2
 (the convergence condition of Appendix B); the functions here take the two terms as scalars because
-the solver sits in the 1 kHz loop (MODEL.md "Ogden material").
+the solver sits in the 1 kHz loop (docs/equations.md, A(11)-A(15)).
 
 Units: μ_k in N/m (membrane stress resultant per unit width), T in N/m, p_rel in Pa, R in m.
 """
@@ -33,7 +33,7 @@ def free_strain(load, mu1, mu2, gamma1, gamma2, guess=1.0):
     """Stretch λ1 ≥ 1 of the free membrane: solve p_rel·R = T(λ1) (22); `load` = p_rel·R in N/m.
 
     T is strictly increasing on λ1 ≥ 1 for γ_k > 1 and T(1) = 0, so the root is unique; a load ≤ 0
-    (vented or sucked chain) leaves the membrane unstretched, λ1 = 1 (MODEL.md). NaN gives NaN.
+    (vented or sucked chain) leaves the membrane unstretched, λ1 = 1 (see A(22)). NaN gives NaN.
 
     Solved for u = ln λ1 with expm1 so that λ1 - 1 keeps full relative precision for tiny loads:
     safeguarded Newton inside the bracket [0, u_hi] (a bisection step whenever Newton leaves it).

@@ -2,13 +2,13 @@
 
 τ_drive = τ_a + τ_s + τ_f (2), with
 - τ_a, actuator torque (29): Σ_j σ_j x_a,jᵀ θ_a, x_a,j = p_j [1, s_j, s_j², s_j p_j, s_j Ψ_j, s_j Ψ_j²,
-  p_j Ψ_j, Ψ_j²] (MODEL.md [choice] for the garbled regressor), s_j = s̃_a of chain j from the
+  p_j Ψ_j, Ψ_j²] ([choice] for the garbled regressor), s_j = s̃_a of chain j from the
   no-slip strain memory (`bellows_ros.models.contact`, Algorithm 1);
 - τ_s, restoring torque (3, 4): Σ_j (Ψ - Ψ_j0)(k_s + k_s,p p_j), Ψ_j0 = σ_j c_Ψ0,p tanh(c_Ψ0 p_j);
 - τ_f, friction torque (5): tanh(c_vel Ψ̇)(c_f + c_f,p Σ_j p_j);
-- τ_prev, the previous model (34): τ_f + τ_s + Σ_j σ_j p_j [1, p_j, Ψ_j, p_j²] θ_prev (MODEL.md [choice]).
+- τ_prev, the previous model (34): τ_f + τ_s + Σ_j σ_j p_j [1, p_j, Ψ_j, p_j²] θ_prev ([choice]).
 Here p_j is the scaled pressure p_scl,j = (p_j - p0)/(p_max - p0), Ψ_j = σ_j Ψ, σ = (+1, -1)
-(mirrored chains, MODEL.md [choice]). τ_prev is, like τ_drive, a driving torque: on a quasi-static
+(mirrored chains, [choice]). τ_prev is, like τ_drive, a driving torque: on a quasi-static
 bench both predict -τ_ext.
 
 Two implementations of the same formulas exist on purpose: NumPy regressors (identification, batch)
@@ -24,7 +24,7 @@ from bellows_ros import params as parameters
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.contact import StrainMemory, contact_angle
 
-SIGNS = (1.0, -1.0)  # σ_j of chains 1 and 2 (MODEL.md [choice])
+SIGNS = (1.0, -1.0)  # σ_j of chains 1 and 2 ([choice], docs/equations.md)
 OUTPUTS = ('sa1', 'sa2', 'tau_a', 'tau_s', 'tau_f', 'tau_drive', 'tau_prev')
 
 
@@ -148,7 +148,7 @@ def strain_memory(p):
 # --- regressors (NumPy, one row per sample) -------------------------------------------------------
 
 def scaled_pressure(p, pressure):
-    """p_scl = (p - p0)/(p_max - p0), 1 (MODEL.md [choice] p_max)."""
+    """p_scl = (p - p0)/(p_max - p0), 1 ([choice] p_max)."""
     return (np.asarray(pressure, float) - p.p0) / (p.p_max - p.p0)
 
 
@@ -164,7 +164,7 @@ def actuator_regressor(psi, ps1, ps2, sa1, sa2):
 
 
 def natural_curvature(ps, sign, c_psi0, c_psi0_p):
-    """Ψ_j0(p) = σ_j c_Ψ0,p tanh(c_Ψ0 p_scl,j), rad (4; MODEL.md [choice], zero at ambient)."""
+    """Ψ_j0(p) = σ_j c_Ψ0,p tanh(c_Ψ0 p_scl,j), rad (4; [choice], zero at ambient)."""
     return sign * c_psi0_p * np.tanh(c_psi0 * ps)
 
 

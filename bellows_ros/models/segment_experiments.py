@@ -1,7 +1,7 @@
 """Experiments on the simulated segment, like paper A's test-bench measurements (angle imposed by an
 external force, pressures set by a pressure controller, torque from a force-torque sensor).
 
-Each returns the DESIGN.md segment columns `t, psi, p1, p2, tau_ext, psi_dot` plus `tau_motion`
+Each returns the segment data columns `t, psi, p1, p2, tau_ext, psi_dot` plus `tau_motion`
 (M Ψ̈ + C Ψ̇ + N of the plant, which a bench computes from the known mechanics) as a dict of arrays of
 *measured* values. Deterministic for a given seed.
 """

@@ -1,9 +1,9 @@
 """Simulated arm segment: the driving-torque physics plus dynamics, valves, sensors and switchable
 effects. The simulated hardware and the tests use it as "the real segment".
 
-With no effects the plant *is* the model doctor's baseline (DESIGN.md): the previous model (34) with
+With no effects the plant *is* the doctor's baseline (docs/doctor.md): the previous model (34) with
 constant friction (c_f only) and no natural curvature (Ψ_j0 = 0, k_s,p = 0). Each effect switches on
-one piece of missing physics (DESIGN.md segment vocabulary, `SEGMENT_EFFECTS`):
+one piece of missing physics (the doctor's segment vocabulary, `SEGMENT_EFFECTS`):
 
 - `contact_hysteresis`: the actuator torque is paper A's membrane-contact torque (29) with the no-slip
   strain memory (Algorithm 1) instead of the pressure polynomial of (34). No parameters.

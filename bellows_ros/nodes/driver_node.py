@@ -1,6 +1,6 @@
 """driver_node: the arm on CAN and/or the actuator on serial, wired to the topic contract.
 
-Publishes one message per device sample and group (DESIGN.md): `/joint_states`, `/bellows/chambers`,
+One message per device sample and group (docs/interfaces.md): `/joint_states`, `/bellows/chambers`,
 and for the actuator's load cell `/bellows/wrench` (frame `actuator`, force.z = spring force). The
 devices' 1 kHz sampling is the clock: messages go out from the drivers' reader threads as each
 sample arrives, stamped with the node clock at arrival; there is no ROS timer at 1 kHz.

@@ -1,0 +1,103 @@
+"""The documentation stays true to the repository.
+
+No tracked file points at notes or paths outside the repository, and docs/equations.md names only
+functions and tests that exist, so the reference cannot rot silently.
+"""
+import ast
+import importlib
+import re
+import subprocess
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+EQUATIONS = ROOT / 'docs' / 'equations.md'
+
+# Built from pieces so that this file does not match itself.
+FORBIDDEN = [re.compile(pattern) for pattern in (
+    r'DESIGN' + r'\.md', r'MODEL' + r'\.md', r'\.\./' + r'shared', r'(?<![\w.])/' + r'work/',
+    r'(?<![\w.])/' + r'root/')]
+FUNCTION = re.compile(r'`(bellows_ros(?:\.\w+)+)`')
+TEST = re.compile(r'`(test/(test_\w+\.py)::(test_\w+))`')
+
+
+def tracked_files():
+    try:
+        listed = subprocess.run(['git', 'ls-files', '-z'], cwd=ROOT, capture_output=True,
+                                check=True).stdout.decode().split('\0')
+    except (OSError, subprocess.CalledProcessError):  # not a git checkout (e.g. an sdist)
+        pytest.skip('not a git checkout')
+    return [ROOT / name for name in listed if name and (ROOT / name).is_file()]
+
+
+def test_no_file_names_a_document_or_path_outside_the_repository():
+    found = []
+    for path in tracked_files():
+        text = path.read_bytes().decode('utf-8', errors='replace')
+        for number, line in enumerate(text.splitlines(), 1):
+            if any(pattern.search(line) for pattern in FORBIDDEN):
+                found.append(f'{path.relative_to(ROOT)}:{number}: {line.strip()}')
+    assert not found, 'references outside the repository:\n' + '\n'.join(found)
+
+
+def test_the_forbidden_patterns_catch_what_they_should():
+    for line in ('see ' + 'DESIGN' + '.md', '`' + 'MODEL' + '.md` [choice]',
+                 '../' + 'shared/x', 'cd /' + 'work/main', 'in /' + 'root/.cache'):
+        assert any(pattern.search(line) for pattern in FORBIDDEN), line
+    for line in ('docs/equations.md', 'DESIGN_KEYS', '/tmp/run', 'a/work/b'):
+        assert not any(pattern.search(line) for pattern in FORBIDDEN), line
+
+
+def resolve(dotted):
+    """Import the longest module prefix of `dotted`, then follow attributes; raise if missing."""
+    parts = dotted.split('.')
+    for cut in range(len(parts), 0, -1):
+        try:
+            target = importlib.import_module('.'.join(parts[:cut]))
+        except ModuleNotFoundError:
+            continue
+        for name in parts[cut:]:
+            target = getattr(target, name)
+        return target
+    raise ModuleNotFoundError(dotted)
+
+
+def test_every_function_named_in_equations_md_exists():
+    names = sorted(set(FUNCTION.findall(EQUATIONS.read_text())))
+    assert len(names) > 30  # the page really names the code
+    missing = []
+    for name in names:
+        try:
+            resolve(name)
+        except (ImportError, AttributeError) as exc:
+            missing.append(f'{name}: {exc}')
+    assert not missing, 'docs/equations.md names what does not exist:\n' + '\n'.join(missing)
+
+
+def test_every_test_named_in_equations_md_exists():
+    references = sorted(set(TEST.findall(EQUATIONS.read_text())))
+    assert len(references) > 20
+    missing = []
+    for full, file_name, test_name in references:
+        path = ROOT / 'test' / file_name
+        if not path.is_file():
+            missing.append(f'{full}: no such file')
+            continue
+        defined = {node.name for node in ast.walk(ast.parse(path.read_text()))
+                   if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef))}
+        if test_name not in defined:
+            missing.append(f'{full}: no such test')
+    assert not missing, 'docs/equations.md names tests that do not exist:\n' + '\n'.join(missing)
+
+
+def test_every_equation_cited_as_a_or_b_in_the_code_is_in_equations_md():
+    """A docstring citing A(n) or B(n) points at a section that exists."""
+    text = EQUATIONS.read_text()
+    documented = set(re.findall(r'\b([AB])\((\d+)\)', text))
+    for n in re.findall(r'\b([AB])\((\d+)\)-\1\((\d+)\)', text):
+        documented.update((n[0], str(k)) for k in range(int(n[1]), int(n[2]) + 1))
+    cited = set()
+    for path in (ROOT / 'bellows_ros').rglob('*.py'):
+        cited.update(re.findall(r'\b([AB])\((\d+)\)', path.read_text()))
+    assert cited <= documented, sorted(cited - documented)
