@@ -115,8 +115,9 @@ class Node:
         """ParameterError for a given parameter (file or -p) the node does not declare."""
         unknown = [name for name in self._overrides if not self.has_parameter(name)]
         if unknown:
-            raise ParameterError(f"parameters: unknown parameter '{unknown[0]}' for node "
-                                 f"'{self.get_name()}'")
+            raise ParameterError(f"unknown parameter '{unknown[0]}' for node '{self.get_name()}' "
+                                 '(given in a params file or with -p; the node has no such '
+                                 'parameter)')
 
     # communication
     def create_publisher(self, msg_type, topic, qos_profile):

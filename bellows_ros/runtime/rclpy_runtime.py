@@ -3,6 +3,7 @@
 The same names as the DDS runtime (`dds_node`), so `runtime.node.run` uses either unchanged. Import
 fails with ImportError where rclpy or the message packages are absent.
 """
+import sys
 import types
 
 import rclpy
@@ -21,6 +22,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64, Header
 
 from bellows_ros.errors import ParameterError
+from bellows_ros.runtime import ros_args
 
 NAME = 'rclpy'
 
@@ -45,6 +47,8 @@ _executor = None
 
 def init(args=None):
     """rclpy.init; a malformed `--ros-args` (or parameter file) is a ParameterError."""
+    # The DDS runtime's reading first: the same mistakes get the same one-line messages.
+    ros_args.parse(sys.argv if args is None else args, strict=False)
     try:
         rclpy.init(args=args)
     except _rclpy.UnknownROSArgsError as exc:

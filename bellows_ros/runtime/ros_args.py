@@ -34,7 +34,8 @@ LOG_LEVELS = ('debug', 'info', 'warn', 'error', 'fatal')
 class RosArgs:
     """What `--ros-args` said, in order.
 
-    `parameter_rules` holds ('file', path) and ('param', node or None, name, value); `remaps` holds
+    `parameter_rules` holds ('file', path, {section: flat parameters}) and
+    ('param', node or None, name, value); `remaps` holds
     (node or None, from, to); `renames` holds (node or None, '__node' or '__ns', value).
     """
 
@@ -44,8 +45,14 @@ class RosArgs:
     log_level: str = 'info'
 
 
-def parse(argv):
-    """Split `argv` into (RosArgs, the other arguments); ParameterError on a malformed argument."""
+def parse(argv, strict=True):
+    """Split `argv` into (RosArgs, the other arguments); ParameterError on a malformed argument.
+
+    Parameter files are read here, so a bad one is reported before any node starts. With
+    `strict=False` an argument this parser does not know is passed over (rclpy checks the
+    arguments this way first, so both runtimes word the same mistakes the same way, then lets rcl
+    judge the arguments only it knows).
+    """
     ros, rest = RosArgs(), []
     inside = False
     items = iter(argv)
@@ -61,7 +68,8 @@ def parse(argv):
         elif arg == '--ros-args':
             continue
         elif arg == '--params-file':
-            ros.parameter_rules.append(('file', _value(items, arg)))
+            path = _value(items, arg)
+            ros.parameter_rules.append(('file', path, params_module.read_sections(path)))
         elif arg in ('-p', '--param'):
             ros.parameter_rules.append(('param', *_parameter(_value(items, arg))))
         elif arg in ('-r', '--remap'):
@@ -72,7 +80,7 @@ def parse(argv):
                 raise ParameterError(f"--ros-args --log-level: unknown level '{level}' "
                                      f"(one of {', '.join(LOG_LEVELS)})")
             ros.log_level = level
-        else:
+        elif strict:
             raise ParameterError(f"--ros-args: unknown argument '{arg}' (the DDS runtime "
                                  'takes --params-file, -p, -r and --log-level)')
     return ros, rest
@@ -170,7 +178,7 @@ def parameter_overrides(ros, node_fqn):
     entries = {}  # node key -> {name: (value, source)}, in order of first appearance
     for rule in ros.parameter_rules:
         if rule[0] == 'file':
-            for section, values in params_module.read_sections(rule[1]).items():
+            for section, values in rule[2].items():
                 entry = entries.setdefault(section, {})
                 entry.update({name: (value, rule[1]) for name, value in values.items()})
         else:

@@ -1,0 +1,48 @@
+"""The two runtimes in tests: is rclpy here, and the environment of a node process on either.
+
+Where rclpy does not import, tests on it are skipped with the reason, unless
+`BELLOWS_REQUIRE_RCLPY=1` (scripts/test.sh sets it when it installed ROS 2): then they fail.
+"""
+import functools
+import os
+import subprocess
+import sys
+
+import pytest
+
+LOOPBACK_CYCLONE = ('<CycloneDDS><Domain><General><Interfaces><NetworkInterface name="lo"/>'
+                    '</Interfaces><AllowMulticast>false</AllowMulticast></General></Domain>'
+                    '</CycloneDDS>')
+
+
+@functools.lru_cache(maxsize=None)
+def rclpy_unavailable():
+    """Why rclpy cannot run nodes here ('' when it can), asked of a child Python."""
+    probe = subprocess.run([sys.executable, '-c', 'import rclpy, sensor_msgs.msg, '
+                            'diagnostic_msgs.msg, rosgraph_msgs.msg'],
+                           capture_output=True, text=True, timeout=60)
+    if probe.returncode == 0:
+        return ''
+    lines = probe.stderr.strip().splitlines()
+    return lines[-1] if lines else f'exit status {probe.returncode}'
+
+
+def require_rclpy():
+    """Skip (or, with BELLOWS_REQUIRE_RCLPY=1, fail) the calling test where rclpy is absent."""
+    reason = rclpy_unavailable()
+    if not reason:
+        return
+    message = f'rclpy not importable ({reason}); source a ROS 2 Jazzy setup.bash to run this'
+    if os.environ.get('BELLOWS_REQUIRE_RCLPY') == '1':
+        pytest.fail(message + ' (BELLOWS_REQUIRE_RCLPY=1: ROS 2 was installed for this run)')
+    pytest.skip(message)
+
+
+def node_env(runtime, **extra):
+    """The environment for a node process on `runtime`, with `extra` variables."""
+    return dict(os.environ, BELLOWS_RUNTIME=runtime, **extra)
+
+
+def override(node, name, value):
+    """`-p node:name:=value`: wins over the node's own section of a params file (rcl's rule)."""
+    return ['-p', f'{node}:{name}:={value}']
