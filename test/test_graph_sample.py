@@ -1,5 +1,8 @@
 """Acceptance: the simulated graph over real DDS, driver -> model, counted sample by sample.
 
+Runs twice: the nodes on rclpy (`[rclpy]`) and on the DDS runtime (`[dds]`); the test's own probe
+is a DDS-runtime node either way.
+
 Processes: sim_arm_node (udp_multicast CAN), sim_actuator_node (pty), driver_node, model_node; an
 independent plain-Cyclone subscriber (no bellows_ros import, its own IDL definitions with ROS 2
 type names) must see /joint_states and /bellows/driving_torque. Then the driver is stopped and its
@@ -20,6 +23,7 @@ from bellows_ros.runtime import dds_node, realtime
 from bellows_ros.runtime.messages import msg
 
 from plain_cyclone import JOINT_STATE_SUBSCRIBER
+from runtimes import node_env, override
 
 BIN = Path(sys.executable).parent
 CONFIG = Path(__file__).resolve().parent.parent / 'config' / 'nodes_sim.yaml'
@@ -108,11 +112,11 @@ def stop(process, timeout=10):
 
 
 @pytest.fixture
-def graph(tmp_path, monkeypatch):
+def graph(runtime, tmp_path, monkeypatch):
     domain = str(random.randint(100, 180))
     group = f'239.74.164.{random.randint(2, 250)}'
     port = str(tmp_path / 'actuator')
-    env = dict(os.environ, ROS_DOMAIN_ID=domain, BELLOWS_RUNTIME='dds')
+    env = node_env(runtime, ROS_DOMAIN_ID=domain)
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     dds_node.init([])
     probe = dds_node.Node('acceptance_probe')
@@ -122,11 +126,13 @@ def graph(tmp_path, monkeypatch):
         for status in array.status:
             final[status.name] = {kv.key: kv.value for kv in status.values}
     probe.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
-    can = ['-p', f'can.channel:={group}']
     processes = {
-        'sim_arm_node': launch('sim_arm_node', can + ['-p', 'n_segments:=2'], env, tmp_path),
-        'sim_actuator_node': launch('sim_actuator_node', ['-p', f'port:={port}'], env, tmp_path),
-        'model_node': launch('model_node', ['-p', 'segments:=[1, 2]'], env, tmp_path),
+        'sim_arm_node': launch('sim_arm_node', override('sim_arm_node', 'can.channel', group)
+                               + override('sim_arm_node', 'n_segments', 2), env, tmp_path),
+        'sim_actuator_node': launch('sim_actuator_node', override('sim_actuator_node', 'port', port),
+                                    env, tmp_path),
+        'model_node': launch('model_node', override('model_node', 'segments', '[1, 2]'), env,
+                             tmp_path),
     }
     try:
         # The driver publishes from its first sample on: the model must be subscribed by then
@@ -136,11 +142,10 @@ def graph(tmp_path, monkeypatch):
         while 'model_node: driving torque' not in final and time.monotonic() < end:
             dds_node.spin_once(probe, timeout_sec=0.05)
         assert 'model_node: driving torque' in final, logs(tmp_path)
-        processes['driver_node'] = launch('driver_node', ['-p', f'arm.channel:={group}',
-                                                          '-p', 'arm.n_segments:=2',
-                                                          '-p', f'actuator.port:={port}',
-                                                          '-p', 'wait_for_subscribers:=20.0'],
-                                          env, tmp_path)
+        driver = [override('driver_node', name, value) for name, value in (
+            ('arm.channel', group), ('arm.n_segments', 2), ('actuator.port', port),
+            ('wait_for_subscribers', 20.0))]
+        processes['driver_node'] = launch('driver_node', sum(driver, []), env, tmp_path)
         yield processes, domain, tmp_path, probe, final
     finally:
         for process in processes.values():

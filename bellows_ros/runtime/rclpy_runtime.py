@@ -12,6 +12,7 @@ import rclpy.exceptions
 import rclpy.executors
 import rclpy.node
 import rclpy.qos
+import rclpy.signals
 import rclpy.time
 from builtin_interfaces.msg import Time as TimeMsg
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -35,7 +36,7 @@ Time = rclpy.time.Time
 Duration = rclpy.duration.Duration
 SENSOR_DATA = rclpy.qos.qos_profile_sensor_data
 
-# rclpy shuts its context down on SIGINT/SIGTERM; a spinning executor then raises this.
+# Raised by a spinning executor when something else shut rclpy's context down.
 INTERRUPTED = (rclpy.executors.ExternalShutdownException,)
 # A user's mistake in a node name, namespace, topic name or parameter, as rclpy reports it.
 USER_ERRORS = (rclpy.exceptions.ParameterException, rclpy.exceptions.InvalidNodeNameException,
@@ -43,6 +44,7 @@ USER_ERRORS = (rclpy.exceptions.ParameterException, rclpy.exceptions.InvalidNode
                rclpy.exceptions.InvalidTopicNameException)
 
 _executor = None
+_MAX_WAIT_S = 0.1  # longest wait in C, so SIGINT/SIGTERM are acted on promptly
 
 
 def init(args=None):
@@ -50,7 +52,10 @@ def init(args=None):
     # The DDS runtime's reading first: the same mistakes get the same one-line messages.
     ros_args.parse(sys.argv if args is None else args, strict=False)
     try:
-        rclpy.init(args=args)
+        # Without rclpy's signal handlers: they shut the context down at SIGINT, before a node's
+        # close() could publish its final counts. SIGINT is then Python's KeyboardInterrupt, raised
+        # when the executor's wait returns (spin wakes at least every _MAX_WAIT_S for that).
+        rclpy.init(args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     except _rclpy.UnknownROSArgsError as exc:
         # rclpy's message is the list of unknown arguments, as text.
         unknown = str(exc).strip("[]").split(',')[0].strip().strip("'")
@@ -84,7 +89,8 @@ def spin(node):
     executor = _the_executor()
     executor.add_node(node)
     try:
-        executor.spin()
+        while rclpy.ok():
+            executor.spin_once(timeout_sec=_MAX_WAIT_S)
     finally:
         executor.remove_node(node)
 
