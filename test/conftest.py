@@ -13,11 +13,10 @@ import os
 
 import pytest
 
-from runtimes import LOOPBACK_CYCLONE, require_rclpy
+from runtimes import LOOPBACK_ENVIRONMENT, require_rclpy
 
 os.environ.setdefault('MPLBACKEND', 'Agg')
-os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-os.environ['CYCLONEDDS_URI'] = LOOPBACK_CYCLONE
+os.environ.update(LOOPBACK_ENVIRONMENT)
 os.environ['BELLOWS_RUNTIME'] = 'dds'  # in-process nodes and probes; children get their own
 
 

@@ -10,9 +10,7 @@ import sys
 
 import pytest
 
-LOOPBACK_CYCLONE = ('<CycloneDDS><Domain><General><Interfaces><NetworkInterface name="lo"/>'
-                    '</Interfaces><AllowMulticast>false</AllowMulticast></General></Domain>'
-                    '</CycloneDDS>')
+from bellows_ros.runtime.dds_node import LOOPBACK_ENVIRONMENT  # noqa: F401 (conftest's)
 
 
 @functools.lru_cache(maxsize=None)

@@ -16,24 +16,24 @@ DOMAIN = '191'
 
 TALKER = textwrap.dedent('''
     import sys
-    from bellows_ros.runtime import rt
+    from bellows_ros.runtime import Node, run
 
-    class Talker(rt.Node):
-        def __init__(self):
-            super().__init__('talker')
+    class Talker(Node):
+        def __init__(self, runtime):
+            super().__init__('talker', runtime)
             rate = self.declare_parameter('rate', 100.0).value
             self.offset = self.declare_parameter('offset', 0.0).value
-            self.publisher = self.create_publisher(rt.msg.JointState, 'joint_states', 10)
+            self.publisher = self.create_publisher(self.msg.JointState, 'joint_states', 10)
             self.count = 0
             self.create_timer(1.0 / rate, self.tick)
 
         def tick(self):
             self.count += 1
-            state = rt.msg.JointState(name=['segment_1'], position=[self.offset + self.count])
+            state = self.msg.JointState(name=['segment_1'], position=[self.offset + self.count])
             state.header.stamp = self.get_clock().now().to_msg()
             self.publisher.publish(state)
 
-    sys.exit(rt.main(Talker))
+    sys.exit(run(Talker))
 ''')
 
 # A subscriber that knows nothing of bellows_ros: plain cyclonedds and its own IDL definitions
@@ -91,7 +91,7 @@ def receive(node, items, count, timeout=10.0):
 
 
 def test_two_processes_talk_with_ros_args(tmp_path, env):
-    talker = start(tmp_path, TALKER, ['--ros-args', '-p', 'rate:=200', '-p', 'offset:=1000',
+    talker = start(tmp_path, TALKER, ['--ros-args', '-p', 'rate:=200.0', '-p', 'offset:=1000.0',
                                       '-r', 'joint_states:=/remapped'], env)
     try:
         dds_node.init([])
@@ -129,7 +129,7 @@ def test_independent_cyclone_subscriber_sees_the_runtime(tmp_path, env):
 
 def test_use_sim_time_follows_clock(tmp_path, env):
     talker = start(tmp_path, TALKER, ['--ros-args', '-p', 'use_sim_time:=true',
-                                      '-p', 'rate:=100'], env)
+                                      '-p', 'rate:=100.0'], env)
     try:
         dds_node.init([])
         node = dds_node.Node('clock_source')
@@ -150,7 +150,7 @@ def test_use_sim_time_follows_clock(tmp_path, env):
 
 @pytest.mark.parametrize('args, message', [
     (['--ros-args', '-p', 'rat:=5'], "unknown parameter 'rat' for node 'talker'"),
-    (['--ros-args', '-p', 'rate:=fast'], "parameter 'rate': expected a double"),
+    (['--ros-args', '-p', 'rate:=fast'], "parameter 'rate' must be a double, got a string 'fast'"),
     (['--ros-args', '--params-file', 'missing.yaml'], 'missing.yaml: cannot read parameter file'),
 ])
 def test_user_mistakes_exit_2_with_one_line(tmp_path, env, args, message):

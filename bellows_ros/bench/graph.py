@@ -76,6 +76,15 @@ def _model_reference(segments):
     return timing(f'graph.model_step_inprocess_{segments}seg', step_all, 5000)
 
 
+def _rclpy_unavailable():
+    """Why rclpy cannot run the nodes here ('' when it can), asked of a child Python (this process
+    uses the DDS runtime for its probe: one Cyclone DDS library per process)."""
+    probe = subprocess.run([sys.executable, '-c', 'import rclpy, sensor_msgs.msg'],
+                           capture_output=True, text=True, timeout=60)
+    lines = probe.stderr.strip().splitlines()
+    return '' if probe.returncode == 0 else (lines[-1] if lines else 'import failed')
+
+
 def run(quick=False, segments=4):
     window = 3.0 if quick else 10.0
     reference = _model_reference(segments)
@@ -89,32 +98,41 @@ def run(quick=False, segments=4):
                                      host['model_node'], limit))
     results.append(_wakeup_reference('graph.platform.wakeup_lateness_no_latency_limit', window,
                                      host['model_node'], -1.0))
-    for prefix, priorities, latency in (('graph', fifo, limit), ('graph.normal', normal, limit),
-                                        ('graph.no_latency_limit', normal, -1.0)):
-        results += _measure(prefix, window, segments, priorities, latency, reference)
+    variants = [('graph', 'dds', fifo, limit), ('graph.normal', 'dds', normal, limit),
+                ('graph.no_latency_limit', 'dds', normal, -1.0)]
+    rclpy_missing = _rclpy_unavailable()
+    if not rclpy_missing:
+        variants += [('graph.rclpy', 'rclpy', fifo, limit),
+                     ('graph.rclpy.normal', 'rclpy', normal, limit)]
+    for prefix, runtime, priorities, latency in variants:
+        results += _measure(prefix, runtime, window, segments, priorities, latency, reference)
+    if rclpy_missing:
+        results.append(Result('graph.rclpy.rate', float('nan'), 'Hz', 0,
+                              extra={'skipped': f'rclpy not importable: {rclpy_missing}'}))
     return results
 
 
-def _measure(prefix, window, segments, priorities, latency_limit, reference):
-    """Run the three nodes for `window` s at the given `realtime_priority` each and
-    `cpu_latency_limit`; their figures."""
+def _measure(prefix, runtime, window, segments, priorities, latency_limit, reference):
+    """Run the three nodes on `runtime` ('dds' or 'rclpy') for `window` s at the given
+    `realtime_priority` each and `cpu_latency_limit`; their figures."""
     from bellows_ros.runtime import dds_node
     from bellows_ros.runtime.messages import msg
 
     domain = str(random.randint(231, 232))
     group = f'239.74.166.{random.randint(2, 250)}'
-    env = dict(os.environ, ROS_DOMAIN_ID=domain, BELLOWS_RUNTIME='dds')
-    args = {'sim_arm_node': ['-p', f'can.channel:={group}', '-p', f'n_segments:={segments}'],
-            'driver_node': ['-p', f'arm.channel:={group}', '-p', f'arm.n_segments:={segments}',
-                            '-p', 'actuator.enabled:=false', '-p', 'wait_for_subscribers:=20.0'],
-            'model_node': ['-p', f'segments:={list(range(1, segments + 1))}',
-                           '-p', 'latency_budget:=0.002']}
+    env = dict(os.environ, ROS_DOMAIN_ID=domain, BELLOWS_RUNTIME=runtime,
+               **dds_node.LOOPBACK_ENVIRONMENT)
+    given = {'sim_arm_node': {'can.channel': group, 'n_segments': segments},
+             'driver_node': {'arm.channel': group, 'arm.n_segments': segments,
+                             'actuator.enabled': 'false', 'wait_for_subscribers': 20.0},
+             'model_node': {'segments': list(range(1, segments + 1)), 'latency_budget': 0.002}}
     binary = Path(sys.executable).parent
     logs = tempfile.TemporaryDirectory()
     processes = {}
     windows, final = [], {}
-    previous_env = os.environ.get('ROS_DOMAIN_ID')
-    os.environ['ROS_DOMAIN_ID'] = domain
+    previous_env = {name: os.environ.get(name)
+                    for name in ('ROS_DOMAIN_ID', *dds_node.LOOPBACK_ENVIRONMENT)}
+    os.environ.update(ROS_DOMAIN_ID=domain, **dds_node.LOOPBACK_ENVIRONMENT)
     try:
         dds_node.init([])
         node = dds_node.Node('bench_graph')
@@ -128,10 +146,13 @@ def _measure(prefix, window, segments, priorities, latency_limit, reference):
         node.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
         for name in NODES:
             log = open(Path(logs.name) / f'{name}.log', 'w')
+            given[name].update(realtime_priority=priorities[name],
+                               cpu_latency_limit=float(latency_limit))
+            # `-p node:name:=value`: wins over the node's own section of the file (rcl's rule).
+            overrides = [arg for key, value in given[name].items()
+                         for arg in ('-p', f'{name}:{key}:={value}')]
             processes[name] = subprocess.Popen(
-                [str(binary / name), '--ros-args', '--params-file', str(CONFIG), *args[name],
-                 '-p', f'realtime_priority:={priorities[name]}',
-                 '-p', f'cpu_latency_limit:={float(latency_limit)}'],
+                [str(binary / name), '--ros-args', '--params-file', str(CONFIG), *overrides],
                 env=env, stdout=log, stderr=subprocess.STDOUT)
             if name == 'model_node':
                 # The driver publishes from its first sample on: the model must listen by then
@@ -167,10 +188,11 @@ def _measure(prefix, window, segments, priorities, latency_limit, reference):
             except subprocess.TimeoutExpired:
                 process.kill()
         dds_node.shutdown()
-        if previous_env is None:
-            os.environ.pop('ROS_DOMAIN_ID', None)
-        else:
-            os.environ['ROS_DOMAIN_ID'] = previous_env
+        for name, value in previous_env.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
         logs.cleanup()
     driver = final.get('driver_node: arm', {})
     model = final.get('model_node: driving torque', {})
@@ -183,7 +205,7 @@ def _measure(prefix, window, segments, priorities, latency_limit, reference):
                   for name, values in final.items() if name.split(':')[0] in NODES}
     results = [Result(f'{prefix}.rate', statistics.median(rates) if rates else 0.0, 'Hz',
                       len(rates), target=1000.0,
-                      extra={'scheduling': scheduling, 'steal': stolen,
+                      extra={'runtime': runtime, 'scheduling': scheduling, 'steal': stolen,
                              'cpu_latency_limit': limit_in_force},
                       extra_units={'steal': '', 'cpu_latency_limit': 's'})]
     results.append(Result(f'{prefix}.fraction_evaluated',

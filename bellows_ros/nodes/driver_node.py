@@ -71,7 +71,7 @@ class DriverNode(Node):
         n_segments = self.declare_parameter('arm.n_segments', 0).value
         self.startup_timeout = self.declare_parameter('startup_timeout', 2.0).value
         wait_for_subscribers = self.declare_parameter('wait_for_subscribers', 0.0).value
-        realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: rt.main applies them
+        realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
         if not (self.use_arm or self.use_actuator):
             raise BellowsError('driver_node: neither arm.enabled nor actuator.enabled is set')

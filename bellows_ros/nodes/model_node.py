@@ -38,7 +38,7 @@ class ModelNode(Node):
         params_file = self.declare_parameter('params_file', '').value or None
         self.max_pending = self.declare_parameter('max_pending', 100).value
         latency_budget = self.declare_parameter('latency_budget', 0.002).value
-        realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: rt.main applies them
+        realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
         if not segments or any(s < 1 for s in segments):
             raise BellowsError(f'model_node: parameter segments must list segment numbers >= 1, '

@@ -44,7 +44,7 @@ class ScenarioNode(Node):
         self.excursion_length = self.declare_parameter('excursion_length', 20.0).value
         self.output_dir = Path(self.declare_parameter('output_dir', 'scenario_out').value)
         actuator_params = self.declare_parameter('actuator_params', '').value or None
-        realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: rt.main applies them
+        realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.p0 = load_segment_params().p0  # ambient: the vented chain's pressure, Pa abs
         self.check_parameters()
         k_min, k_max = stiffness_range(load_actuator_params(actuator_params))

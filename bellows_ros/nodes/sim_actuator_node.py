@@ -46,7 +46,7 @@ class SimActuatorNode(Node):
         self.amplitude = self.declare_parameter('spring.amplitude', 0.0).value
         self.spring_period = self.declare_parameter('spring.period', 4.0).value
         clock_rate = self.declare_parameter('clock_rate', 100.0).value
-        realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: rt.main applies them
+        realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
         if not port:
             raise BellowsError('sim_actuator_node: parameter port is empty')

@@ -39,7 +39,7 @@ class SimArmNode(Node):
         seed = self.declare_parameter('seed', 1).value
         self.load_torque = self.declare_parameter('load_torque', 0.0).value
         clock_rate = self.declare_parameter('clock_rate', 100.0).value
-        realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: rt.main applies them
+        realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
         params = load_segment_params(segment_params)
         self.plants = [SegmentPlant(params, effects=effects, seed=seed + i)

@@ -46,7 +46,7 @@ class StiffnessControllerNode(Node):
         self.target_every = self.declare_parameter('target_every', 4).value
         self.publish_every = self.declare_parameter('publish_every', 2).value
         initial = self.declare_parameter('initial_stiffness', 0.0).value
-        realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: rt.main applies them
+        realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
         if not (0 < gains.duty_max <= 1 and gains.kp >= 0 and gains.kd >= 0):
             raise BellowsError('stiffness_controller_node: need 0 < pd.duty_max <= 1, '

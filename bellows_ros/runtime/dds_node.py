@@ -103,6 +103,16 @@ def init(args=None):
     return rest
 
 
+# What the tests, the benchmarks and the simulated launches run with: ROS 2's own switch for
+# discovery on this host, and Cyclone bound to the loopback interface with multicast off.
+LOOPBACK_ENVIRONMENT = {
+    'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST',
+    'CYCLONEDDS_URI': ('<CycloneDDS><Domain><General><Interfaces><NetworkInterface name="lo"/>'
+                       '</Interfaces><AllowMulticast>false</AllowMulticast></General></Domain>'
+                       '</CycloneDDS>'),
+}
+
+
 def discovery_config(discovery_range, static_peers):
     """The Cyclone XML fragment rmw_cyclonedds_cpp (Jazzy) puts before `$CYCLONEDDS_URI`.
 

@@ -23,9 +23,9 @@ API
 - ``request(node) -> bool``: the node's `realtime_priority` parameter (when it declares one): 1-99
   = SCHED_FIFO at that priority for every thread of the process, and so for the threads it starts
   later (they inherit it); 0 leaves the scheduling alone. Logs the outcome on the node's logger.
-  `rt.main` calls it once the node is built, so a node only declares the parameter.
+  `runtime.run` calls it once the node is built, so a node only declares the parameter.
 - ``limit_cpu_latency(node) -> int | None``: the node's `cpu_latency_limit` (>= 0) requested from
-  the kernel; returns the file descriptor that holds the request (`rt.main` closes it at
+  the kernel; returns the file descriptor that holds the request (`runtime.run` closes it at
   shutdown), or None when off or not permitted (one warning).
 - ``hold_cpu_latency(limit) -> int``, ``cpu_latency_in_force() -> float``: the PM QoS request
   itself, and the limit in force now (the least of every process's request), s.
