@@ -26,3 +26,26 @@ def runtime(request):
     if request.param == 'rclpy':
         require_rclpy()
     return request.param
+
+
+def pytest_report_header(config):
+    from runtimes import rclpy_unavailable
+    reason = rclpy_unavailable()
+    rclpy = 'rclpy' if not reason else f'rclpy skipped ({reason})'
+    return f'bellows runtimes: dds (Cyclone DDS), {rclpy}'
+
+
+def pytest_terminal_summary(terminalreporter):
+    """How many tests ran on each runtime, and how they ended."""
+    counts = {}
+    for outcome in ('passed', 'failed', 'skipped', 'error'):
+        for report in terminalreporter.stats.get(outcome, []):
+            for runtime in ('dds', 'rclpy'):
+                if f'[{runtime}' in report.nodeid or f'-{runtime}]' in report.nodeid:
+                    key = (runtime, outcome)
+                    counts[key] = counts.get(key, 0) + 1
+    for runtime in ('dds', 'rclpy'):
+        line = ', '.join(f'{counts[(runtime, o)]} {o}' for o in ('passed', 'failed', 'skipped',
+                                                                  'error') if (runtime, o) in counts)
+        if line:
+            terminalreporter.write_line(f'runtime {runtime}: {line}')

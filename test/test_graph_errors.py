@@ -1,6 +1,5 @@
 """Acceptance: a node started with a missing device, a bad YAML or an unknown parameter exits with
 status 2 and one line on stderr naming the problem, the same line on rclpy and on the DDS runtime."""
-import os
 import random
 import subprocess
 import sys

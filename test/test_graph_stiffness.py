@@ -5,6 +5,8 @@ stiffness_controller_node; the test publishes set-points and listens to /actuato
 controller's estimate from the measured pressure) and /diagnostics (the plant's true chamber
 compression and gas amount, from which the true stiffness follows with paper B's model).
 
+Runs twice: the nodes on rclpy (`[rclpy]`) and on the DDS runtime (`[dds]`).
+
 Criteria (issue): after a step to 1900 N/m, within 2 % of the target in <= 1.2x the lead screw's
 minimum travel time, overshoot <= 5 % of the step, end stops never hit; with air_leak on, held
 within 2 % for 60 s (real time: the plant runs at wall-clock pace, ~85 s for this test).
@@ -14,7 +16,6 @@ The low set-point is 1400 N/m where the actuator model can reach it; with the pr
 config/actuator.yaml its range starts above 1400 N/m, so the step starts 1 % above the bottom of
 the range instead (reported in the assertion messages).
 """
-import os
 import random
 import subprocess
 import sys
@@ -29,6 +30,8 @@ from bellows_ros.models.stiffness_map import compression_for_stiffness, stiffnes
 from bellows_ros.runtime import dds_node
 from bellows_ros.runtime.messages import msg
 
+from runtimes import node_env, override
+
 BIN = Path(sys.executable).parent
 CONFIG = Path(__file__).resolve().parent.parent / 'config' / 'nodes_sim.yaml'
 K_HIGH = 1900.0
@@ -42,7 +45,7 @@ def launch(name, args, env, log_dir):
 
 
 @pytest.mark.timeout(200)
-def test_stiffness_step_and_leak_hold(tmp_path, monkeypatch):
+def test_stiffness_step_and_leak_hold(runtime, tmp_path, monkeypatch):
     params = load_actuator_params()
     k_min, _ = stiffness_range(params)
     k_low = max(1400.0, 1.01 * k_min)
@@ -53,16 +56,19 @@ def test_stiffness_step_and_leak_hold(tmp_path, monkeypatch):
 
     domain = str(random.randint(201, 230))
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
-    env = dict(os.environ, ROS_DOMAIN_ID=domain, BELLOWS_RUNTIME='dds')
+    env = node_env(runtime, ROS_DOMAIN_ID=domain)
     port = str(tmp_path / 'actuator')
     processes = [
-        launch('sim_actuator_node', ['-p', f'port:={port}', '-p', f'x_c0:={x_low}',
-                                     '-p', 'effects:=[wall_bulging, air_leak]'], env, tmp_path),
-        launch('stiffness_controller_node', ['-p', f'initial_stiffness:={k_low}'], env, tmp_path),
+        launch('sim_actuator_node', override('sim_actuator_node', 'port', port)
+               + override('sim_actuator_node', 'x_c0', x_low)
+               + override('sim_actuator_node', 'effects', '[wall_bulging, air_leak]'),
+               env, tmp_path),
+        launch('stiffness_controller_node',
+               override('stiffness_controller_node', 'initial_stiffness', k_low), env, tmp_path),
     ]
     time.sleep(1.0)
-    processes.append(launch('driver_node', ['-p', 'arm.enabled:=false',
-                                            '-p', f'actuator.port:={port}'], env, tmp_path))
+    processes.append(launch('driver_node', override('driver_node', 'arm.enabled', 'false')
+                            + override('driver_node', 'actuator.port', port), env, tmp_path))
     estimate, plant = [], []
 
     def on_diagnostics(array):
