@@ -23,7 +23,8 @@ TOPICS = {
     '/clock': 'rosgraph_msgs/msg/Clock',
 }
 
-# Depth for the 1 kHz sample topics: a reader that falls a few ms behind must not lose samples.
-SAMPLE_DEPTH = 200
+# Depth for the 1 kHz sample topics: a reader stalled by its host for up to a second (seen on a
+# shared 2-core machine under load) must not lose samples; 1000 samples of 4 segments is ~200 kB.
+SAMPLE_DEPTH = 1000
 
 ACTUATOR_FRAME = 'actuator'
