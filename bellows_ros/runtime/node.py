@@ -28,14 +28,16 @@ import importlib
 import os
 import signal
 import sys
+from types import ModuleType
+from typing import Any, Callable, Optional, Sequence
 
 from bellows_ros.errors import BellowsError, ParameterError
 
 RUNTIMES = {'rclpy': 'bellows_ros.runtime.rclpy_runtime', 'dds': 'bellows_ros.runtime.dds_node'}
 
 
-def select_runtime(choice=None):
-    """The runtime module: `choice` or `$BELLOWS_RUNTIME` ('rclpy', 'dds'), else rclpy if it imports.
+def select_runtime(choice: Optional[str] = None) -> ModuleType:
+    """Pick the runtime module: `choice` or `$BELLOWS_RUNTIME` ('rclpy', 'dds'), else rclpy.
 
     Raises ParameterError for an unknown choice, or when rclpy was asked for and does not import.
     """
@@ -52,13 +54,13 @@ def select_runtime(choice=None):
     return importlib.import_module(RUNTIMES['dds'])
 
 
-def stamp_ns(stamp):
+def stamp_ns(stamp: Any) -> int:
     """builtin_interfaces/Time -> integer nanoseconds."""
     return stamp.sec * 1_000_000_000 + stamp.nanosec
 
 
 # rcl's parameter types, as rclpy names them in its errors.
-def parameter_type(value):
+def parameter_type(value: Any) -> str:
     """rcl's type name for a parameter value ('double', 'integer_array', ...)."""
     if isinstance(value, (list, tuple)):
         if not value:
@@ -71,7 +73,7 @@ def parameter_type(value):
     return type(value).__name__
 
 
-def check_override(node_name, name, default, override):
+def check_override(node_name: str, name: str, default: Any, override: Any) -> None:
     """ParameterError when `override` does not have the type of the declared `default` (rcl's rule:
     no conversion, not even integer to double)."""
     if default is None:
@@ -85,33 +87,33 @@ def check_override(node_name, name, default, override):
                          f'got {_article(given)} {override!r}{hint}')
 
 
-def _article(kind):
+def _article(kind: str) -> str:
     return ('an ' if kind[0] in 'aeiou' else 'a ') + kind.replace('_', ' ')
 
 
 class Node:
     """A bellows node on either runtime: the narrow interface (see the module docstring)."""
 
-    def __init__(self, node_name, runtime):
+    def __init__(self, node_name: str, runtime: ModuleType) -> None:
         self.runtime = runtime
         self.msg = runtime.msg
         self._node = runtime.create_node(node_name)
         self._overrides = runtime.parameter_overrides(self._node)
 
     # parameters
-    def declare_parameter(self, name, value):
+    def declare_parameter(self, name: str, value: Any) -> Any:
         """Declare `name` with default `value`; an override of another type is a ParameterError."""
         if name in self._overrides:
             check_override(self.get_name(), name, value, self._overrides[name])
         return self._node.declare_parameter(name, value)
 
-    def get_parameter(self, name):
+    def get_parameter(self, name: str) -> Any:
         return self._node.get_parameter(name)
 
-    def has_parameter(self, name):
+    def has_parameter(self, name: str) -> bool:
         return self._node.has_parameter(name)
 
-    def check_parameters(self):
+    def check_parameters(self) -> None:
         """ParameterError for a given parameter (file or -p) the node does not declare."""
         unknown = [name for name in self._overrides if not self.has_parameter(name)]
         if unknown:
@@ -120,29 +122,30 @@ class Node:
                                  'parameter)')
 
     # communication
-    def create_publisher(self, msg_type, topic, qos_profile):
+    def create_publisher(self, msg_type: type, topic: str, qos_profile: Any) -> Any:
         return self._node.create_publisher(msg_type, topic, qos_profile)
 
-    def create_subscription(self, msg_type, topic, callback, qos_profile):
+    def create_subscription(self, msg_type: type, topic: str, callback: Callable[[Any], None],
+                            qos_profile: Any) -> Any:
         return self._node.create_subscription(msg_type, topic, callback, qos_profile)
 
-    def create_timer(self, period, callback):
+    def create_timer(self, period: float, callback: Callable[[], None]) -> Any:
         return self._node.create_timer(period, callback)
 
     # the rest
-    def get_logger(self):
+    def get_logger(self) -> Any:
         return self._node.get_logger()
 
-    def get_clock(self):
+    def get_clock(self) -> Any:
         return self._node.get_clock()
 
-    def get_name(self):
+    def get_name(self) -> str:
         return self._node.get_name()
 
-    def get_namespace(self):
+    def get_namespace(self) -> str:
         return self._node.get_namespace()
 
-    def destroy_node(self):
+    def destroy_node(self) -> None:
         self._node.destroy_node()
 
 
@@ -150,7 +153,8 @@ def _raise_interrupt(signum, frame):
     raise KeyboardInterrupt
 
 
-def run(node_class, args=None, runtime=None):
+def run(node_class: type, args: Optional[Sequence[str]] = None,
+        runtime: Optional[ModuleType] = None) -> int:
     """Run one node until Ctrl-C/SIGTERM; a user mistake is one line on stderr and exit status 2.
 
     Picks the runtime (`select_runtime`) unless one is given, builds `node_class(runtime)`, which
@@ -205,7 +209,7 @@ def run(node_class, args=None, runtime=None):
     return 0
 
 
-def _user_error(program, exc):
+def _user_error(program: str, exc: Exception) -> int:
     message = ' '.join(str(exc).split())  # rcl's messages span lines
     message = message.removeprefix(f'{program}: ')  # node errors often name the node already
     print(f'{program}: error: {message}', file=sys.stderr, flush=True)
