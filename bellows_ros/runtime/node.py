@@ -37,7 +37,7 @@ RUNTIMES = {'rclpy': 'bellows_ros.runtime.rclpy_runtime', 'dds': 'bellows_ros.ru
 
 
 def select_runtime(choice: Optional[str] = None) -> ModuleType:
-    """Pick the runtime module: `choice` or `$BELLOWS_RUNTIME` ('rclpy', 'dds'), else rclpy.
+    """Pick the runtime module: `choice` or `$BELLOWS_RUNTIME`, else rclpy when it imports.
 
     Raises ParameterError for an unknown choice, or when rclpy was asked for and does not import.
     """
@@ -149,8 +149,21 @@ class Node:
         self._node.destroy_node()
 
 
-def _raise_interrupt(signum, frame):
-    raise KeyboardInterrupt
+# Where the process is with respect to SIGINT/SIGTERM: while a node is being built a signal
+# interrupts at once (KeyboardInterrupt); while it spins, a signal only sets `stop`, which the spin
+# loop sees within one wait (a KeyboardInterrupt raised inside a C call of rclpy or Cyclone
+# surfaces as some other error, a traceback and exit status 1); once clean-up has begun, further
+# signals are ignored (a terminal's Ctrl-C reaches a launched node twice: from the terminal and
+# from `ros2 launch`).
+_signals = {'spinning': False, 'stop': False, 'closing': False}
+
+
+def _on_signal(signum, frame):
+    if _signals['closing']:
+        return
+    _signals['stop'] = True
+    if not _signals['spinning']:
+        raise KeyboardInterrupt
 
 
 def run(node_class: type, args: Optional[Sequence[str]] = None,
@@ -167,9 +180,11 @@ def run(node_class: type, args: Optional[Sequence[str]] = None,
     from bellows_ros.runtime import realtime
 
     program = os.path.basename(sys.argv[0]) if args is None else node_class.__name__
-    signal.signal(signal.SIGTERM, _raise_interrupt)
-    # A shell starts background jobs with SIGINT ignored; ros2 launch stops nodes with SIGINT.
-    signal.signal(signal.SIGINT, signal.default_int_handler)
+    # Installed whatever the shell gave: a shell starts background jobs with SIGINT ignored, and
+    # ros2 launch stops nodes with SIGINT.
+    _signals.update(spinning=False, stop=False, closing=False)
+    signal.signal(signal.SIGTERM, _on_signal)
+    signal.signal(signal.SIGINT, _on_signal)
     node = None
     latency_request = None
     try:
@@ -182,12 +197,12 @@ def run(node_class: type, args: Optional[Sequence[str]] = None,
         # Everything built so far (modules, type store, model tables) lives as long as the node:
         # keep the cyclic collector from walking it again and again in the 1 kHz callbacks.
         gc.freeze()
-        if hasattr(node, 'done'):  # a node with an end: spin until it says so, then finish
-            while not node.done:
-                runtime.spin_once(node._node, timeout_sec=0.05)
+        _signals['spinning'] = True
+        # A node with an end (`done`) spins until it says so, then finishes (the scenario).
+        while not _signals['stop'] and not getattr(node, 'done', False) and runtime.ok():
+            runtime.spin_once(node._node, timeout_sec=None)
+        if getattr(node, 'done', False):
             node.finish()
-        else:
-            runtime.spin(node._node)
     except KeyboardInterrupt:
         pass
     except Exception as exc:
@@ -198,6 +213,7 @@ def run(node_class: type, args: Optional[Sequence[str]] = None,
         if not (runtime and isinstance(exc, runtime.INTERRUPTED)):
             raise
     finally:
+        _signals['closing'] = True
         if node is not None:
             if hasattr(node, 'close'):
                 node.close()
