@@ -16,6 +16,7 @@ if [ -f "$top/setup.py" ]; then here=$top; else here=$PWD; fi  # a checkout, or 
 # shellcheck source=scripts/node_processes.sh
 source "$top/scripts/node_processes.sh"
 bin=$(find_executables "$top" launch_hw) || exit 2
+echo "launch_hw: executables in $bin" >&2
 params="$top/config/nodes_hw.yaml"
 logs="$here/out/hw_logs"
 driver=()

@@ -18,6 +18,7 @@ if [ -f "$top/setup.py" ]; then "$top/scripts/setup.sh"; here=$top; else here=$P
 # shellcheck source=scripts/node_processes.sh
 source "$top/scripts/node_processes.sh"
 bin=$(find_executables "$top" launch_sim) || exit 2
+echo "launch_sim: executables in $bin" >&2
 params="$top/config/nodes_sim.yaml"
 output="$here/out/scenario"
 duration=40.0
