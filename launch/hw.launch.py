@@ -8,10 +8,11 @@
 Starts driver_node, model_node (when the arm is on) and stiffness_controller_node (when the
 actuator is on). Ports default to the parameter file, whose '' means config/hardware.yaml (the
 board's /dev/serial/by-id link, socketcan can0). Arguments override the file's node sections
-(launch_ros writes them under the node's full name, after `params_file`). Every node is required: if
-one exits (absent device, bad parameter: its one-line error is in the output) the launch stops,
-exiting 1. The network is left as the user configured it (ROS_AUTOMATIC_DISCOVERY_RANGE,
-CYCLONEDDS_URI): a robot's graph is meant to be seen from other hosts.
+(launch_ros writes them under the node's full name, after `params_file`). Every node is required:
+if one exits (absent device, bad parameter: its one-line error is in the output) the launch stops,
+and exits 1 when the node failed. The network is left as the user configured it
+(ROS_AUTOMATIC_DISCOVERY_RANGE, CYCLONEDDS_URI): a robot's graph is meant to be seen from other
+hosts.
 """
 import os
 
@@ -26,6 +27,7 @@ PACKAGE = 'bellows_ros'
 
 
 def _flag(context, name):
+    """Parse a true/false launch argument."""
     text = LaunchConfiguration(name).perform(context).strip().lower()
     if text not in ('true', 'false', '1', '0', 'yes', 'no'):
         raise ValueError(f"{name}:='{text}': expected true or false")
@@ -33,6 +35,7 @@ def _flag(context, name):
 
 
 def _nodes(context):
+    """Build the node actions from the evaluated launch arguments."""
     def arg(name):
         return LaunchConfiguration(name).perform(context).strip()
 
@@ -76,6 +79,7 @@ def _on_exit(event, context):
 
 
 def generate_launch_description():
+    """Declare the arguments; the nodes are built once they are known (`_nodes`)."""
     share = get_package_share_directory(PACKAGE)
     return LaunchDescription([
         DeclareLaunchArgument('actuator_port', default_value='',
@@ -90,7 +94,8 @@ def generate_launch_description():
         DeclareLaunchArgument('arm', default_value='true',
                               description='drive the arm (and run model_node)'),
         DeclareLaunchArgument('actuator', default_value='true',
-                              description='drive the actuator (and run stiffness_controller_node)'),
+                              description='drive the actuator '
+                                          '(and run stiffness_controller_node)'),
         DeclareLaunchArgument('params_file',
                               default_value=os.path.join(share, 'config', 'nodes_hw.yaml'),
                               description='ROS 2 parameter file for every node'),

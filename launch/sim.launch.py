@@ -15,8 +15,9 @@ launch stops, and exits 1 when that was not a clean end (`ros2 launch` returns 1
 
 Arguments override the parameter file's node sections: launch_ros writes a dict of parameters to
 a file under the node's full name (when both name and namespace are given), passed after
-`params_file`, so it wins as `-p node:name:=value` would. The default pty path and multicast group are private to each launch (from its process
-id), so two launches on one machine do not collide.
+`params_file`, so it wins as `-p node:name:=value` would. The default pty path and multicast
+group are private to each launch (from its process id), so two launches on one machine do not
+collide.
 """
 import os
 import tempfile
@@ -34,7 +35,7 @@ PACKAGE = 'bellows_ros'
 
 
 def _effects(text, argument):
-    """A launch argument's effect list: YAML list or comma-separated names; '' = the file's."""
+    """Parse an effects argument: a YAML list or comma-separated names; '' = the file's."""
     text = text.strip()
     if not text:
         return None
@@ -49,6 +50,7 @@ def _effects(text, argument):
 
 
 def _double(text, argument):
+    """Parse a number as a double (rcl types parameters strictly: 12 would be an integer)."""
     try:
         return float(text)
     except ValueError:
@@ -56,6 +58,7 @@ def _double(text, argument):
 
 
 def _nodes(context):
+    """Build the node actions from the evaluated launch arguments."""
     def arg(name):
         return LaunchConfiguration(name).perform(context).strip()
 
@@ -112,6 +115,7 @@ def _on_exit(event, context):
 
 
 def generate_launch_description():
+    """Declare the arguments; the nodes are built once they are known (`_nodes`)."""
     share = get_package_share_directory(PACKAGE)
     discovery = os.environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE') or 'LOCALHOST'
     return LaunchDescription([

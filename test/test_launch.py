@@ -1,4 +1,4 @@
-"""Launching under rclpy: `ros2 launch bellows_ros sim.launch.py / hw.launch.py` and the shell launchers.
+"""Launching under rclpy: `ros2 launch bellows_ros sim.launch.py`, `hw.launch.py`, launch_sim.sh.
 
 The launch files run from an ament prefix made by hand (what colcon installs, without a colcon
 build per test run: the package's share/ files as setup.py installs them, one executable per
@@ -20,7 +20,8 @@ import yaml
 
 ROOT = Path(__file__).resolve().parent.parent
 LOOPBACK_URI = ('<CycloneDDS><Domain><General><Interfaces><NetworkInterface name="lo"/>'
-                '</Interfaces><AllowMulticast>false</AllowMulticast></General></Domain></CycloneDDS>')
+                '</Interfaces><AllowMulticast>false</AllowMulticast></General></Domain>'
+                '</CycloneDDS>')
 GUARD = 300  # s; a hang guard for a whole launch, not a timing assertion
 
 pytestmark = pytest.mark.slow
@@ -51,7 +52,7 @@ def ros():
 
 @pytest.fixture(scope='module')
 def prefix(ros, tmp_path_factory):
-    """An ament prefix holding bellows_ros as colcon lays it out."""
+    """Make an ament prefix holding bellows_ros as colcon lays it out."""
     top = tmp_path_factory.mktemp('ament_prefix')
     index = top / 'share' / 'ament_index' / 'resource_index' / 'packages'
     index.mkdir(parents=True)
