@@ -7,40 +7,44 @@
 # Ports default to config/hardware.yaml (the board's /dev/serial/by-id link, socketcan can0).
 # Starts driver_node, model_node and stiffness_controller_node in the background; Ctrl-C stops
 # all of them (trap). A node that cannot start (absent device, bad parameter) stops the launch
-# with its one-line error and exit status 2.
+# with its one-line error and exit status 2. Works from a checkout, a pip install and a colcon
+# install (the executables are found as `ros2 run` finds them). The network is left as the user
+# configured it (ROS_AUTOMATIC_DISCOVERY_RANGE, CYCLONEDDS_URI): a robot is meant to be seen.
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
-venv="${BELLOWS_VENV:-$top/.venv}"
-bin="$venv/bin"
-[ -x "$bin/driver_node" ] || bin=$(dirname "$(command -v driver_node)")
+if [ -f "$top/setup.py" ]; then here=$top; else here=$PWD; fi  # a checkout, or an install
+# shellcheck source=scripts/node_processes.sh
+source "$top/scripts/node_processes.sh"
+bin=$(find_executables "$top" launch_hw) || exit 2
+echo "launch_hw: executables in $bin" >&2
 params="$top/config/nodes_hw.yaml"
-logs="$top/out/hw_logs"
+logs="$here/out/hw_logs"
 driver=()
 actuator=1
 arm=1
 extra=()
 while [ $# -gt 0 ]; do
   case "$1" in
-    --actuator-port) driver+=(-p "actuator.port:=$2"); shift ;;
-    --can-channel) driver+=(-p "arm.channel:=$2"); shift ;;
-    --can-interface) driver+=(-p "arm.interface:=$2"); shift ;;
+    # node:name:=value: under rcl the file's driver_node section beats a bare -p (= /**).
+    --actuator-port) driver+=(-p "driver_node:actuator.port:=$2"); shift ;;
+    --can-channel) driver+=(-p "driver_node:arm.channel:=$2"); shift ;;
+    --can-interface) driver+=(-p "driver_node:arm.interface:=$2"); shift ;;
     --no-actuator) actuator=0 ;;
     --no-arm) arm=0 ;;
     --params) params="$2"; shift ;;
     --) shift; extra=("$@"); break ;;
-    -h|--help) sed -n '2,11p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
     *) echo "launch_hw.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
   shift
 done
-[ "$actuator" = 1 ] || driver+=(-p actuator.enabled:=false)
-[ "$arm" = 1 ] || driver+=(-p arm.enabled:=false)
+[ "$actuator" = 1 ] || driver+=(-p driver_node:actuator.enabled:=false)
+[ "$arm" = 1 ] || driver+=(-p driver_node:arm.enabled:=false)
+[ -f "$params" ] || { echo "launch_hw.sh: --params '$params': no such file" >&2; exit 2; }
 mkdir -p "$logs"
 common=(--ros-args --params-file "$params")
 
 node_logs="$logs"
-# shellcheck source=scripts/node_processes.sh
-source "$top/scripts/node_processes.sh"
 trap stop_nodes EXIT
 trap 'exit 130' INT TERM
 

@@ -9,19 +9,19 @@
 # DIR/logs. Then runs scenario_node (stiffness step 1400 -> 1900 N/m, segment_1 pressure
 # excursion to 4 bar): it prints a summary and writes DIR/scenario.png and DIR/scenario.csv, and the
 # graph is stopped. With --no-scenario the graph runs until Ctrl-C. Every process is stopped on
-# exit, Ctrl-C or error (trap). Uses rclpy when it is installed, Cyclone DDS otherwise.
+# exit, Ctrl-C or error (trap). Works from a checkout, a pip install and a colcon install (the
+# executables are found as `ros2 run` finds them). DDS discovery stays on this host.
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
-# From a checkout, set up first (idempotent: a no-op once done). A colcon install has no setup.py.
-if [ -f "$top/setup.py" ]; then "$top/scripts/setup.sh"; fi
-venv="${BELLOWS_VENV:-$top/.venv}"
-bin="$venv/bin"
-[ -x "$bin/driver_node" ] || bin=$(dirname "$(command -v driver_node)")   # colcon / pip install
-python="${PYTHON:-$venv/bin/python}"
-[ -x "$python" ] || python=python3
+# From a checkout, set up first (idempotent: a no-op once done). An install has no setup.py.
+if [ -f "$top/setup.py" ]; then "$top/scripts/setup.sh"; here=$top; else here=$PWD; fi
+# shellcheck source=scripts/node_processes.sh
+source "$top/scripts/node_processes.sh"
+bin=$(find_executables "$top" launch_sim) || exit 2
+echo "launch_sim: executables in $bin" >&2
 params="$top/config/nodes_sim.yaml"
-output="$top/out/scenario"
-duration=40
+output="$here/out/scenario"
+duration=40.0
 scenario=1
 extra=()
 while [ $# -gt 0 ]; do
@@ -31,20 +31,32 @@ while [ $# -gt 0 ]; do
     --output) output="$2"; shift ;;
     --params) params="$2"; shift ;;
     --) shift; extra=("$@"); break ;;
-    -h|--help) sed -n '2,13p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
     *) echo "launch_sim.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
   shift
 done
+case "$duration" in
+  ''|*[!0-9.]*|*.*.*) echo "launch_sim.sh: --duration '$duration': expected seconds, e.g. 40" >&2
+                     exit 2 ;;
+  *.*) ;;
+  *) duration="$duration.0" ;;  # rcl types parameters strictly: duration is a double
+esac
+[ -f "$params" ] || { echo "launch_sim.sh: --params '$params': no such file" >&2; exit 2; }
+# A simulation stays off the network: DDS discovery on this host only, Cyclone on loopback
+# (unless the user configured Cyclone); the simulated CAN bus is on loopback already.
+export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
+if [ -z "${CYCLONEDDS_URI:-}" ]; then
+  export CYCLONEDDS_URI='<CycloneDDS><Domain><General><Interfaces><NetworkInterface name="lo"/></Interfaces><AllowMulticast>false</AllowMulticast></General></Domain></CycloneDDS>'
+fi
 mkdir -p "$output/logs"
+output=$(cd "$output" && pwd)
 # A private pty link and multicast group per run, so two launches on one machine do not collide.
 port="${TMPDIR:-/tmp}/bellows_sim_actuator_$$"
 group="239.74.163.$(( ($$ % 200) + 20 ))"
 common=(--ros-args --params-file "$params")
 
 node_logs="$output/logs"
-# shellcheck source=scripts/node_processes.sh
-source "$top/scripts/node_processes.sh"
 cleanup() {
   stop_nodes
   rm -f "$port"
@@ -57,19 +69,20 @@ start() {  # start NAME ARGS...: a node in the background, log in $output/logs/N
   echo "launch_sim: $1 (pid $!)" >&2
 }
 
-start sim_arm_node -p "can.channel:=$group"
-start sim_actuator_node -p "port:=$port"
+# node:name:=value, after the file: under rcl a node's own section beats a bare -p (= /**).
+start sim_arm_node -p "sim_arm_node:can.channel:=$group"
+start sim_actuator_node -p "sim_actuator_node:port:=$port"
 for _ in $(seq 50); do [ -e "$port" ] && break; sleep 0.1; done
 nodes_alive launch_sim
-start driver_node -p "arm.channel:=$group" -p "actuator.port:=$port"
+start driver_node -p "driver_node:arm.channel:=$group" -p "driver_node:actuator.port:=$port"
 start model_node
 start stiffness_controller_node
 sleep 3
 nodes_alive launch_sim
 
 if [ "$scenario" = 1 ]; then
-  "$python" -m bellows_ros.nodes.scenario_node "${common[@]}" -p "duration:=$duration" \
-    -p "output_dir:=$output" "${extra[@]}"
+  "$bin/scenario_node" "${common[@]}" -p "scenario_node:duration:=$duration" \
+    -p "scenario_node:output_dir:=$output" "${extra[@]}"
   nodes_alive launch_sim
 else
   echo "launch_sim: graph running; Ctrl-C to stop" >&2

@@ -1,7 +1,33 @@
 # Sourced by launch_sim.sh and launch_hw.sh: nodes started in the background and stopped together.
-# The caller sets bin (the node executables), common and extra (arguments before and after each
-# node's own) and node_logs (the log folder), and traps EXIT with stop_nodes.
+# The caller sets bin (the node executables: find_executables), common and extra (arguments before
+# and after each node's own) and node_logs (the log folder), and traps EXIT with stop_nodes.
 pids=()
+
+find_executables() {  # find_executables TOP WHO: print the folder holding bellows_ros' executables
+  # As `ros2 run` finds them: a checkout's venv; the install the script itself came from
+  # (TOP = <prefix>/share/bellows_ros: colcon puts them in <prefix>/lib/bellows_ros, pip in the
+  # venv's bin/); the ament index (AMENT_PREFIX_PATH: <prefix>/lib/bellows_ros); then PATH.
+  local top=$1 who=$2 prefix dir
+  local candidates=()
+  [ -f "$top/setup.py" ] && candidates+=("${BELLOWS_VENV:-$top/.venv}/bin")
+  prefix=$(cd "$top/../.." && pwd)
+  candidates+=("$prefix/lib/bellows_ros" "$prefix/bin")
+  local IFS=:
+  for dir in ${AMENT_PREFIX_PATH:-}; do
+    [ -e "$dir/share/ament_index/resource_index/packages/bellows_ros" ] \
+      && candidates+=("$dir/lib/bellows_ros")
+  done
+  unset IFS
+  if command -v driver_node >/dev/null; then
+    candidates+=("$(dirname "$(command -v driver_node)")")
+  fi
+  for dir in "${candidates[@]}"; do
+    if [ -x "$dir/driver_node" ]; then echo "$dir"; return 0; fi
+  done
+  echo "$who: cannot find the bellows_ros executables (looked in: ${candidates[*]}); run" \
+    "scripts/setup.sh, pip install bellows_ros, or source a colcon install's setup.bash" >&2
+  return 2
+}
 
 stop_nodes() {  # every started node: TERM, up to 5 s to exit, then KILL
   trap - EXIT INT TERM

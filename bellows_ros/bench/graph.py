@@ -52,8 +52,9 @@ from bellows_ros.hardware.loop_timing import LoopStats, PeriodicLoop
 from bellows_ros.models.segment import SegmentModel, load_segment_params
 from bellows_ros.runtime import realtime
 
-CONFIG = Path(__file__).resolve().parent.parent.parent / 'config' / 'nodes_sim.yaml'
-ROBOT_CONFIG = CONFIG.with_name('nodes_hw.yaml')
+# The installed config (a pip or colcon install has no source tree beside the package).
+CONFIG = params.default_file('nodes_sim')
+ROBOT_CONFIG = params.default_file('nodes_hw')
 NODES = ('sim_arm_node', 'model_node', 'driver_node')  # in start order
 
 

@@ -1,0 +1,229 @@
+"""Launching under rclpy: `ros2 launch bellows_ros sim.launch.py`, `hw.launch.py`, launch_sim.sh.
+
+The launch files run from an ament prefix made by hand (what colcon installs, without a colcon
+build per test run: the package's share/ files as setup.py installs them, one executable per
+console script in lib/bellows_ros). The shell launcher runs from a non-editable `pip install`
+into a fresh venv. DDS stays on loopback, on this run's ROS_DOMAIN_ID.
+"""
+import csv
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import threading
+from pathlib import Path
+
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parent.parent
+LOOPBACK_URI = ('<CycloneDDS><Domain><General><Interfaces><NetworkInterface name="lo"/>'
+                '</Interfaces><AllowMulticast>false</AllowMulticast></General></Domain>'
+                '</CycloneDDS>')
+GUARD = 300  # s; a hang guard for a whole launch, not a timing assertion
+
+pytestmark = pytest.mark.slow
+
+
+def _ros_env(**extra):
+    env = dict(os.environ)
+    env.setdefault('ROS_DOMAIN_ID', '57')
+    env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    env.setdefault('CYCLONEDDS_URI', LOOPBACK_URI)
+    env.pop('BELLOWS_RUNTIME', None)  # under ROS the nodes pick rclpy, as a user's would
+    env['PYTHONUNBUFFERED'] = '1'
+    env.update(extra)
+    return env
+
+
+@pytest.fixture(scope='module')
+def ros():
+    """Skip (with the reason) where rclpy or the ros2 CLI is not usable."""
+    probe = subprocess.run([sys.executable, '-c', 'import rclpy, launch_ros'], env=_ros_env(),
+                           capture_output=True, text=True)
+    if probe.returncode != 0:
+        reason = (probe.stderr.strip().splitlines() or ['?'])[-1]
+        pytest.skip(f'rclpy not importable: {reason} (source your ROS 2 setup.bash)')
+    if shutil.which('ros2') is None:
+        pytest.skip('rclpy not importable: the ros2 CLI is not on PATH (source setup.bash)')
+
+
+@pytest.fixture(scope='module')
+def prefix(ros, tmp_path_factory):
+    """Make an ament prefix holding bellows_ros as colcon lays it out."""
+    top = tmp_path_factory.mktemp('ament_prefix')
+    index = top / 'share' / 'ament_index' / 'resource_index' / 'packages'
+    index.mkdir(parents=True)
+    (index / 'bellows_ros').touch()
+    share = top / 'share' / 'bellows_ros'
+    share.mkdir()
+    shutil.copy(ROOT / 'package.xml', share / 'package.xml')
+    shutil.copytree(ROOT / 'config', share / 'config')
+    (share / 'launch').mkdir()
+    for launch_file in (ROOT / 'launch').glob('*.launch.py'):
+        shutil.copy(launch_file, share / 'launch')
+    lib = top / 'lib' / 'bellows_ros'
+    lib.mkdir(parents=True)
+    scripts = re.findall(r"'(\w+) = (bellows_ros\.nodes\.\w+):main'",
+                         (ROOT / 'setup.py').read_text())
+    assert len(scripts) >= 6, scripts
+    for name, module in scripts:
+        exe = lib / name
+        exe.write_text(f'#!{sys.executable}\nimport sys\nfrom {module} import main\n'
+                       'sys.exit(main())\n')
+        exe.chmod(0o755)
+    return top
+
+
+def _prefix_env(prefix):
+    return _ros_env(AMENT_PREFIX_PATH=f"{prefix}:{os.environ.get('AMENT_PREFIX_PATH', '')}")
+
+
+def _series_counts(csv_path):
+    counts = {}
+    with open(csv_path) as stream:
+        for row in csv.DictReader(stream):
+            counts[row['series']] = counts.get(row['series'], 0) + 1
+    return counts
+
+
+def test_sim_launch_runs_the_scenario_and_shuts_down(prefix, tmp_path):
+    """`ros2 launch bellows_ros sim.launch.py`: the whole graph, the scenario, a clean exit 0."""
+    out = tmp_path / 'scenario'
+    run = subprocess.run(['ros2', 'launch', 'bellows_ros', 'sim.launch.py', 'duration:=12.0',
+                          f'output_dir:={out}'], env=_prefix_env(prefix), capture_output=True,
+                         text=True, timeout=GUARD)
+    log = run.stdout + run.stderr
+    assert run.returncode == 0, log[-3000:]
+    for node in ('sim_arm_node', 'sim_actuator_node', 'driver_node', 'model_node',
+                 'stiffness_controller_node', 'scenario_node'):
+        assert f'[{node}-' in log, f'{node} was not started:\n{log[-3000:]}'
+    assert re.search(r'\[scenario_node-\d+\] stiffness step', log), log[-3000:]
+    assert re.search(r'\[scenario_node-\d+\] tau_drive: [1-9]\d* samples', log), log[-3000:]
+    counts = _series_counts(out / 'scenario.csv')
+    # Pressures and angles came through the driver, torques from the model, the estimated
+    # stiffness from the controller: every node of the graph took part.
+    for series in ('p1', 'psi', 'tau_drive', 'x_c', 'stiffness'):
+        assert counts.get(series, 0) > 0, counts
+    assert (out / 'scenario.png').stat().st_size > 0
+
+
+def _read_until(process, patterns, guard=GUARD):
+    """Lines of `process` until every regex in `patterns` matched one; (matches, lines)."""
+    lines, found = [], {}
+    done = threading.Event()
+
+    def reader():
+        for line in process.stdout:
+            lines.append(line)
+            for pattern in patterns:
+                match = re.search(pattern, line)
+                if match and pattern not in found:
+                    found[pattern] = match
+            if len(found) == len(patterns):
+                done.set()
+        done.set()
+    thread = threading.Thread(target=reader, daemon=True)
+    thread.start()
+    done.wait(guard)
+    return found, lines
+
+
+def _stop(process):
+    if process.poll() is None:
+        process.send_signal(signal.SIGINT)  # as Ctrl-C: launch stops every node
+        try:
+            process.wait(30)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
+
+
+ACTUATOR_LINE = r'\[sim_actuator_node\]: simulated actuator board on (\S+), effects: (.*)$'
+ARM_LINE = r'\[sim_arm_node\]: simulated arm .* on udp_multicast:(\S+), effects: (.*)$'
+DRIVER_LINE = r'\[driver_node\]: driving arm and actuator'
+
+
+def test_sim_launch_arguments_override_the_parameter_file(prefix, tmp_path):
+    """Ports, channels and effects given as launch arguments are the ones the nodes use."""
+    sections = yaml.safe_load((ROOT / 'config' / 'nodes_sim.yaml').read_text())
+    port = tmp_path / 'actuator_pty'
+    channel = f'239.74.163.{(os.getpid() % 30) + 220}'
+    yaml_port = sections['sim_actuator_node']['ros__parameters']['port']
+    yaml_channel = sections['sim_arm_node']['ros__parameters']['can']['channel']
+    assert (str(port), channel) != (yaml_port, yaml_channel)  # else the test proves nothing
+    process = subprocess.Popen(
+        ['ros2', 'launch', 'bellows_ros', 'sim.launch.py', 'scenario:=false',
+         f'actuator_port:={port}', f'can_channel:={channel}',
+         'actuator_effects:=[wall_bulging, air_leak]', 'arm_effects:=none'],
+        env=_prefix_env(prefix), stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        found, lines = _read_until(process, [ACTUATOR_LINE, ARM_LINE, DRIVER_LINE])
+        pty_existed = port.exists()
+    finally:
+        _stop(process)
+    log = ''.join(lines)
+    assert len(found) == 3, log[-3000:]
+    actuator, arm = found[ACTUATOR_LINE], found[ARM_LINE]
+    assert actuator.group(1) == str(port)
+    assert actuator.group(2).strip() == 'wall_bulging, air_leak'
+    assert arm.group(1) == channel
+    assert arm.group(2).strip() in ('', 'none')
+    assert pty_existed  # the driver opened the board at the argument's path, not the file's
+
+
+def test_hw_launch_port_argument_reaches_the_driver(prefix, tmp_path):
+    """hw.launch.py: the driver opens the port given as argument; its absence ends the launch."""
+    port = tmp_path / 'no_such_board'
+    run = subprocess.run(['ros2', 'launch', 'bellows_ros', 'hw.launch.py', 'arm:=false',
+                          f'actuator_port:={port}'], env=_prefix_env(prefix),
+                         capture_output=True, text=True, timeout=GUARD)
+    log = run.stdout + run.stderr
+    assert f'actuator board port {port} does not exist' in log, log[-3000:]
+    assert run.returncode != 0, log[-3000:]
+    assert 'driver_node exited with status 2' in log, log[-3000:]
+
+
+def test_shell_launcher_from_a_pip_install(ros, tmp_path):
+    """scripts/launch_sim.sh as installed by a non-editable `pip install .` into a fresh venv.
+
+    The package itself is installed (wheel built from this tree, no source tree on its path);
+    its dependencies come from the running environment through a .pth file, so the test does not
+    download or reinstall numpy, scipy, matplotlib and cyclonedds.
+    """
+    venv = tmp_path / 'venv'
+    subprocess.run([sys.executable, '-m', 'venv', '--without-pip', str(venv)], check=True)
+    site = next((venv / 'lib').glob('python3*/site-packages'))
+    # Plain path lines: the .pth files there (this checkout's editable install) are not run.
+    deps = [p for p in sys.path if p.endswith('site-packages') and Path(p).is_dir()]
+    (site / 'zz_test_deps.pth').write_text('\n'.join(deps) + '\n')
+    python = venv / 'bin' / 'python'
+    install = subprocess.run([str(python), '-m', 'pip', 'install', '--quiet', '--no-deps',
+                              str(ROOT)], capture_output=True, text=True, timeout=GUARD)
+    assert install.returncode == 0, install.stderr[-3000:]
+    where = subprocess.run([str(python), '-c', 'import bellows_ros; print(bellows_ros.__file__)'],
+                           cwd=tmp_path, capture_output=True, text=True, check=True).stdout.strip()
+    assert where.startswith(str(venv)), where  # the installed copy, not this checkout
+    launcher = venv / 'share' / 'bellows_ros' / 'scripts' / 'launch_sim.sh'
+    assert launcher.is_file()
+    out = tmp_path / 'out'
+    # No checkout venv and no colcon install on PATH: the launcher must find its own prefix's bin/.
+    path = ':'.join(p for p in os.environ['PATH'].split(':')
+                    if not Path(p, 'driver_node').exists())
+    env = _ros_env(PATH=path, AMENT_PREFIX_PATH=os.environ.get('AMENT_PREFIX_PATH', ''))
+    env.pop('CYCLONEDDS_URI')
+    env.pop('ROS_AUTOMATIC_DISCOVERY_RANGE')  # the launcher sets both for a simulation
+    run = subprocess.run(['bash', str(launcher), '--duration', '12', '--output', str(out)],
+                         cwd=tmp_path, env=env, capture_output=True, text=True, timeout=GUARD)
+    log = run.stdout + run.stderr
+    assert run.returncode == 0, log[-3000:]
+    assert f'launch_sim: executables in {venv}/bin' in log
+    assert 'stiffness step' in run.stdout
+    counts = _series_counts(out / 'scenario.csv')
+    for series in ('p1', 'psi', 'tau_drive', 'stiffness'):
+        assert counts.get(series, 0) > 0, counts
+    # The launcher's private pty path (node:name:=value) beat the file's sim_actuator_node port.
+    board = (out / 'logs' / 'sim_actuator_node.log').read_text()
+    assert re.search(r'simulated actuator board on \S+/bellows_sim_actuator_\d+,', board), board
