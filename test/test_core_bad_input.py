@@ -40,20 +40,25 @@ def _wrench(ns, force_z):
     return STORE.types[WRENCH](header=_header(ns, 'actuator'), wrench=body)
 
 
-def write_actuator_bag(path, rows, storage=StoragePlugin.SQLITE3, joint_type=JOINT_STATE):
-    """rows: (stamp ns, x_c, x_s, p, f) -> the actuator's three topics, a message each per row."""
+def write_actuator_bag(path, rows, storage=StoragePlugin.SQLITE3, joint_type=JOINT_STATE,
+                       log_time=lambda k, ns: ns):
+    """rows: (stamp ns, x_c, x_s, p, f) -> the actuator's three topics, a message each per row.
+
+    Messages are logged at `log_time(row index, stamp)` (the header stamp by default).
+    """
     with Writer(path, version=8, storage_plugin=storage) as writer:
         joints = writer.add_connection('/joint_states', joint_type, typestore=STORE)
         chambers = writer.add_connection('/bellows/chambers', JOINT_STATE, typestore=STORE)
         forces = writer.add_connection('/bellows/wrench', WRENCH, typestore=STORE)
-        for ns, x_c, x_s, p, f in rows:
+        for k, (ns, x_c, x_s, p, f) in enumerate(rows):
             joint_message = (_joints(ns, ('air_chamber', 'spring'), position=(x_c, x_s))
                              if joint_type == JOINT_STATE else _wrench(ns, x_c))
             for connection, message, kind in (
                     (joints, joint_message, joint_type),
                     (chambers, _joints(ns, ('actuator',), effort=(p,)), JOINT_STATE),
                     (forces, _wrench(ns, f), WRENCH)):
-                writer.write(connection, ns, STORE.serialize_cdr(message, kind))
+                writer.write(connection, log_time(k, ns),
+                             STORE.serialize_cdr(message, kind))
 
 
 def actuator_rows(n=20, p_scale=1.0):
