@@ -9,12 +9,12 @@ DB = cp.load_dbc()
 
 
 def _cantools_frame(message, values, counter):
-    """Reference: cantools' strict encode, CRC over the data bytes + frame ID, encode again."""
+    """Reference: cantools' strict encode, CRC over frame ID + data bytes, encode again."""
     values = dict(values, Counter=counter & 0xFF, CRC=0)
     data = message.encode(values)
     crc_byte = message.get_signal_by_name('CRC').start // 8
     covered = bytes(data[:crc_byte]) + bytes(data[crc_byte + 1:])
-    values['CRC'] = cp.crc8_j1850(covered + message.frame_id.to_bytes(2, 'little'))
+    values['CRC'] = cp.crc8_j1850(message.frame_id.to_bytes(2, 'little') + covered)
     return message.encode(values, strict=False)
 
 
