@@ -220,6 +220,7 @@ def test_a_header_only_csv_gives_its_error_and_no_warning(tmp_path):
     assert [str(w.message) for w in caught] == []
 
 
+@pytest.mark.slow
 def test_the_cli_prints_only_the_error_for_a_header_only_csv(tmp_path):
     (tmp_path / 'h.csv').write_text('t,x_c,x_s,p,f\n')
     command = 'import sys; from bellows_ros.cli import main; sys.exit(main())'

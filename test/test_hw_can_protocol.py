@@ -53,8 +53,8 @@ def test_replayed_corrupt_and_misaddressed_frames_are_rejected_and_counted():
     f0 = cp.encode_frame(SEG1, {'P1': 2e5, 'P2': 1e5, 'Psi': 0.1}, 10)
     f1 = cp.encode_frame(SEG1, {'P1': 2e5, 'P2': 1e5, 'Psi': 0.2}, 11)
     f4 = cp.encode_frame(SEG1, {'P1': 2e5, 'P2': 1e5, 'Psi': 0.3}, 14)
-    assert checker.check(SEG1.frame_id, f0, 0.000) is not None
-    assert checker.check(SEG1.frame_id, f1, 0.001) is not None
+    assert checker.check(SEG1.frame_id, f0, 0.000)[1]['Psi'] == pytest.approx(0.1, abs=5e-5)
+    assert checker.check(SEG1.frame_id, f1, 0.001)[1]['Psi'] == pytest.approx(0.2, abs=5e-5)
     assert checker.check(SEG1.frame_id, f1, 0.002) is None        # same counter again: replay
     assert checker.check(SEG1.frame_id, f0, 0.003) is None        # older counter: replay
     assert checker.check(SEG2.frame_id, f1, 0.003) is None        # valid data under another ID
