@@ -259,11 +259,33 @@ def test_a_byte_order_mark_is_not_part_of_the_first_column_name(tmp_path):
     ('ogden: {mu: [a, 400.0]}', "'segment.ogden.mu' expects a list of numbers (like [4000.0, "
                                 "400.0]), got 'a' in it"),
     ('p_max: 1' + '0' * 400, "'segment.p_max' is beyond float range"),
+    ('dynamics: {inertia: -1.0}', "'segment.dynamics.inertia' must be >= 0"),
 ])
 def test_a_parameter_of_the_wrong_kind_is_named(tmp_path, capsys, body, needle):
     user = tmp_path / 'u.yaml'
     user.write_text('/**:\n  ros__parameters:\n    segment: {' + body + '}\n')
     status, err = run_cli(['simulate', 'segment', '--input', str(tmp_path / 'none.csv'),
+                           '--output', str(tmp_path / 'o.csv'), '--params', str(user)], capsys)
+    assert status == 2
+    assert_one_line(err, f'{user}: parameter {needle}')
+
+
+@pytest.mark.parametrize('body, needle', [
+    ('air_chamber: {h0: 0.0}', "'actuator.air_chamber.h0' must be > 0"),
+    ('spring: {n: 4.5}', "'actuator.spring.n' must be a positive whole number of segments, "
+                         'got 4.5'),
+    ('air_chamber: {r_small: 0.03}', "'actuator.air_chamber.r_big' must exceed r_small > 0"),
+    ('air_chamber: {x_max: 0.2}', "'actuator.air_chamber.x_max' must exceed x_min and stay below "
+                                  'n*h0 = 0.0746 m'),
+    ('air_chamber: {x_min: -0.2}', "'actuator.air_chamber.x_min' -0.2 m lies beyond the frustum "
+                                   'geometry (3)'),
+    ('gas: {x_c_ref: 0.047, p_ref: 0.0}', "'actuator.gas.p_ref' must be > 0"),
+    ('drive: {gear_ratio: 0.0}', "'actuator.drive.gear_ratio' must be > 0"),
+])
+def test_an_inadmissible_actuator_parameter_is_named(tmp_path, capsys, body, needle):
+    user = tmp_path / 'u.yaml'
+    user.write_text('/**:\n  ros__parameters:\n    actuator: {' + body + '}\n')
+    status, err = run_cli(['simulate', 'actuator', '--input', str(tmp_path / 'none.csv'),
                            '--output', str(tmp_path / 'o.csv'), '--params', str(user)], capsys)
     assert status == 2
     assert_one_line(err, f'{user}: parameter {needle}')
