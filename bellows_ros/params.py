@@ -109,6 +109,10 @@ def read_file(path, node_name=None):
     if not matched and node_name is None:
         raise ParameterError(f"{path}: no '/**' section with 'ros__parameters'")
     for name, value in flat.items():
+        # A blank, a control character or an empty part between dots names no parameter (and
+        # would break the one-line message).
+        if not name.isprintable() or ' ' in name or '' in name.split('.'):
+            raise ParameterError(f'{path}: {name!r} is not a parameter name')
         _check_value(path, name, value)
     return flat
 

@@ -10,6 +10,7 @@ import warnings
 
 import numpy as np
 import pytest
+import yaml
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
@@ -309,3 +310,13 @@ def test_a_good_bag_reads_back_what_was_written(tmp_path):
     np.testing.assert_allclose(table['t'], [(r[0] - rows[0][0]) * 1e-9 for r in rows])
     for i, name in enumerate(('x_c', 'x_s', 'p', 'f'), start=1):
         np.testing.assert_array_equal(table[name], [r[i] for r in rows])
+
+
+@pytest.mark.parametrize('name', ['a\nb', '', 'a..b', 'a b'])
+def test_a_name_that_is_no_parameter_name_is_one_line(tmp_path, name):
+    """Found by the YAML fuzzing: a key holding a newline broke the one-line message."""
+    path = tmp_path / 'p.yaml'
+    path.write_text(yaml.safe_dump({'/**': {'ros__parameters': {name: 1.0}}}))
+    with pytest.raises(ParameterError, match='is not a parameter name') as error:
+        params.read_file(path)
+    assert '\n' not in str(error.value) and repr(name) in str(error.value)
