@@ -134,6 +134,7 @@ def test_paper_a_story_end_to_end(tmp_path):
     assert 'contact_hysteresis' in text and 'extended.yaml' in text
 
 
+@pytest.mark.slow
 def test_record_pressurised_only_at_its_end_names_nothing(tmp_path):
     """Regression: a record (natural curvature hidden, pressures changing only between angle moves)
     whose chains are pressurised only in its last ~2 s, below 2.9 bar abs. Every pressurised sample

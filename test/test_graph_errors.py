@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow  # each test starts a node process (1-3 s)
 
 BIN = Path(sys.executable).parent
 CONFIG = Path(__file__).resolve().parent.parent / 'config' / 'nodes_sim.yaml'
@@ -34,7 +35,6 @@ def test_missing_serial_device(tmp_path):
     check(result, 'driver_node: error:', f'actuator board port {port} does not exist')
 
 
-@pytest.mark.slow
 def test_silent_can_bus(tmp_path):
     group = f'239.74.165.{random.randint(2, 250)}'  # nobody simulates an arm on this group
     result = run('driver_node', ['-p', 'arm.enabled:=true', '-p', 'arm.interface:=udp_multicast',
