@@ -15,6 +15,7 @@ Columns (see `bellows_ros.runtime.topics` for the wrench axes):
 from pathlib import Path
 
 import numpy as np
+import yaml
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
 
@@ -22,24 +23,48 @@ from bellows_ros.data import COLUMNS, Table, check_increasing
 from bellows_ros.errors import DataError
 
 SEGMENT = 'segment_1'
+TYPES = {'/joint_states': 'sensor_msgs/msg/JointState',
+         '/bellows/chambers': 'sensor_msgs/msg/JointState',
+         '/bellows/wrench': 'geometry_msgs/msg/WrenchStamped'}
+
+
+def _first_line(exc):
+    lines = str(exc).strip().splitlines()
+    return lines[0] if lines else type(exc).__name__
 
 
 def _stamp(msg):
     return msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
 
 
-def _messages(reader, typestore, topic):
+def _messages(path, reader, typestore, topic):
+    """The deserialised messages on `topic`; a corrupt or mistyped recording raises DataError."""
     connections = [c for c in reader.connections if c.topic == topic]
     if not connections:
         return  # rosbags reads every topic when given no connection
-    for connection, _, raw in reader.messages(connections=connections):
-        yield typestore.deserialize_cdr(raw, connection.msgtype)
+    for connection in connections:
+        if connection.msgtype != TYPES[topic]:
+            raise DataError(path, f'{topic} holds {connection.msgtype}, expected {TYPES[topic]}')
+    messages = reader.messages(connections=connections)
+    while True:
+        # rosbags and its storage back ends raise many types for damaged files (ReaderError,
+        # SerdeError, struct.error, UnicodeDecodeError, MemoryError for a corrupt length, apsw
+        # errors); to the user each means the same: this recording cannot be read.
+        try:
+            item = next(messages, None)
+            if item is None:
+                return
+            connection, timestamp, raw = item
+            message = typestore.deserialize_cdr(raw, connection.msgtype)
+        except Exception as exc:
+            raise DataError(path, f'{topic}: damaged message data ({_first_line(exc)})') from None
+        yield message
 
 
 def _joint_rows(path, reader, typestore, topic, names, field_names):
     """Stamps and values of `names` (each field of field_names) from messages that contain them."""
     stamps, rows = [], []
-    for msg in _messages(reader, typestore, topic):
+    for msg in _messages(path, reader, typestore, topic):
         index = {name: i for i, name in enumerate(msg.name)}
         if not all(name in index for name in names):
             continue
@@ -60,7 +85,7 @@ def _joint_rows(path, reader, typestore, topic, names, field_names):
 
 def _wrench_rows(path, reader, typestore, frame, axis):
     stamps, values = [], []
-    for msg in _messages(reader, typestore, '/bellows/wrench'):
+    for msg in _messages(path, reader, typestore, '/bellows/wrench'):
         if msg.header.frame_id in (frame, ''):
             kind, component = axis
             stamps.append(_stamp(msg))
@@ -78,15 +103,42 @@ def _hold(sample_stamps, stamps, values):
     return values[np.clip(index, 0, len(stamps) - 1)]
 
 
+def _check_metadata(path):
+    """Parse metadata.yaml first, so that a broken one is named with its line, not a traceback."""
+    metadata = path / 'metadata.yaml'
+    try:
+        document = yaml.safe_load(metadata.read_bytes())
+    except FileNotFoundError:
+        raise DataError(path, 'not a rosbag2 directory (it has no metadata.yaml)') from None
+    except OSError as exc:
+        raise DataError(metadata, f'cannot read file ({exc.strerror})') from None
+    except yaml.YAMLError as exc:  # also for bytes that are not text
+        mark = getattr(exc, 'problem_mark', None)
+        problem = getattr(exc, 'problem', None) or _first_line(exc)
+        raise DataError(metadata, f'not valid YAML: {problem}',
+                        None if mark is None else mark.line + 1) from None
+    if not isinstance(document, dict) \
+            or not isinstance(document.get('rosbag2_bagfile_information'), dict):
+        raise DataError(metadata, "no 'rosbag2_bagfile_information' map: not rosbag2 metadata")
+
+
+def _open(path):
+    """An open rosbags Reader of `path`, or DataError naming what is wrong."""
+    _check_metadata(path)
+    try:
+        reader = Reader(path)
+        reader.open()
+    except Exception as exc:  # rosbags' many error types for a bag it cannot open (see _messages)
+        raise DataError(path, f'cannot open the rosbag2 recording ({_first_line(exc)})') from None
+    return reader
+
+
 def read_bag_table(path, system):
     """A rosbag2 directory as a `Table` with the columns of `system` (docs/interfaces.md)."""
     path = Path(path)
     typestore = get_typestore(Stores.ROS2_JAZZY)
+    reader = _open(path)
     try:
-        reader = Reader(path)
-    except Exception as exc:  # rosbags raises its own errors for a directory that is not a bag
-        raise DataError(path, f'not a rosbag2 directory ({exc})') from None
-    with reader:
         if system == 'segment':
             stamps, joints = _joint_rows(path, reader, typestore, '/joint_states', [SEGMENT],
                                          ('position', 'velocity'))
@@ -110,10 +162,17 @@ def read_bag_table(path, system):
                        'f': _hold(stamps, wrench_stamps, force)[:, 0]}
         else:
             raise DataError(path, f"unknown system '{system}' (segment or actuator)")
+    finally:
+        reader.close()
     required, optional = COLUMNS[system]
     values = {'t': (stamps - stamps[0]) * 1e-9}
     values.update(columns)
     names = [n for n in required + optional if n in values]
     table = Table(str(path), names, {n: values[n] for n in names})
     check_increasing(table, 't')
+    for name in names:
+        bad = np.flatnonzero(~np.isfinite(table[name]))
+        if bad.size:  # the CSV reader refuses these too; a NaN would poison a fit silently
+            raise DataError(path, f'{table[name][bad[0]]} is not a finite number (stamp '
+                                  f'{stamps[bad[0]]} ns)', column=name)
     return table

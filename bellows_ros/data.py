@@ -23,6 +23,14 @@ COLUMNS = {
     'actuator': (('t', 'x_c', 'x_s', 'p', 'f'), ('run',)),
 }
 
+# Pressure columns of each system: absolute, in Pa.
+PRESSURES = {'segment': ('p1', 'p2'), 'actuator': ('p',)}
+# No bellows works near vacuum: a pressure column that never reaches 2 kPa abs was written in kPa
+# or bar (ambient is 101.3 kPa = 1.013 bar), and read as Pa it would be fitted without complaint.
+MIN_PLAUSIBLE_PRESSURE = 2e3
+# The segment's bending angle cannot pass a half turn; larger values are degrees.
+MAX_ANGLE = math.pi
+
 
 @dataclass
 class Table:
@@ -63,14 +71,35 @@ def read_csv(path, required, optional=()):
         raw = path.read_bytes()
     except OSError as exc:
         raise DataError(path, f'cannot read file ({exc.strerror})') from None
+    raw = raw.removeprefix(b'\xef\xbb\xbf')  # the UTF-8 byte-order mark spreadsheets write
     fast = _read_numeric(path, raw, required, optional)
     if fast is not None:
         return fast
     reader = csv.reader(io.StringIO(raw.decode(errors='replace'), newline=''))
+    try:
+        header, rows, lines = _split_rows(path, reader, required)
+    except csv.Error as exc:  # e.g. a field longer than the csv module's limit
+        raise DataError(path, str(exc), line=reader.line_num) from None
+    values, extras = {}, {}
+    for index, name in enumerate(header):
+        cells = [row[index] for row in rows]
+        if name in required or name in optional:
+            values[name] = _parse_column(path, name, cells, lines)
+        else:
+            extras[name] = cells
+    return Table(str(path), header, values, extras, lines)
+
+
+def _split_rows(path, reader, required):
+    """Header (checked against `required`) and the non-blank rows of a CSV with their lines."""
     header = next(reader, None)
     if not header:
         raise DataError(path, 'empty file: expected a header row', line=1)
     header = [name.strip() for name in header]
+    duplicate = next((name for i, name in enumerate(header) if name in header[:i]), None)
+    if duplicate is not None:
+        # Which of the two is meant cannot be known; taking either would be a silent guess.
+        raise DataError(path, f"column '{duplicate}' appears twice in the header", line=1)
     for name in required:
         if name not in header:
             raise DataError(path, f"missing column '{name}' (header has: {', '.join(header)})",
@@ -86,15 +115,7 @@ def read_csv(path, required, optional=()):
         lines.append(reader.line_num)
     if not rows:
         raise DataError(path, 'no data rows after the header')
-    wanted = [name for name in header if name in required or name in optional]
-    values, extras = {}, {}
-    for index, name in enumerate(header):
-        cells = [row[index] for row in rows]
-        if name in wanted:
-            values[name] = _parse_column(path, name, cells, lines)
-        else:
-            extras[name] = cells
-    return Table(str(path), header, values, extras, lines)
+    return header, rows, lines
 
 
 def _read_numeric(path, raw, required, optional):
@@ -106,14 +127,17 @@ def _read_numeric(path, raw, required, optional):
     first, _, body = raw.partition(b'\n')
     header = [name.strip() for name in first.decode(errors='replace').split(',')]
     if any(name not in required and name not in optional for name in header) \
-            or any(name not in header for name in required):
+            or any(name not in header for name in required) or len(set(header)) < len(header):
         return None
     rows = body.rstrip(b'\r\n').count(b'\n') + 1 if body.strip() else 0
+    if rows == 0:
+        return None  # loadtxt would warn about the empty body before the careful reader's error
     try:
-        array = np.loadtxt(io.BytesIO(body), delimiter=',', dtype=float, ndmin=2)
+        # comments=None: a '#' in a cell is an error for both readers, never a silent cut.
+        array = np.loadtxt(io.BytesIO(body), delimiter=',', dtype=float, ndmin=2, comments=None)
     except ValueError:
         return None
-    if rows == 0 or array.shape != (rows, len(header)) or not np.isfinite(array).all():
+    if array.shape != (rows, len(header)) or not np.isfinite(array).all():
         return None
     values = {name: np.ascontiguousarray(array[:, i]) for i, name in enumerate(header)}
     return Table(str(path), header, values, {}, list(range(2, rows + 2)))
@@ -123,12 +147,15 @@ def _parse_column(path, name, cells, lines):
     try:
         column = np.array(cells, dtype=float)
     except ValueError:
+        # Find the culprit; a cell only NumPy refuses (Python's float is the more lenient) is read
+        # as Python reads it.
+        parsed = []
         for cell, line in zip(cells, lines):
             try:
-                float(cell)
+                parsed.append(float(cell))
             except ValueError:
                 raise DataError(path, f'not a number: {cell.strip()!r}', line, name) from None
-        raise
+        column = np.array(parsed)
     bad = ~np.isfinite(column)
     if bad.any():
         first = int(np.argmax(bad))
@@ -165,13 +192,40 @@ def read_table(path, system, required=None):
     """
     if Path(path).is_dir():
         from bellows_ros.bag import read_bag_table
-        return read_bag_table(path, system)
+        table = read_bag_table(path, system)
+        check_units(table, system)
+        return table
     mandatory, optional = COLUMNS[system]
     required = mandatory if required is None else tuple(required)
     optional = tuple(name for name in mandatory + optional if name not in required)
     table = read_csv(path, required, optional)
     check_increasing(table, 't')
+    check_units(table, system, required)
     return table
+
+
+def check_units(table, system, names=None):
+    """Refuse columns whose values can only mean another unit: kPa or bar, degrees.
+
+    Only the columns in `names` (default: all of the system's) are checked; a simulation input may
+    carry old output columns that are replaced anyway.
+    """
+    names = COLUMNS[system][0] if names is None else names
+    for name in PRESSURES[system]:
+        if name in names and name in table:
+            highest = float(np.max(table[name]))
+            if highest < MIN_PLAUSIBLE_PRESSURE:
+                raise DataError(
+                    table.path, f'every value is below {MIN_PLAUSIBLE_PRESSURE:g} Pa (largest '
+                    f'{highest:g}): pressures are absolute, in Pa - was the file written in kPa '
+                    'or bar?', column=name)
+    if system == 'segment' and 'psi' in table:
+        beyond = np.flatnonzero(np.abs(table['psi']) > MAX_ANGLE)
+        if beyond.size:
+            first = int(beyond[0])
+            raise DataError(
+                table.path, f"{table['psi'][first]:g} is beyond a half turn: angles are in rad - "
+                'was the file written in degrees?', table.line(first), 'psi')
 
 
 def write_csv(path, table, outputs):

@@ -119,6 +119,10 @@ def read_sections(path):
             raise ParameterError(f"{path}: section '{section}' has no 'ros__parameters' map")
         flat = flatten(body['ros__parameters'])
         for name, value in flat.items():
+            # A blank, a control character or an empty part between dots names no parameter (and
+            # would break the one-line message).
+            if not name.isprintable() or ' ' in name or '' in name.split('.'):
+                raise ParameterError(f'{path}: {name!r} is not a parameter name')
             _check_value(path, name, value)
         key = '/' + str(section).lstrip('/')
         sections[key] = {**sections.get(key, {}), **flat}
@@ -166,16 +170,51 @@ def _check_value(path, name, value):
     for item in values:
         if isinstance(item, float) and not math.isfinite(item):
             raise ParameterError(f"{path}: parameter '{name}' is not finite ({item})")
+        if isinstance(item, int) and not isinstance(item, bool) and abs(item) > _LARGEST_INT:
+            raise ParameterError(f"{path}: parameter '{name}' is beyond float range (2**1023)")
         if not isinstance(item, (bool, int, float, str)):
             raise ParameterError(f"{path}: parameter '{name}' has an unsupported value {item!r}")
 
 
+# A YAML integer past float range would overflow the first time the model computes with it.
+_LARGEST_INT = 2 ** 1023
+
+
+def _kind(value):
+    """'bool', 'number', 'string' or 'list'."""
+    if isinstance(value, list):
+        return 'list'
+    if isinstance(value, bool):  # before int: YAML's true is not the number 1
+        return 'bool'
+    return 'number' if isinstance(value, (int, float)) else 'string'
+
+
+def _check_kind(source, name, default, value):
+    """`value` must be of the default's kind, a list's items of the kind of the default's items.
+
+    A string where a number belongs would otherwise reach the model as a TypeError deep inside.
+    """
+    expected = _kind(default)
+    if expected != _kind(value):
+        raise ParameterError(f"{source}: parameter '{name}' expects a {expected} (like "
+                             f'{default!r}), got {value!r}')
+    if expected == 'list' and default:
+        item_kind = _kind(default[0])
+        wrong = next((item for item in value if _kind(item) != item_kind), None)
+        if wrong is not None:
+            raise ParameterError(f"{source}: parameter '{name}' expects a list of {item_kind}s "
+                                 f'(like {default!r}), got {wrong!r} in it')
+
+
 def overlay(defaults, overrides, source):
-    """Lay `overrides` over `defaults`; a name the defaults lack raises ParameterError."""
+    """Lay `overrides` over `defaults`; a name the defaults lack, or a value of another kind (a
+    string for a number, a scalar for a list), raises ParameterError."""
     unknown = sorted(set(overrides) - set(defaults))
     if unknown:
         raise ParameterError(f"{source}: unknown parameter '{unknown[0]}'"
                              + (f' (and {len(unknown) - 1} more)' if len(unknown) > 1 else ''))
+    for name, value in overrides.items():
+        _check_kind(source, name, defaults[name], value)
     merged = dict(defaults)
     merged.update(overrides)
     return merged

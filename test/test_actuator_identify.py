@@ -32,6 +32,7 @@ def start():
                                chamber=fitted_terms_zeroed(TRUTH.chamber), spring=fitted_terms_zeroed(TRUTH.spring))
 
 
+@pytest.mark.slow
 def test_identification_recovers_e_v_within_0_4_ml(series, start):
     fit = fit_actuator(start, series['x_c'], series['x_s'], series['p'], series['f'], run=series['run'])
     x_c, x_s, p = series['x_c'], series['x_s'], series['p']
@@ -51,6 +52,7 @@ def test_identification_recovers_e_v_within_0_4_ml(series, start):
         assert stiffness(nominal, x_c_point) == pytest.approx(stiffness(TRUTH, x_c_point), rel=0.01)
 
 
+@pytest.mark.slow
 def test_geometric_baseline_fits_worse_on_bulging_data(series, start):
     full = fit_actuator(start, series['x_c'], series['x_s'], series['p'], series['f'], run=series['run'])
     base = fit_actuator(without_bulging(start), series['x_c'], series['x_s'], series['p'], series['f'],

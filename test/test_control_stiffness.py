@@ -27,6 +27,7 @@ def test_unreachable_setpoint_names_the_range():
     assert setpoint.k_target is None
 
 
+@pytest.mark.slow
 def test_leak_is_corrected_from_the_measured_pressure():
     """With air_leak on, the corrected controller holds K; a fixed x_c would drift."""
     # 3x the YAML's leak: a visible drift in 30 s. wall_bulging makes the plant's volumes those of

@@ -7,10 +7,12 @@ and only the file path is given to `bellows diagnose`.
 import dataclasses
 import json
 
+import matplotlib.image
 import numpy as np
 import pytest
 
 from bellows_ros.cli import main
+from bellows_ros.data import read_csv
 from bellows_ros.models.actuator import load_actuator_params
 from bellows_ros.models.actuator_experiments import actuator_record
 
@@ -54,6 +56,7 @@ def hidden(tmp_path, effects, seed):
     return write_csv(tmp_path / 'data.csv', record), chosen
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize('cause', sorted(EFFECTS))
 def test_names_the_hidden_cause(tmp_path, cause):
     data, chosen = hidden(tmp_path, [cause], seed=100 + sorted(EFFECTS).index(cause))
@@ -69,6 +72,7 @@ def test_names_the_hidden_cause(tmp_path, cause):
             assert fitted[name] == pytest.approx(true, rel=0.3), name
 
 
+@pytest.mark.slow
 def test_no_effect_is_none(tmp_path):
     data, _ = hidden(tmp_path, [], seed=7)
     report, directory = diagnose(tmp_path, data)
@@ -79,6 +83,7 @@ def test_no_effect_is_none(tmp_path):
     assert 'Cause: `none`' in (directory / 'report.md').read_text()
 
 
+@pytest.mark.slow
 def test_two_effects_are_both_named(tmp_path):
     data, _ = hidden(tmp_path, ['air_leak', 'sensor_lag'], seed=11)
     report, _ = diagnose(tmp_path, data)
@@ -87,6 +92,7 @@ def test_two_effects_are_both_named(tmp_path):
     assert report['gain'] >= 0.30
 
 
+@pytest.mark.slow
 def test_effect_outside_the_vocabulary_is_unexplained(tmp_path):
     """A pressure disturbance no candidate describes (a 0.3 Hz ripple from, say, a pump nearby)."""
     rng = np.random.default_rng(5)
@@ -100,24 +106,44 @@ def test_effect_outside_the_vocabulary_is_unexplained(tmp_path):
     assert 'Unexplained structure remains' in (directory / 'report.md').read_text()
 
 
+@pytest.mark.slow
 def test_report_files_and_extended_yaml_go_back_into_the_system(tmp_path):
     data, chosen = hidden(tmp_path, ['sensor_lag'], seed=21)
     report, directory = diagnose(tmp_path, data)
-    for name in ('report.md', 'residuals.png', 'fit.png', 'hysteresis.png', 'autocorrelation.png'):
-        assert (directory / name).stat().st_size > 1000, name
+    text = (directory / 'report.md').read_text()
+    assert 'sensor_lag' in text
+    for name in ('residuals.png', 'fit.png', 'hysteresis.png', 'autocorrelation.png'):
+        image = matplotlib.image.imread(directory / name)  # raises unless it is an image
+        colours = np.unique(image.reshape(-1, image.shape[-1]), axis=0)
+        assert min(image.shape[:2]) > 100 and len(colours) > 10, name  # drawn on, not blank
+        assert f'![{name}]({name})' in text, name  # and shown in the report
     assert report['baseline']['unit'] == 'Pa'
     assert all(set(c) == {'cause', 'heldout_rmse', 'params'} for c in report['candidates'])
     extended = load_actuator_params(directory / 'extended.yaml')
     tau = extended.effect_defaults()['sensor_lag']['time_constant']
     assert tau == pytest.approx(chosen['sensor_lag']['time_constant'], rel=0.3)
-    # the extended file drives `bellows simulate` with the fitted effect switched on
-    out = tmp_path / 'simulated.csv'
-    assert main(['simulate', 'actuator', '--input', data, '--output', str(out),
-                 '--params', str(directory / 'extended.yaml'), '--effect', 'sensor_lag']) == 0
-    assert out.stat().st_size > 0
+    # the extended file drives `bellows simulate` with the fitted effect switched on: its pressure
+    # is the unlagged one (a lag of 1 ns) passed through a first-order lag of the fitted tau
+    runs = {}
+    for name, effect in (('lagged', 'sensor_lag'), ('unlagged', 'sensor_lag:time_constant=1e-9')):
+        out = tmp_path / f'{name}.csv'
+        assert main(['simulate', 'actuator', '--input', data, '--output', str(out),
+                     '--params', str(directory / 'extended.yaml'), '--effect', effect]) == 0
+        runs[name] = read_csv(out, ('t', 'x_c', 'x_s', 'p', 'f', 'k'))
+    source = read_csv(data, ('t', 'x_c', 'x_s', 'p', 'f'))
+    np.testing.assert_array_equal(runs['lagged']['x_c'], source['x_c'])  # input rows carried
+    t, true, lagged = source['t'], runs['unlagged']['p'], runs['lagged']['p']
+    expected = np.empty_like(true)
+    expected[0] = true[0]
+    for i in range(1, len(t)):
+        alpha = -np.expm1(-(t[i] - t[i - 1]) / tau)
+        expected[i] = expected[i - 1] + (true[i] - expected[i - 1]) * alpha
+    assert np.max(np.abs(lagged - true)) > 50.0  # the lag shows (a few hundred Pa on the steps)
+    np.testing.assert_allclose(lagged, expected, rtol=0, atol=1e-6)
     assert 'extended.yaml' in (directory / 'report.md').read_text()
 
 
+@pytest.mark.slow
 def test_backlash_not_identifiable_without_reversals(tmp_path):
     rng = np.random.default_rng(3)
     params = random_params(rng)
@@ -138,6 +164,7 @@ def test_backlash_not_identifiable_without_reversals(tmp_path):
     assert report['cause'] == 'none'
 
 
+@pytest.mark.slow
 def test_backlash_in_a_record_that_never_reverses_is_not_named_as_something_else(tmp_path):
     """Backlash in the plant, but the chamber only compresses: the plate then just trails the nut
     (the encoder) by half the play, a constant offset. Backlash is not identifiable, and the offset

@@ -7,6 +7,7 @@ The bag is written here with rosbags' own writer and the ROS 2 Jazzy type store:
 import json
 
 import numpy as np
+import pytest
 from rosbags.rosbag2 import Writer
 from rosbags.typesys import Stores, get_typestore
 
@@ -56,6 +57,7 @@ def write_actuator_bag(path, record, every=4):
                 writer.write(connection, ns, STORE.serialize_cdr(message, kind))
 
 
+@pytest.mark.slow
 def test_names_a_hidden_effect_from_a_rosbag2(tmp_path):
     params = load_actuator_params()
     record = actuator_record(params, {'backlash': {'width': 4e-4}}, seed=41, duration=30.0)

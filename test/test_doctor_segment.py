@@ -58,6 +58,7 @@ def diagnose(tmp_path, data):
     return json.loads((report / 'report.json').read_text()), report
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize('cause', sorted(EFFECTS))
 def test_names_the_hidden_cause(tmp_path, cause):
     data, chosen = hidden(tmp_path, [cause], seed=200 + sorted(EFFECTS).index(cause))
@@ -78,6 +79,7 @@ def test_names_the_hidden_cause(tmp_path, cause):
     assert report['unexplained'] is False
 
 
+@pytest.mark.slow
 def test_no_effect_is_none(tmp_path):
     data, _ = hidden(tmp_path, [], seed=9)
     report, _ = diagnose(tmp_path, data)
@@ -86,6 +88,7 @@ def test_no_effect_is_none(tmp_path):
     assert report['unexplained'] is False
 
 
+@pytest.mark.slow
 def test_effect_outside_the_vocabulary_is_unexplained(tmp_path):
     """A 0.3 Hz torque ripple (no cause of the vocabulary makes one) must not get the nearest name."""
     rng = np.random.default_rng(21)
@@ -99,6 +102,7 @@ def test_effect_outside_the_vocabulary_is_unexplained(tmp_path):
     assert 'Unexplained structure remains' in (directory / 'report.md').read_text()
 
 
+@pytest.mark.slow
 def test_two_effects_are_both_named(tmp_path):
     data, _ = hidden(tmp_path, ['contact_hysteresis', 'pressure_friction'], seed=13)
     report, _ = diagnose(tmp_path, data)
@@ -106,6 +110,7 @@ def test_two_effects_are_both_named(tmp_path):
     assert report['gain'] >= MIN_GAIN
 
 
+@pytest.mark.slow
 def test_paper_a_story_end_to_end(tmp_path):
     """Paper A: the previous model (34) cannot show the contact hysteresis (error 3.2 N·m in Fig. 10,
     0.6 N·m with the membrane-contact model). The doctor must find the cause by itself, with a gain
@@ -129,6 +134,7 @@ def test_paper_a_story_end_to_end(tmp_path):
     assert 'contact_hysteresis' in text and 'extended.yaml' in text
 
 
+@pytest.mark.slow
 def test_record_pressurised_only_at_its_end_names_nothing(tmp_path):
     """Regression: a record (natural curvature hidden, pressures changing only between angle moves)
     whose chains are pressurised only in its last ~2 s, below 2.9 bar abs. Every pressurised sample

@@ -7,6 +7,8 @@ import math
 import os
 import time
 
+import pytest
+
 from bellows_ros import params
 from bellows_ros.bench import Result
 from bellows_ros.bench import graph
@@ -22,7 +24,8 @@ def test_the_wakeup_reference_measures_a_lone_1khz_loop():
     elapsed = time.perf_counter() - start
     if os.access(realtime.CPU_LATENCY_DEVICE, os.W_OK):
         assert result.extra['cpu_latency_limit'] == min(before, 123e-6)   # held while it ran
-    assert realtime.cpu_latency_in_force() == before or math.isnan(before)  # and withdrawn after
+    after = realtime.cpu_latency_in_force()  # and withdrawn after (nan: the device is unreadable)
+    assert after == before or (math.isnan(before) and math.isnan(after)), (before, after)
     ticks, slots = result.samples, result.extra['slots']
     # Every 1 ms slot the loop lived through either ticked or was counted missed; how many slots
     # that is depends on how long the (shared) machine took, so the bound is the time measured here.
@@ -30,7 +33,10 @@ def test_the_wakeup_reference_measures_a_lone_1khz_loop():
     assert result.extra['slots_missed'] == (slots - ticks) / slots
     assert 0.0 <= result.extra['p50'] <= result.value <= result.extra['max']
     assert result.extra['scheduling'] in ('SCHED_FIFO 50', 'SCHED_OTHER')
-    assert 0.0 <= result.extra['steal'] <= 1.0 or math.isnan(result.extra['steal'])
+    if os.access('/proc/stat', os.R_OK):  # where the kernel tells, steal is a fraction
+        assert 0.0 <= result.extra['steal'] <= 1.0
+    else:
+        assert math.isnan(result.extra['steal'])
 
 
 def test_fractions_in_extra_are_shown_without_the_figures_unit():
@@ -40,6 +46,7 @@ def test_fractions_in_extra_are_shown_without_the_figures_unit():
     assert '    p50:        980 Hz' in table
 
 
+@pytest.mark.slow
 def test_graph_bench_reports_every_figure_for_each_variant(capsys):
     configured = params.read_file(graph.CONFIG, 'model_node')['cpu_latency_limit']
     unlimited = realtime.cpu_latency_in_force()

@@ -9,6 +9,8 @@ import pytest
 
 from runtimes import node_env
 
+pytestmark = pytest.mark.slow  # each test starts a node process (1-3 s)
+
 BIN = Path(sys.executable).parent
 CONFIG = Path(__file__).resolve().parent.parent / 'config' / 'nodes_sim.yaml'
 

@@ -8,6 +8,7 @@ independent plain-Cyclone subscriber (no bellows_ros import, its own IDL definit
 type names) must see /joint_states and /bellows/driving_torque. Then the driver is stopped and its
 final count of published arm samples must equal the model node's count of evaluated samples.
 """
+import math
 import os
 import random
 import subprocess
@@ -111,6 +112,9 @@ def stop(process, timeout=10):
     return process.returncode
 
 
+pytestmark = pytest.mark.slow  # four node processes, ~25 s per runtime
+
+
 @pytest.fixture
 def graph(runtime, tmp_path, monkeypatch):
     domain = str(random.randint(100, 180))
@@ -168,7 +172,8 @@ def test_graph_publishes_and_every_sample_is_evaluated(graph):
     assert set(lines) == {'/joint_states', '/bellows/driving_torque'}, logs(tmp_path)
     for line in lines.values():
         name, sec, _nanosec, value = line.split()
-        assert name == 'segment_1' and int(sec) > 0 and float(value) == float(value)
+        assert name == 'segment_1' and abs(int(sec) - time.time()) < 600 \
+            and math.isfinite(float(value)), line
     # The same reader can tell which node publishes what (ROS 2's graph, `ros_discovery_info`).
     owners = subprocess.run([sys.executable, '-c', PLAIN_GRAPH_READER, domain, '/joint_states',
                              '/bellows/driving_torque'],

@@ -44,6 +44,7 @@ def launch(name, args, env, log_dir):
                             env=env, stdout=log, stderr=subprocess.STDOUT)
 
 
+@pytest.mark.slow
 @pytest.mark.timeout(200)
 def test_stiffness_step_and_leak_hold(runtime, tmp_path, monkeypatch):
     params = load_actuator_params()

@@ -57,6 +57,7 @@ def rig(request):
         thing.close()
 
 
+@pytest.mark.slow
 def test_ten_seconds_with_one_percent_corruption_delivers_only_true_values(rig):
     received = []
     sim, board = rig(faults=Faults(corrupt_rate=0.01, seed=4), record=True,

@@ -86,6 +86,7 @@ def rig(request):
         thing.close()
 
 
+@pytest.mark.slow
 def test_corrupt_and_replayed_frames_never_reach_the_user(rig):
     received = []
     sim, arm = rig(faults=Faults(corrupt_rate=0.005, replay_rate=0.01, seed=3),
@@ -189,6 +190,7 @@ print(json.dumps({'setpoints': setpoints, 'counters': sim.counters(),
 '''
 
 
+@pytest.mark.slow
 def test_four_segments_at_1khz_between_two_processes_over_udp_multicast():
     group, port = '239.74.163.2', 40000 + os.getpid() % 20000  # own port: parallel runs stay apart
     config = dataclasses.replace(CONFIG, interface='udp_multicast', channel=group)

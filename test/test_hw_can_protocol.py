@@ -1,7 +1,9 @@
 """CAN protocol of the arm: DBC round trips, integrity checks, fuzzing, bus load from the DBC."""
+import itertools
 import re
 from pathlib import Path
 
+import cantools
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -41,7 +43,8 @@ def test_setpoint_round_trip_through_the_dbc():
 
 
 def test_out_of_range_value_is_refused_not_wrapped():
-    with pytest.raises(Exception):
+    with pytest.raises(cantools.database.EncodeError, match='"P1" of ARM_SEG1_SAMPLE: 2000000.0 '
+                                                            'outside the DBC range'):
         cp.encode_frame(SEG1, {'P1': 2e6, 'P2': 1e5, 'Psi': 0.0}, 0)
 
 
@@ -50,8 +53,8 @@ def test_replayed_corrupt_and_misaddressed_frames_are_rejected_and_counted():
     f0 = cp.encode_frame(SEG1, {'P1': 2e5, 'P2': 1e5, 'Psi': 0.1}, 10)
     f1 = cp.encode_frame(SEG1, {'P1': 2e5, 'P2': 1e5, 'Psi': 0.2}, 11)
     f4 = cp.encode_frame(SEG1, {'P1': 2e5, 'P2': 1e5, 'Psi': 0.3}, 14)
-    assert checker.check(SEG1.frame_id, f0, 0.000) is not None
-    assert checker.check(SEG1.frame_id, f1, 0.001) is not None
+    assert checker.check(SEG1.frame_id, f0, 0.000)[1]['Psi'] == pytest.approx(0.1, abs=5e-5)
+    assert checker.check(SEG1.frame_id, f1, 0.001)[1]['Psi'] == pytest.approx(0.2, abs=5e-5)
     assert checker.check(SEG1.frame_id, f1, 0.002) is None        # same counter again: replay
     assert checker.check(SEG1.frame_id, f0, 0.003) is None        # older counter: replay
     assert checker.check(SEG2.frame_id, f1, 0.003) is None        # valid data under another ID
@@ -72,7 +75,7 @@ def test_random_frames_never_raise_and_never_pass_a_bad_crc(frame_id, data):
     if result is not None:
         message, values = result
         crc_byte = message.get_signal_by_name('CRC').start // 8
-        covered = data[:crc_byte] + data[crc_byte + 1:] + message.frame_id.to_bytes(2, 'little')
+        covered = message.frame_id.to_bytes(2, 'little') + data[:crc_byte] + data[crc_byte + 1:]
         assert values['CRC'] == cp.crc8_j1850(covered) == data[crc_byte]
 
 
@@ -85,6 +88,88 @@ def test_any_single_byte_corruption_is_rejected(p1, p2, psi, counter, position, 
     checker = cp.FrameChecker(DB)
     assert checker.check(SEG1.frame_id, bytes(data), 0.0) is None
     assert checker.crc_errors == 1
+
+
+def _nominal_frame(message, counter=3):
+    values = {s.name: (s.minimum + s.maximum) / 2 for s in message.signals
+              if s.name not in ('Counter', 'CRC')}
+    return cp.encode_frame(message, values, counter)
+
+
+@pytest.mark.parametrize('message', DB.messages, ids=lambda m: m.name)
+def test_every_error_of_two_bits_or_an_8_bit_burst_is_rejected(message):
+    """Exhaustive, in wire order (bytes in order, most significant bit first): the CRC is linear,
+    so which error patterns pass depends on the pattern alone, not on the frame's values."""
+    good = _nominal_frame(message)
+    bits = 8 * len(good)
+    word = int.from_bytes(good, 'big')
+    patterns = {burst << shift for burst in range(1, 256) for shift in range(bits - 7)}
+    patterns |= {(1 << i) | (1 << j) for i, j in itertools.combinations(range(bits), 2)}
+    checker = cp.FrameChecker(DB)
+    for pattern in patterns:
+        assert checker.check(message.frame_id, (word ^ pattern).to_bytes(len(good), 'big'),
+                             0.0) is None, hex(pattern)
+    assert checker.crc_errors == len(patterns) and checker.accepted == 0
+    assert checker.check(message.frame_id, good, 0.0) is not None  # and the frame itself passes
+
+
+@pytest.mark.parametrize('sent', DB.messages, ids=lambda m: m.name)
+def test_a_good_frame_under_any_other_id_is_rejected(sent):
+    frame = _nominal_frame(sent)
+    for other in DB.messages:
+        if other is not sent:
+            checker = cp.FrameChecker(DB)
+            assert checker.check(other.frame_id, frame, 0.0) is None
+            assert checker.crc_errors + checker.malformed == 1  # length differs, or the ID's CRC
+
+
+@st.composite
+def traffic(draw):
+    """Frames as a receiver may see them: good ones in counter order, repeats, stale ones, up to
+    two flipped bits, a foreign ID, a wrong length."""
+    events, counters, sent = [], {}, []
+    for _ in range(draw(st.integers(1, 30))):
+        message = draw(st.sampled_from(DB.messages))
+        counters[message.frame_id] = (counters.get(message.frame_id, 0)
+                                      + draw(st.sampled_from([1, 1, 1, 0, 2, 200]))) % 256
+        data = bytearray(_nominal_frame(message, counters[message.frame_id]))
+        sent.append((message.frame_id, bytes(data)))
+        kind = draw(st.sampled_from(['good'] * 4 + ['bits', 'id', 'short']))
+        frame_id = message.frame_id
+        if kind == 'bits':
+            for bit in draw(st.lists(st.integers(0, 8 * len(data) - 1), min_size=1, max_size=2,
+                                     unique=True)):
+                data[bit // 8] ^= 0x80 >> (bit % 8)
+        elif kind == 'id':
+            frame_id = draw(st.sampled_from([0, 0x7FF] + [m.frame_id for m in DB.messages]))
+        elif kind == 'short':
+            data = data[:draw(st.integers(0, len(data) - 1))]
+        events.append((frame_id, bytes(data), draw(st.floats(0.0, 0.1))))
+    return events, sent
+
+
+@settings(max_examples=100, deadline=None)
+@given(traffic())
+def test_every_frame_is_accepted_once_or_counted_once_and_nothing_else_is_accepted(case):
+    events, sent = case
+    checker = cp.FrameChecker(DB)
+    now, outcomes = 0.0, 0
+    for frame_id, data, dt in events:
+        now += dt
+        before = dict(checker.counters())
+        result = checker.check(frame_id, data, now)
+        changed = {k for k, v in checker.counters().items() if v != before[k]} - {'lost'}
+        assert len(changed) == 1  # exactly one of accepted, unknown, malformed, crc, replayed
+        outcomes += 1
+        if result is not None:
+            message, values = result
+            # only a frame that was sent, under the ID it was sent with (at most two bits flipped
+            # cannot make another valid frame), with values inside the DBC ranges
+            assert (frame_id, data) in sent and message.frame_id == frame_id
+            for signal in message.signals:
+                assert signal.minimum <= values[signal.name] <= signal.maximum
+    counts = checker.counters()
+    assert outcomes == sum(v for k, v in counts.items() if k != 'lost')
 
 
 def test_frame_bits_worst_case_stuffing():

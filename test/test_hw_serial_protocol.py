@@ -2,6 +2,7 @@
 import zlib
 
 from cobs import cobs
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -104,3 +105,48 @@ def test_mutated_streams_yield_only_messages_that_were_sent(sent, mutations):
     out = decoder.feed(bytes(stream)) + decoder.feed(b'\x00')
     for message in out:
         assert message in sent  # CRC-32: a corrupted frame is never passed as a good one
+
+
+@pytest.mark.parametrize('sent', MESSAGES, ids=lambda m: type(m).__name__)
+def test_every_single_byte_corruption_loses_that_frame_only_and_is_counted(sent):
+    """Exhaustive: each byte of one frame (COBS code bytes and the delimiter included) set to each
+    other value, between two good frames. Never a different message; the frame after it survives
+    unless its delimiter was hit (then the two run together and are lost as one)."""
+    before, after = sp.encode(MESSAGES[4]), sp.encode(MESSAGES[2])
+    frame = sp.encode(sent)
+    for position in range(len(frame)):
+        for value in range(256):
+            if value == frame[position]:
+                continue
+            spoilt = bytearray(frame)
+            spoilt[position] = value
+            decoder = sp.FrameDecoder()
+            out = decoder.feed(before + bytes(spoilt) + after)
+            delimiter_hit = position == len(frame) - 1
+            assert out == ([MESSAGES[4]] if delimiter_hit else [MESSAGES[4], MESSAGES[2]]), \
+                (position, value)
+            assert errors(decoder) >= 1
+
+
+def errors(decoder):
+    return (decoder.crc_errors + decoder.framing_errors + decoder.version_errors
+            + decoder.unknown_types)
+
+
+def delimited_chunks(stream):
+    """Non-empty runs ended by a 0x00: each must come out as one message or one counted error."""
+    return sum(1 for chunk in stream.split(b'\x00')[:-1] if chunk)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.one_of(messages.map(sp.encode), st.binary(max_size=60)), max_size=8),
+       st.lists(st.tuples(st.integers(0, 10 ** 6), st.integers(0, 255)), max_size=3))
+def test_every_delimited_chunk_is_a_message_or_one_counted_error(parts, mutations):
+    stream = bytearray(b''.join(parts))
+    for position, value in mutations:
+        if stream:
+            stream[position % len(stream)] = value
+    decoder = sp.FrameDecoder()
+    out = decoder.feed(bytes(stream))
+    assert len(out) == decoder.frames
+    assert decoder.frames + errors(decoder) == delimited_chunks(bytes(stream))

@@ -1,4 +1,5 @@
 """The struct-based CDR path of the message classes writes and reads cyclonedds' exact bytes."""
+import pytest
 from cyclonedds.idl import IdlStruct
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -9,6 +10,7 @@ names = st.lists(st.text(max_size=12), max_size=6)
 floats = st.lists(st.floats(allow_nan=False), max_size=5)
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None)
 @given(names, floats, floats, floats, st.integers(-2**31, 2**31 - 1), st.integers(0, 2**32 - 1),
        st.text(max_size=7))

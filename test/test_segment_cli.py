@@ -61,6 +61,7 @@ def test_simulate_with_effects_runs_the_plant(tmp_path, record):
     assert np.max(np.abs(p1 - cmd)) > 1e4  # the measured pressure lags the command
 
 
+@pytest.mark.slow
 def test_identify_round_trip_through_the_cli(tmp_path, record):
     """identify (subprocess: the real entry point) -> YAML -> simulate with --params."""
     short = {k: v[:400] for k, v in record.items()}

@@ -41,6 +41,7 @@ def fitted():
     return truth, fit
 
 
+@pytest.mark.slow
 def test_fitted_model_is_within_the_noise_on_unseen_records(fitted):
     truth, fit = fitted
     sigma = NOISE['tau']
@@ -65,6 +66,7 @@ def test_fitted_model_is_within_the_noise_on_unseen_records(fitted):
     assert fit.heldout['previous'][0] > 5 * fit.heldout['model'][0]
 
 
+@pytest.mark.slow
 def test_fit_reproduces_the_fig10_hysteresis(fitted):
     truth, fit = fitted
     fit_before, fit_after, prev_before, prev_after = fig10_torques(fit.params)

@@ -106,6 +106,7 @@ def test_reset_restores_the_initial_state(params):
     assert first == again
 
 
+@pytest.mark.slow
 def test_fig10_calibration_of_the_default_parameters(params):
     """Fig. 10 scenario (chain 1 at 4 bar abs, chain 2 vented, Ψ = 74.5°, excursion to -30° and
     back): paper A measured 6.7 N·m before and 9.1 N·m after; the previous model gives one value."""

@@ -1,9 +1,12 @@
 """CAN protocol of the arm: frames described by config/arm.dbc, used through cantools.
 
 Every frame ends with two DBC signals, ``Counter`` (8-bit, +1 per transmission of that frame ID) and
-``CRC`` (CRC-8 SAE J1850 over the frame's other data bytes followed by the frame ID as two bytes,
-little-endian -- the data-ID idea of AUTOSAR E2E profile 1, so a frame with a valid CRC under
-another ID is still rejected). Spec and bus-load budget: docs/protocols.md, "CAN".
+``CRC`` (CRC-8 SAE J1850 over the frame ID as two bytes little-endian followed by the frame's
+other data bytes -- the data-ID idea of AUTOSAR E2E profile 1, so a frame with a valid CRC under
+another ID is still rejected). The ID goes first so that the CRC byte, last in every frame,
+directly follows the bytes it covers, as on the wire: then every error burst of up to 8 bits is
+detected (with the ID after the data, a burst across the last data byte and the CRC byte could
+pass). Spec and bus-load budget: docs/protocols.md, "CAN".
 
 API
 ---
@@ -38,8 +41,8 @@ def load_dbc(path=None):
         if 'Counter' not in names or 'CRC' not in names:
             raise ValueError(f'{path}: frame {message.name} lacks a Counter or CRC signal')
         crc = message.get_signal_by_name('CRC')
-        if crc.length != 8 or crc.start % 8:
-            raise ValueError(f'{path}: frame {message.name}: CRC must be one whole byte')
+        if crc.length != 8 or crc.start != 8 * (message.length - 1):
+            raise ValueError(f'{path}: frame {message.name}: CRC must be the last whole byte')
     return db
 
 
@@ -101,9 +104,9 @@ class FrameCodec:
         self._names = frozenset(s.name for s in message.signals)
 
     def crc(self, data):
-        """CRC-8 of `data` without its CRC byte, followed by the frame ID (see module docstring)."""
+        """CRC-8 of the frame ID, then `data` without its CRC byte (see module docstring)."""
         i = self.crc_byte
-        return crc8_j1850(bytes(data[:i]) + bytes(data[i + 1:]) + self._id_bytes)
+        return crc8_j1850(self._id_bytes + bytes(data[:i]) + bytes(data[i + 1:]))
 
     def encode(self, values, counter):
         """Data bytes with `values` (physical units), the rolling `counter` and the CRC."""

@@ -133,6 +133,7 @@ def params_from_flat(flat, source='parameters'):
         effect, _, key = name.partition('.')
         effects.setdefault(effect, {})[key] = float(value)
     try:
+        _check_admissible(parts, source)
         return ActuatorParams(
             chamber=build(Bellows, parts['air_chamber'], f'{source}: actuator.air_chamber'),
             spring=build(Bellows, parts['spring'], f'{source}: actuator.spring'),
@@ -149,6 +150,61 @@ def params_from_flat(flat, source='parameters'):
         )
     except TypeError as exc:  # a list where a number belongs, or the reverse
         raise ParameterError(f'{source}: {exc}') from None
+
+
+def _check_admissible(parts, source):
+    """Refuse values the equations cannot use, naming the parameter (as the segment's check does).
+
+    Without this a zero height divides by zero while the gas amount is computed, a fractional
+    segment count is silently truncated, and a travel range beyond the frustum geometry (3) takes
+    the square root of a negative number.
+    """
+    def fail(name, why):
+        raise ParameterError(f"{source}: parameter 'actuator.{name}' {why}")
+
+    def number(group, name):
+        value = parts[group].get(name)
+        if not isinstance(value, (int, float)) or isinstance(value, bool):
+            fail(f'{group}.{name}', f'must be a number, got {value!r}')
+        return float(value)
+    for group in ('air_chamber', 'spring'):
+        r_big, r_small = number(group, 'r_big'), number(group, 'r_small')
+        h0, x_min, x_max = number(group, 'h0'), number(group, 'x_min'), number(group, 'x_max')
+        n = parts[group].get('n')
+        if isinstance(n, bool) or not isinstance(n, (int, float)) or n != int(n) or n < 1:
+            fail(f'{group}.n', f'must be a positive whole number of segments, got {n!r}')
+        if not r_big > r_small > 0:
+            fail(f'{group}.r_big', f'must exceed r_small > 0 (got {r_big:g}, {r_small:g})')
+        if not h0 > 0:
+            fail(f'{group}.h0', 'must be > 0')
+        if number(group, 'wall') < 0:
+            fail(f'{group}.wall', 'must be >= 0')
+        if not x_min < x_max < n * h0:
+            fail(f'{group}.x_max', f'must exceed x_min and stay below n*h0 = {n * h0:g} m')
+        for x in (x_min, x_max):  # R(dh)^2 term of (3) is concave in dh: the ends bound it
+            dh = x / n
+            if (r_big - r_small) ** 2 - (dh * dh - 2.0 * h0 * dh) / 4.0 <= 0:
+                fail(f'{group}.x_min' if x == x_min else f'{group}.x_max',
+                     f'{x:g} m lies beyond the frustum geometry (3) of this bellows')
+    if not number('gas', 'p_ref') > 0:
+        fail('gas.p_ref', 'must be > 0 (absolute pressure, Pa)')
+    if number('gas', 'v_tube') < 0:
+        fail('gas.v_tube', 'must be >= 0')
+    x_c_ref = number('gas', 'x_c_ref')
+    if not number('air_chamber', 'x_min') <= x_c_ref <= number('air_chamber', 'x_max'):
+        fail('gas.x_c_ref', 'must lie within the air chamber travel [x_min, x_max]')
+    if not number('stiffness', 'x_s_low') < number('stiffness', 'x_s_high'):
+        fail('stiffness.x_s_high', 'must exceed x_s_low')
+    for name in ('supply_voltage', 'resistance', 'torque_constant', 'rotor_inertia', 'gear_ratio',
+                 'counts_per_rev', 'lead', 'efficiency'):
+        if not number('drive', name) > 0:
+            fail(f'drive.{name}', 'must be > 0')
+    for name in ('inductance', 'viscous_friction'):
+        if number('drive', name) < 0:
+            fail(f'drive.{name}', 'must be >= 0')
+    for name, value in parts['sensors'].items():
+        if number('sensors', name) < 0:
+            fail(f'sensors.{name}', 'must be >= 0')
 
 
 def _need(mapping, name, source, group):

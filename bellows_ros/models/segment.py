@@ -134,7 +134,8 @@ def check_params(p, source='parameters'):
     if int(p.geometry_n_lambda) != p.geometry_n_lambda or p.geometry_n_lambda < 1:
         fail('geometry_n_lambda', 'must be a positive integer')
     for name in ('plant_noise_p', 'plant_noise_psi', 'plant_noise_psi_dot', 'plant_noise_tau',
-                 'plant_sensor_lag_tau', 'plant_damping', 'identify_input_cutoff'):
+                 'plant_sensor_lag_tau', 'plant_damping', 'identify_input_cutoff',
+                 'dynamics_inertia', 'dynamics_damping'):  # negative: energy from nowhere
         if getattr(p, name) < 0:
             fail(name, 'must be >= 0')
 
