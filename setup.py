@@ -9,7 +9,6 @@ setup(
     name=package_name,
     version='0.1.0',
     packages=find_packages(exclude=['test']),
-    package_data={package_name: ['py.typed']},
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
@@ -33,7 +32,12 @@ setup(
         # The DDS runtime used when rclpy is not importable; 11.x ships the C library in the wheel.
         'cyclonedds==11.0.1',
     ],
-    extras_require={'test': ['pytest>=7', 'hypothesis>=6', 'pytest-timeout>=2']},
+    extras_require={'test': [
+        'pytest>=7', 'hypothesis>=6', 'pytest-timeout>=2',
+        # the lint tests: flake8 with ament_flake8's plugins, pydocstyle as ament_pep257 runs it
+        'flake8>=6', 'flake8-builtins', 'flake8-comprehensions', 'flake8-import-order',
+        'flake8-quotes', 'pydocstyle>=6',
+    ]},
     zip_safe=True,
     maintainer='bellows_ros maintainers',
     maintainer_email='maintainers@bellows-ros.invalid',

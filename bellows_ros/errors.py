@@ -1,4 +1,5 @@
-"""Exceptions for mistakes a user can make (bad files, bad parameters, absent devices).
+"""
+Exceptions for mistakes a user can make (bad files, bad parameters, absent devices).
 
 The CLI and the nodes turn a `BellowsError` into a one-line message and exit status 2; anything
 else is a bug and keeps its traceback.
@@ -10,7 +11,8 @@ class BellowsError(Exception):
 
 
 class DataError(BellowsError):
-    """A problem at a known place in a data file.
+    """
+    A problem at a known place in a data file.
 
     Parameters
     ----------
@@ -22,6 +24,7 @@ class DataError(BellowsError):
         1-based line of the file (the CSV header is line 1), or None for the whole file.
     column : str, optional
         Column name, or None.
+
     """
 
     def __init__(self, path, message, line=None, column=None):
@@ -32,4 +35,4 @@ class DataError(BellowsError):
 
 
 class ParameterError(BellowsError):
-    """A bad, missing or unknown parameter (in a YAML file, on the command line, or in --effect)."""
+    """A bad, missing or unknown parameter (in a YAML file, on the command line, in --effect)."""

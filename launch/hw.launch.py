@@ -1,6 +1,7 @@
 # Copyright 2026 bellows_ros maintainers
 # SPDX-License-Identifier: Apache-2.0
-"""The bellows graph against real hardware (no simulators).
+"""
+The bellows graph against real hardware (no simulators).
 
     ros2 launch bellows_ros hw.launch.py [actuator_port:=/dev/ttyACM0] [can_interface:=socketcan]
         [can_channel:=can0] [actuator:=true] [arm:=true] [params_file:=FILE]

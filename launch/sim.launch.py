@@ -1,6 +1,7 @@
 # Copyright 2026 bellows_ros maintainers
 # SPDX-License-Identifier: Apache-2.0
-"""The whole bellows graph on simulated hardware, with the scripted scenario.
+"""
+The whole bellows graph on simulated hardware, with the scripted scenario.
 
     ros2 launch bellows_ros sim.launch.py [duration:=40.0] [scenario:=true] [output_dir:=DIR]
         [actuator_port:=PATH] [can_channel:=GROUP] [arm_effects:='[..]'] [actuator_effects:='[..]']
@@ -133,7 +134,7 @@ def generate_launch_description():
                               description="sim_arm_node effects, e.g. '[contact_hysteresis]' "
                                           "or 'none' ('' = params_file's)"),
         DeclareLaunchArgument('actuator_effects', default_value='',
-                              description="sim_actuator_node effects, e.g. "
+                              description='sim_actuator_node effects, e.g. '
                                           "'[wall_bulging, air_leak]' or 'none' "
                                           "('' = params_file's)"),
         DeclareLaunchArgument('params_file',

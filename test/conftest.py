@@ -1,4 +1,5 @@
-"""Test session set-up: DDS on loopback, and the `runtime` fixture that runs a test on both runtimes.
+"""
+Test session set-up: DDS on loopback, and the `runtime` fixture that runs a test on both runtimes.
 
 Every test keeps its DDS traffic on this machine: ROS 2's own switch
 (`ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`, which rclpy and the DDS runtime both honour) plus a
@@ -12,7 +13,6 @@ DDS library per process). A test that takes the `runtime` fixture runs twice, `[
 import os
 
 import pytest
-
 from runtimes import LOOPBACK_ENVIRONMENT, require_rclpy
 
 os.environ.setdefault('MPLBACKEND', 'Agg')
@@ -22,7 +22,7 @@ os.environ['BELLOWS_RUNTIME'] = 'dds'  # in-process nodes and probes; children g
 
 @pytest.fixture(params=['dds', 'rclpy'])
 def runtime(request):
-    """The runtime the test's nodes run on ('dds' or 'rclpy'), in the test's id."""
+    """Give the runtime the test's nodes run on ('dds' or 'rclpy'), in the test's id."""
     if request.param == 'rclpy':
         require_rclpy()
     return request.param
@@ -45,7 +45,8 @@ def pytest_terminal_summary(terminalreporter):
                     key = (runtime, outcome)
                     counts[key] = counts.get(key, 0) + 1
     for runtime in ('dds', 'rclpy'):
-        line = ', '.join(f'{counts[(runtime, o)]} {o}' for o in ('passed', 'failed', 'skipped',
-                                                                  'error') if (runtime, o) in counts)
+        line = ', '.join(f'{counts[(runtime, o)]} {o}'
+                         for o in ('passed', 'failed', 'skipped', 'error')
+                         if (runtime, o) in counts)
         if line:
             terminalreporter.write_line(f'runtime {runtime}: {line}')

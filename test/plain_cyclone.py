@@ -1,4 +1,5 @@
-"""The opening of a subscriber script that knows nothing of bellows_ros.
+"""
+The opening of a subscriber script that knows nothing of bellows_ros.
 
 Plain cyclonedds with its own IDL definitions under the ROS 2 type names, for tests that check the
 graph speaks the ROS 2 wire format to an independent reader. A test appends its own reading loop
@@ -6,7 +7,7 @@ graph speaks the ROS 2 wire format to an independent reader. A test appends its 
 """
 import textwrap
 
-JOINT_STATE_SUBSCRIBER = textwrap.dedent('''
+JOINT_STATE_SUBSCRIBER = textwrap.dedent("""
     import sys, time
     from dataclasses import dataclass
     from cyclonedds.core import Qos, Policy
@@ -35,4 +36,4 @@ JOINT_STATE_SUBSCRIBER = textwrap.dedent('''
         effort: sequence[float64]
 
     participant = DomainParticipant(int(sys.argv[1]))
-''')
+""")

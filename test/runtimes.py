@@ -1,4 +1,5 @@
-"""The two runtimes in tests: is rclpy here, and the environment of a node process on either.
+"""
+The two runtimes in tests: is rclpy here, and the environment of a node process on either.
 
 Where rclpy does not import, tests on it are skipped with the reason, unless
 `BELLOWS_REQUIRE_RCLPY=1` (scripts/test.sh sets it when it installed ROS 2): then they fail.
@@ -37,7 +38,7 @@ def require_rclpy():
 
 
 def node_env(runtime, **extra):
-    """The environment for a node process on `runtime`, with `extra` variables."""
+    """Return the environment for a node process on `runtime`, with `extra` variables."""
     return dict(os.environ, BELLOWS_RUNTIME=runtime, **extra)
 
 

@@ -1,5 +1,7 @@
-"""Bad input to the readers: one line naming the file (exit 2 at the CLI), never a traceback and
-never a number read in the wrong unit.
+"""
+Bad input to the readers: one line naming the file (exit 2 at the CLI), never a traceback.
+
+Never a number read in the wrong unit either.
 
 The rosbag2 recordings are written here with rosbags' own writer and the ROS 2 Jazzy type store.
 """
@@ -10,9 +12,9 @@ import warnings
 
 import numpy as np
 import pytest
-import yaml
 from rosbags.rosbag2 import StoragePlugin, Writer
-from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys import get_typestore, Stores
+import yaml
 
 from bellows_ros import data, params
 from bellows_ros.cli import main as bellows
@@ -43,7 +45,8 @@ def _wrench(ns, force_z):
 
 def write_actuator_bag(path, rows, storage=StoragePlugin.SQLITE3, joint_type=JOINT_STATE,
                        log_time=lambda k, ns: ns):
-    """rows: (stamp ns, x_c, x_s, p, f) -> the actuator's three topics, a message each per row.
+    """
+    rows: (stamp ns, x_c, x_s, p, f) -> the actuator's three topics, a message each per row.
 
     Messages are logged at `log_time(row index, stamp)` (the header stamp by default).
     """
@@ -118,7 +121,7 @@ def test_a_broken_metadata_file_is_one_line_and_exit_2(tmp_path, capsys, metadat
 
 def test_a_directory_without_metadata_is_not_a_bag(tmp_path):
     (tmp_path / 'empty').mkdir()
-    with pytest.raises(DataError, match=r"empty: not a rosbag2 directory \(it has no metadata"):
+    with pytest.raises(DataError, match=r'empty: not a rosbag2 directory \(it has no metadata'):
         data.read_table(tmp_path / 'empty', 'actuator')
 
 

@@ -1,4 +1,5 @@
-"""Fuzzing the file readers (CSV, rosbag2, parameter YAML) with hypothesis.
+"""
+Fuzzing the file readers (CSV, rosbag2, parameter YAML) with hypothesis.
 
 The property throughout: a reader returns what the file says, or raises the one-line BellowsError
 the CLI turns into exit 2 -- never another exception. "What the file says" has an oracle that does
@@ -10,24 +11,23 @@ property is therefore "one line, or a table that passes every check a CSV must p
 import csv
 import io
 import math
+from pathlib import Path
 import random
 import shutil
 import tempfile
-from pathlib import Path
 
+from hypothesis import given, HealthCheck, settings
+from hypothesis import strategies as st
 import numpy as np
 import pytest
-import yaml
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
 from rosbags.rosbag2 import StoragePlugin
+from test_core_bad_input import actuator_rows, write_actuator_bag
+import yaml
 
 from bellows_ros import data, params
 from bellows_ros.errors import BellowsError, DataError, ParameterError
 from bellows_ros.models.actuator import load_actuator_params
 from bellows_ros.models.segment import load_segment_params
-
-from test_core_bad_input import actuator_rows, write_actuator_bag
 
 FUZZ = settings(max_examples=100, deadline=None,
                 suppress_health_check=[HealthCheck.function_scoped_fixture,
@@ -72,8 +72,12 @@ def csv_texts(draw):
 
 
 def reference_columns(text, wanted):
-    """The oracle: csv module and float(), cell by cell (blank rows skipped, names stripped)."""
-    rows = [row for row in csv.reader(io.StringIO(text.removeprefix('\ufeff'), newline=''))]
+    """
+    Read `text` the oracle's way: csv module and float(), cell by cell.
+
+    Blank rows are skipped, names stripped.
+    """
+    rows = list(csv.reader(io.StringIO(text.removeprefix('\ufeff'), newline='')))
     header = [name.strip() for name in rows[0]]
     body = [row for row in rows[1:] if row and any(cell.strip() for cell in row)]
     return {name: [float(row[header.index(name)]) for row in body] for name in wanted}
@@ -148,8 +152,12 @@ pressures = st.one_of(st.floats(2.5e3, 1e6), st.floats(2.5e3, 1e6), st.floats(0.
 @given(st.lists(st.tuples(st.integers(-2_000_000, 3_000_000), values, values, pressures, values),
                 min_size=1, max_size=12))
 def test_bag_reader_returns_the_values_written_or_one_line(samples):
-    """Stamps go where hypothesis says (log time stays in write order); values may be non-finite
-    and pressures implausibly low. Expected: exactly what was written, or the one-line error."""
+    """
+    Stamps go where hypothesis says (log time stays in write order).
+
+    Values may be non-finite and pressures implausibly low. Expected: exactly what was written, or
+    the one-line error.
+    """
     stamps = 5 * 10 ** 9 + np.cumsum([step for step, *_ in samples])
     rows = [(int(ns), *rest) for ns, (_, *rest) in zip(stamps, samples)]
     columns = np.array([row[1:] for row in rows], float)

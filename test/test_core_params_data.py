@@ -13,7 +13,8 @@ def write(path, text):
 
 
 def test_ros2_parameter_file_flattens_and_overlays(tmp_path):
-    defaults = write(tmp_path / 'd.yaml', '/**:\n  ros__parameters:\n    a:\n      b: 1.0\n      c: [1.0, 2.0]\n')
+    defaults = write(tmp_path / 'd.yaml',
+                     '/**:\n  ros__parameters:\n    a:\n      b: 1.0\n      c: [1.0, 2.0]\n')
     user = write(tmp_path / 'u.yaml', '/**:\n  ros__parameters:\n    a: {b: 5.0}\n')
     merged = params.overlay(params.read_file(defaults), params.read_file(user), user)
     assert merged == {'a.b': 5.0, 'a.c': [1.0, 2.0]}
@@ -73,7 +74,8 @@ def test_time_must_increase_and_ranges_checked(tmp_path):
 def test_write_keeps_every_input_column(tmp_path):
     table = data.read_csv(write(tmp_path / 'in.csv', 't,label,a\n0,x,1\n1,y,2\n'), ('t', 'a'))
     data.write_csv(tmp_path / 'out.csv', table, {'b': np.array([3.0, 4.0])})
-    assert (tmp_path / 'out.csv').read_text().splitlines() == ['t,label,a,b', '0.0,x,1.0,3.0', '1.0,y,2.0,4.0']
+    assert (tmp_path / 'out.csv').read_text().splitlines() == ['t,label,a,b', '0.0,x,1.0,3.0',
+                                                               '1.0,y,2.0,4.0']
 
 
 def test_cli_turns_user_error_into_one_line_and_status_2(tmp_path, capsys):

@@ -1,13 +1,14 @@
-"""The documentation stays true to the repository.
+"""
+The documentation stays true to the repository.
 
 No tracked file points at notes or paths outside the repository, and docs/equations.md names only
 functions and tests that exist, so the reference cannot rot silently.
 """
 import ast
 import importlib
+from pathlib import Path
 import re
 import subprocess
-from pathlib import Path
 
 import pytest
 

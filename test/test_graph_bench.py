@@ -1,7 +1,9 @@
-"""`bellows bench --only graph`: the node graph's figures and the platform reference beside them.
+"""
+`bellows bench --only graph`: the node graph's figures and the platform reference beside them.
 
 No time is asserted (shared machine): only that every figure is measured, is a sane number, and
-that the counts the bench reports agree with each other."""
+that the counts the bench reports agree with each other.
+"""
 import json
 import math
 import os
@@ -10,10 +12,9 @@ import time
 import pytest
 
 from bellows_ros import params
-from bellows_ros.bench import Result
-from bellows_ros.bench import graph
-from bellows_ros.cli.bench import format_table
+from bellows_ros.bench import graph, Result
 from bellows_ros.cli import main
+from bellows_ros.cli.bench import format_table
 from bellows_ros.runtime import realtime
 
 
@@ -28,7 +29,8 @@ def test_the_wakeup_reference_measures_a_lone_1khz_loop():
     assert after == before or (math.isnan(before) and math.isnan(after)), (before, after)
     ticks, slots = result.samples, result.extra['slots']
     # Every 1 ms slot the loop lived through either ticked or was counted missed; how many slots
-    # that is depends on how long the (shared) machine took, so the bound is the time measured here.
+    # that is depends on how long the (shared) machine took, so the bound is the time measured
+    # here.
     assert 1 <= ticks <= slots <= math.floor(elapsed / 1e-3) + 1
     assert result.extra['slots_missed'] == (slots - ticks) / slots
     assert 0.0 <= result.extra['p50'] <= result.value <= result.extra['max']
@@ -56,13 +58,16 @@ def test_graph_bench_reports_every_figure_for_each_variant(capsys):
     assert 'graph.platform.wakeup_lateness_no_latency_limit' in results
     for prefix in ('graph', 'graph.normal', 'graph.no_latency_limit'):
         evaluated = results[f'{prefix}.fraction_evaluated']
-        assert evaluated['extra']['published'] > 100   # samples flowed (3 s window; the rate is host-bound)
-        assert evaluated['value'] == evaluated['extra']['evaluated'] / evaluated['extra']['published']
+        # samples flowed (3 s window; the rate is host-bound)
+        assert evaluated['extra']['published'] > 100
+        assert evaluated['value'] == (evaluated['extra']['evaluated']
+                                      / evaluated['extra']['published'])
         assert evaluated['value'] >= 0.99
         rate = results[f'{prefix}.rate']
         assert set(rate['extra']['scheduling']) == set(graph.NODES)
         assert 0.0 < rate['value'] <= 1100.0
-        p50, p99 = results[f'{prefix}.latency_p50']['value'], results[f'{prefix}.latency_p99']['value']
+        p50 = results[f'{prefix}.latency_p50']['value']
+        p99 = results[f'{prefix}.latency_p99']['value']
         assert 0.0 < p50 <= p99
         assert 0.0 <= results[f'{prefix}.late_fraction']['value'] <= 1.0
         for name in graph.NODES:
@@ -73,5 +78,6 @@ def test_graph_bench_reports_every_figure_for_each_variant(capsys):
     if os.access(realtime.CPU_LATENCY_DEVICE, os.W_OK):    # the nodes could hold the limit
         for name in ('graph.platform.wakeup_lateness', 'graph.rate', 'graph.normal.rate'):
             assert results[name]['extra']['cpu_latency_limit'] == min(configured, unlimited), name
-        for name in ('graph.platform.wakeup_lateness_no_latency_limit', 'graph.no_latency_limit.rate'):
+        for name in ('graph.platform.wakeup_lateness_no_latency_limit',
+                     'graph.no_latency_limit.rate'):
             assert results[name]['extra']['cpu_latency_limit'] == unlimited, name

@@ -1,12 +1,14 @@
-"""Acceptance: a node started with a missing device, a bad YAML or an unknown parameter exits with
-status 2 and one line on stderr naming the problem, the same line on rclpy and on the DDS runtime."""
+"""
+Acceptance: a node given a missing device, bad YAML or unknown parameter exits with status 2.
+
+It prints one line on stderr naming the problem, the same line on rclpy and on the DDS runtime.
+"""
+from pathlib import Path
 import random
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
-
 from runtimes import node_env
 
 pytestmark = pytest.mark.slow  # each test starts a node process (1-3 s)
@@ -17,7 +19,7 @@ CONFIG = Path(__file__).resolve().parent.parent / 'config' / 'nodes_sim.yaml'
 
 @pytest.fixture
 def run(runtime, tmp_path):
-    """run(node, args): the node's exit on `runtime`, in a domain of its own."""
+    """Return a runner of `node` with `args`: its exit on `runtime`, in a domain of its own."""
     def run_node(node, args):
         env = node_env(runtime, ROS_DOMAIN_ID=str(random.randint(181, 200)))
         return subprocess.run([str(BIN / node), '--ros-args', *args], capture_output=True,

@@ -1,4 +1,5 @@
-"""Acceptance: the simulated graph over real DDS, driver -> model, counted sample by sample.
+"""
+Acceptance: the simulated graph over real DDS, driver -> model, counted sample by sample.
 
 Runs twice: the nodes on rclpy (`[rclpy]`) and on the DDS runtime (`[dds]`); the test's own probe
 is a DDS-runtime node either way.
@@ -10,26 +11,25 @@ final count of published arm samples must equal the model node's count of evalua
 """
 import math
 import os
+from pathlib import Path
 import random
 import subprocess
 import sys
 import textwrap
 import time
-from pathlib import Path
 
+from plain_cyclone import JOINT_STATE_SUBSCRIBER
 import pytest
+from runtimes import node_env, override
 
 from bellows_ros import params
 from bellows_ros.runtime import dds_node, realtime
 from bellows_ros.runtime.messages import msg
 
-from plain_cyclone import JOINT_STATE_SUBSCRIBER
-from runtimes import node_env, override
-
 BIN = Path(sys.executable).parent
 CONFIG = Path(__file__).resolve().parent.parent / 'config' / 'nodes_sim.yaml'
 
-PLAIN_SUBSCRIBER = JOINT_STATE_SUBSCRIBER + textwrap.dedent('''\
+PLAIN_SUBSCRIBER = JOINT_STATE_SUBSCRIBER + textwrap.dedent("""\
     qos = Qos(Policy.Reliability.Reliable(0), Policy.History.KeepLast(50))
     readers = {t: DataReader(participant, Topic(participant, 'rt' + t, JointState), qos=qos)
                for t in sys.argv[2:]}
@@ -44,12 +44,12 @@ PLAIN_SUBSCRIBER = JOINT_STATE_SUBSCRIBER + textwrap.dedent('''\
     for topic, sample in seen.items():
         print(topic, sample.name[0], sample.header.stamp.sec, sample.header.stamp.nanosec,
               sample.position[0] if sample.position else sample.effort[0])
-''')
+""")
 
 
 # Which node owns the writer of each topic, as `ros2 topic info -v` works it out: the writers a
 # reader matched (GUIDs, from DDS discovery), their owners from `ros_discovery_info`.
-PLAIN_GRAPH_READER = JOINT_STATE_SUBSCRIBER + textwrap.dedent('''\
+PLAIN_GRAPH_READER = JOINT_STATE_SUBSCRIBER + textwrap.dedent("""\
     from cyclonedds.idl.types import array, bounded_str, uint8
 
     @dataclass
@@ -92,7 +92,7 @@ PLAIN_GRAPH_READER = JOINT_STATE_SUBSCRIBER + textwrap.dedent('''\
         time.sleep(0.02)
     for topic, node in sorted(found.items()):
         print(topic, node)
-''')
+""")
 
 
 def launch(name, args, env, log_dir):
@@ -133,7 +133,8 @@ def graph(runtime, tmp_path, monkeypatch):
     processes = {
         'sim_arm_node': launch('sim_arm_node', override('sim_arm_node', 'can.channel', group)
                                + override('sim_arm_node', 'n_segments', 2), env, tmp_path),
-        'sim_actuator_node': launch('sim_actuator_node', override('sim_actuator_node', 'port', port),
+        'sim_actuator_node': launch('sim_actuator_node', override('sim_actuator_node', 'port',
+                                                                  port),
                                     env, tmp_path),
         'model_node': launch('model_node', override('model_node', 'segments', '[1, 2]'), env,
                              tmp_path),

@@ -1,4 +1,5 @@
-"""Acceptance: stiffness step on the simulated actuator, and holding it against an air leak.
+"""
+Acceptance: stiffness step on the simulated actuator, and holding it against an air leak.
 
 Processes: sim_actuator_node (pty; effects wall_bulging + air_leak), driver_node (serial),
 stiffness_controller_node; the test publishes set-points and listens to /actuator/stiffness (the
@@ -16,21 +17,20 @@ The low set-point is 1400 N/m where the actuator model can reach it; with the pr
 config/actuator.yaml its range starts above 1400 N/m, so the step starts 1 % above the bottom of
 the range instead (reported in the assertion messages).
 """
+from pathlib import Path
 import random
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
+from runtimes import node_env, override
 
 from bellows_ros.hardware.actuator_board import load_config
 from bellows_ros.models.actuator import load_actuator_params, stiffness
 from bellows_ros.models.stiffness_map import compression_for_stiffness, stiffness_range
 from bellows_ros.runtime import dds_node
 from bellows_ros.runtime.messages import msg
-
-from runtimes import node_env, override
 
 BIN = Path(sys.executable).parent
 CONFIG = Path(__file__).resolve().parent.parent / 'config' / 'nodes_sim.yaml'
@@ -127,6 +127,7 @@ def test_stiffness_step_and_leak_hold(runtime, tmp_path, monkeypatch):
     assert worst <= band, f'true stiffness off by {worst:.1f} N/m; ' + info
     gas = [v['gas_p_ref'] for _, v in plant]
     # Below atmospheric pressure (x_c < 20 mm) air leaks in: the amount changes either way.
-    assert abs(gas[-1] - gas[0]) > 50.0, f'the leak did not act: gas {gas[0]:.0f} -> {gas[-1]:.0f} Pa'
+    assert abs(gas[-1] - gas[0]) > 50.0, \
+        f'the leak did not act: gas {gas[0]:.0f} -> {gas[-1]:.0f} Pa'
     print(info, f'overshoot {overshoot:.1f} N/m, worst true error {worst:.1f} N/m, '
                 f'gas {gas[0]:.0f} -> {gas[-1]:.0f} Pa')

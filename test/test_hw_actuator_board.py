@@ -1,4 +1,5 @@
-"""Actuator-board driver against the simulated board over a real pty (pyserial on the slave side).
+"""
+Actuator-board driver against the simulated board over a real pty (pyserial on the slave side).
 
 These run real 1 kHz threads on a shared machine: they assert counts and ratios, never durations;
 every wait is bounded by `wait_for`.
@@ -8,6 +9,7 @@ import logging
 import math
 import time
 
+from polling import wait_for
 import pytest
 import serial
 
@@ -16,14 +18,16 @@ from bellows_ros.hardware.actuator_board import ActuatorBoard, load_config
 from bellows_ros.hardware.faults import Faults
 from bellows_ros.hardware.sim_actuator_board import ActuatorState, SimActuatorBoard
 
-from polling import wait_for
-
 CONFIG = load_config()
 
 
 class Plant:
-    """A deterministic stand-in for the actuator plant: the chamber moves at 20 mm/s per unit duty;
-    pressure, spring position and force vary with time so that every frame carries new values."""
+    """
+    A deterministic stand-in for the actuator plant.
+
+    The chamber moves at 20 mm/s per unit duty; pressure, spring position and force vary with time
+    so that every frame carries new values.
+    """
 
     def __init__(self, x_c=0.0):
         self.x_c, self.t = x_c, 0.0
@@ -49,7 +53,8 @@ def rig(request):
             return sim, None
         board = ActuatorBoard(dataclasses.replace(CONFIG, port=sim.port, **config), on_sample)
         made.append(board)
-        assert wait_for(lambda: board.latest() is not None), 'no telemetry from the simulated board'
+        assert wait_for(lambda: board.latest() is not None), \
+            'no telemetry from the simulated board'
         return sim, board
 
     yield make

@@ -1,6 +1,9 @@
-"""Arm CAN driver against the simulated arm: python-can `virtual` in-process, `udp_multicast`
-between two processes. Real 1 kHz threads on a shared machine: counts and ratios only; every wait is
-bounded."""
+"""
+Arm CAN driver against the simulated arm.
+
+python-can `virtual` in-process, `udp_multicast` between two processes. Real 1 kHz threads on a
+shared machine: counts and ratios only; every wait is bounded.
+"""
 import dataclasses
 import json
 import os
@@ -11,6 +14,7 @@ import sys
 import time
 
 import can
+from polling import wait_for
 import pytest
 
 from bellows_ros.hardware import can_protocol as cp
@@ -18,16 +22,17 @@ from bellows_ros.hardware.arm_bus import ArmBus, load_config, open_bus, open_can
 from bellows_ros.hardware.faults import Faults
 from bellows_ros.hardware.sim_arm_bus import SimArmBus
 
-from polling import wait_for
-
 CONFIG = load_config()
 N = CONFIG.n_segments
 
 
 class Pattern:
-    """Deterministic plant stand-in: instant k (mod 1000) is written into every signal, with a
-    different offset per segment, so a sample mixing instants or carrying a corrupted value is
-    recognisable. Pressures sit on the DBC's 15 Pa grid, so they decode exactly."""
+    """
+    Deterministic plant stand-in: instant k (mod 1000) is written into every signal.
+
+    Each segment has a different offset, so a sample mixing instants or carrying a corrupted value
+    is recognisable. Pressures sit on the DBC's 15 Pa grid, so they decode exactly.
+    """
 
     def __init__(self):
         self.k = 0
@@ -40,7 +45,7 @@ class Pattern:
 
 
 def pattern_k(sample):
-    """The tick (mod 1000) a sample claims, or None if its values are not one consistent instant."""
+    """Return the tick (mod 1000) a sample claims; None if its values are not one instant."""
     k = round((sample.psi[0] + 0.5) / 1e-3)
     for i in range(N):
         expected = (150000 + 15 * k + 3000 * i, 120000 + 15 * k + 3000 * i)
@@ -51,8 +56,7 @@ def pattern_k(sample):
 
 
 def check_stream(received):
-    """Number of wrong samples: inconsistent values, or a tick that does not match the index
-    step."""
+    """Count the wrong samples: inconsistent values, or a tick not matching the index step."""
     bad = [s for s in received if pattern_k(s) is None]
     for a, b in zip(received, received[1:]):
         ka, kb = pattern_k(a), pattern_k(b)
@@ -171,7 +175,7 @@ def test_silent_arm_goes_stale_and_comes_back(rig):
     assert wait_for(lambda: arm.latest() is not None)
 
 
-CHILD = r'''
+CHILD = r"""
 import sys, time, json
 from bellows_ros.hardware.arm_bus import open_can
 from bellows_ros.hardware.sim_arm_bus import SimArmBus
@@ -187,7 +191,7 @@ setpoints = sim.setpoints
 sim.close()
 print(json.dumps({'setpoints': setpoints, 'counters': sim.counters(),
                   'ticks': sim.stats.count, 'misses': sim.stats.misses}), flush=True)
-'''
+"""
 
 
 @pytest.mark.slow
@@ -222,7 +226,7 @@ def test_four_segments_at_1khz_between_two_processes_over_udp_multicast():
 
 
 def test_a_bus_hears_only_its_own_multicast_group():
-    """Linux delivers every joined group on a port to a wildcard-bound socket unless told not to."""
+    """Linux gives a wildcard-bound socket every group joined on its port, unless told not to."""
     port = 43000 + random.randint(0, 999)
     talker = open_can('udp_multicast', '239.74.166.10', port=port)
     listener = open_can('udp_multicast', '239.74.166.11', port=port)

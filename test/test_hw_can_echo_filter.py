@@ -54,8 +54,11 @@ def test_other_buses_are_left_alone():
 
 
 def test_an_unknown_packing_attaches_nothing():
-    """Were python-can to pack frames differently, no pattern is made (the callers' own ID check
-    then does the work)."""
+    """
+    Were python-can to pack frames differently, no pattern is made.
+
+    The callers' own ID check then does the work.
+    """
     assert frame_pattern(0x100, pack=lambda m: msgpack.packb([m.arbitration_id, m.timestamp])) \
         is None
     chunks = frame_pattern(0x100)

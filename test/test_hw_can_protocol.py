@@ -1,12 +1,12 @@
 """CAN protocol of the arm: DBC round trips, integrity checks, fuzzing, bus load from the DBC."""
 import itertools
-import re
 from pathlib import Path
+import re
 
 import cantools
-import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+import pytest
 
 from bellows_ros import params
 from bellows_ros.hardware import can_protocol as cp
@@ -98,8 +98,12 @@ def _nominal_frame(message, counter=3):
 
 @pytest.mark.parametrize('message', DB.messages, ids=lambda m: m.name)
 def test_every_error_of_two_bits_or_an_8_bit_burst_is_rejected(message):
-    """Exhaustive, in wire order (bytes in order, most significant bit first): the CRC is linear,
-    so which error patterns pass depends on the pattern alone, not on the frame's values."""
+    """
+    Exhaustive, in wire order (bytes in order, most significant bit first).
+
+    The CRC is linear, so which error patterns pass depends on the pattern alone, not on the
+    frame's values.
+    """
     good = _nominal_frame(message)
     bits = 8 * len(good)
     word = int.from_bytes(good, 'big')
@@ -125,8 +129,12 @@ def test_a_good_frame_under_any_other_id_is_rejected(sent):
 
 @st.composite
 def traffic(draw):
-    """Frames as a receiver may see them: good ones in counter order, repeats, stale ones, up to
-    two flipped bits, a foreign ID, a wrong length."""
+    """
+    Frames as a receiver may see them.
+
+    Good ones in counter order, repeats, stale ones, up to two flipped bits, a foreign ID, a wrong
+    length.
+    """
     events, counters, sent = [], {}, []
     for _ in range(draw(st.integers(1, 30))):
         message = draw(st.sampled_from(DB.messages))

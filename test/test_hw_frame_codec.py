@@ -1,8 +1,8 @@
-"""The precompiled frame codec gives cantools' bytes and values for every frame of the arm's DBC."""
+"""The precompiled frame codec gives cantools' bytes and values for every frame of the DBC."""
 import cantools
-import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+import pytest
 
 from bellows_ros.hardware import can_protocol as cp
 
@@ -10,7 +10,7 @@ DB = cp.load_dbc()
 
 
 def _cantools_frame(message, values, counter):
-    """Reference: cantools' strict encode, CRC over frame ID + data bytes, encode again."""
+    """Encode the reference way: cantools' strict encode, CRC over ID + data, encode again."""
     values = dict(values, Counter=counter & 0xFF, CRC=0)
     data = message.encode(values)
     crc_byte = message.get_signal_by_name('CRC').start // 8

@@ -1,5 +1,8 @@
-"""Absolute-deadline loop and its statistics. Counts and sums only: no wall-clock bounds
-asserted."""
+"""
+Absolute-deadline loop and its statistics.
+
+Counts and sums only: no wall-clock bounds asserted.
+"""
 import threading
 import time
 

@@ -1,10 +1,10 @@
-"""Serial protocol of the actuator board: round trips, resynchronisation, fuzzing of the decoder."""
+"""Actuator board serial protocol: round trips, resynchronisation, fuzzing of the decoder."""
 import zlib
 
 from cobs import cobs
-import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+import pytest
 
 from bellows_ros.hardware import serial_protocol as sp
 
@@ -24,7 +24,8 @@ telemetry = st.builds(
     spring_um=st.integers(-2**31, 2**31 - 1), force_mn=st.integers(-2**31, 2**31 - 1),
     status=st.integers(0, 0xFFFF))
 messages = st.one_of(telemetry,
-                     st.builds(sp.MotorCommand, st.integers(0, 0xFFFF), st.integers(-32767, 32767)),
+                     st.builds(sp.MotorCommand, st.integers(0, 0xFFFF), st.integers(-32767,
+                                                                                    32767)),
                      st.builds(sp.Heartbeat, st.integers(0, 0xFFFF)))
 
 
@@ -109,9 +110,12 @@ def test_mutated_streams_yield_only_messages_that_were_sent(sent, mutations):
 
 @pytest.mark.parametrize('sent', MESSAGES, ids=lambda m: type(m).__name__)
 def test_every_single_byte_corruption_loses_that_frame_only_and_is_counted(sent):
-    """Exhaustive: each byte of one frame (COBS code bytes and the delimiter included) set to each
-    other value, between two good frames. Never a different message; the frame after it survives
-    unless its delimiter was hit (then the two run together and are lost as one)."""
+    """
+    Exhaustive: each byte of one frame set to each other value, between two good frames.
+
+    COBS code bytes and the delimiter included. Never a different message; the frame after it
+    survives unless its delimiter was hit (then the two run together and are lost as one).
+    """
     before, after = sp.encode(MESSAGES[4]), sp.encode(MESSAGES[2])
     frame = sp.encode(sent)
     for position in range(len(frame)):

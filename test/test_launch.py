@@ -1,4 +1,5 @@
-"""Launching under rclpy: `ros2 launch bellows_ros sim.launch.py`, `hw.launch.py`, launch_sim.sh.
+"""
+Launching under rclpy: `ros2 launch bellows_ros sim.launch.py`, `hw.launch.py`, launch_sim.sh.
 
 The launch files run from an ament prefix made by hand (what colcon installs, without a colcon
 build per test run: the package's share/ files as setup.py installs them, one executable per
@@ -7,13 +8,13 @@ into a fresh venv. DDS stays on loopback, on this run's ROS_DOMAIN_ID.
 """
 import csv
 import os
+from pathlib import Path
 import re
 import shutil
 import signal
 import subprocess
 import sys
 import threading
-from pathlib import Path
 
 import pytest
 import yaml
@@ -187,7 +188,8 @@ def test_hw_launch_port_argument_reaches_the_driver(prefix, tmp_path):
 
 
 def test_shell_launcher_from_a_pip_install(ros, tmp_path):
-    """scripts/launch_sim.sh as installed by a non-editable `pip install .` into a fresh venv.
+    """
+    scripts/launch_sim.sh as installed by a non-editable `pip install .` into a fresh venv.
 
     The package itself is installed (wheel built from this tree, no source tree on its path);
     its dependencies come from the running environment through a .pth file, so the test does not

@@ -1,8 +1,8 @@
 """The struct-based CDR path of the message classes writes and reads cyclonedds' exact bytes."""
-import pytest
 from cyclonedds.idl import IdlStruct
 from hypothesis import given, settings
 from hypothesis import strategies as st
+import pytest
 
 from bellows_ros.runtime.messages import msg
 

@@ -1,8 +1,8 @@
-"""Message classes generated from the rosbags Jazzy type store: names, defaults, CDR round trips."""
-from rosbags.typesys import Stores, get_typestore
+"""Message classes built from the rosbags Jazzy type store: names, defaults, CDR round trips."""
+from rosbags.typesys import get_typestore, Stores
 
-from bellows_ros.runtime.messages import (USED_TYPES, dds_type_name, from_typestore, message_class,
-                                          msg, to_typestore, type_hash)
+from bellows_ros.runtime.messages import (dds_type_name, from_typestore, message_class, msg,
+                                          to_typestore, type_hash, USED_TYPES)
 
 STORE = get_typestore(Stores.ROS2_JAZZY)
 

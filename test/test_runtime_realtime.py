@@ -1,5 +1,7 @@
-"""runtime.realtime: SCHED_FIFO for every thread of a node's process, and the CPU latency limit
-held while the node runs; or one clear warning each.
+"""
+runtime.realtime: SCHED_FIFO for every thread of a node's process, and the CPU latency limit.
+
+The limit is held while the node runs; where either is refused, one clear warning each.
 
 Each case runs in a child process, so the test runner itself never changes its scheduling nor
 holds a latency request. Whether this machine grants SCHED_FIFO is asked of the kernel first (a
@@ -14,7 +16,7 @@ import sys
 from bellows_ros.runtime import realtime
 
 # What `realtime` asks of a node: its declared parameters and its logger (printed here).
-NODE = r'''
+NODE = r"""
 import os, sys, threading
 from bellows_ros.runtime import realtime
 
@@ -30,9 +32,9 @@ class Node:
     def has_parameter(self, name): return name in self.parameters
     def get_parameter(self, name): return Param(self.parameters[name])
     def get_logger(self): return Log()
-'''
+"""
 
-CHILD = NODE + r'''
+CHILD = NODE + r"""
 before = threading.Thread(target=threading.Event().wait, args=(5,), daemon=True)
 before.start()                                    # a thread that exists before the request
 granted = realtime.request(Node(realtime_priority=int(sys.argv[1])))
@@ -45,7 +47,7 @@ policies['main'] = realtime.describe()
 policies['before'] = (os.sched_getscheduler(before.native_id),
                       os.sched_getparam(before.native_id).sched_priority)
 print('RESULT', granted, policies)
-'''
+"""
 
 
 def fifo_allowed():
@@ -81,7 +83,7 @@ def test_zero_leaves_scheduling_alone():
     assert 'WARN' not in out and 'INFO' not in out, out
 
 
-LATENCY_CHILD = NODE + r'''
+LATENCY_CHILD = NODE + r"""
 if 'unprivileged' in sys.argv:    # root drops to nobody: the device is then as closed as to a user
     os.setgid(65534)
     os.setuid(65534)
@@ -91,7 +93,7 @@ held = realtime.cpu_latency_in_force()
 if fd is not None:
     os.close(fd)
 print('RESULT', fd is not None, repr(before), repr(held), repr(realtime.cpu_latency_in_force()))
-'''
+"""
 
 
 def run_latency_child(limit, *flags):
@@ -123,7 +125,8 @@ def test_an_unprivileged_node_warns_once_and_runs_on():
     assert not held, out
     warnings = [line for line in out.splitlines() if line.startswith('WARN')]
     assert len(warnings) == 1, out
-    assert f'cpu_latency_limit 0 s not applied ({realtime.CPU_LATENCY_DEVICE}: ' in warnings[0], out
+    assert f'cpu_latency_limit 0 s not applied ({realtime.CPU_LATENCY_DEVICE}: ' in warnings[0], \
+        out
 
 
 def test_a_negative_limit_leaves_the_cpus_alone():

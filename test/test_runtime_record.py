@@ -1,14 +1,14 @@
-"""`bellows record` -> rosbag2 (MCAP) -> `data.read_table`, and the bag reader's alignment/errors."""
+"""`bellows record` -> rosbag2 (MCAP) -> `data.read_table`; the bag reader's alignment, errors."""
 import os
+from pathlib import Path
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
 from rosbags.rosbag2 import Reader, Writer
-from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys import get_typestore, Stores
 
 from bellows_ros.data import read_table
 from bellows_ros.errors import DataError
@@ -127,7 +127,8 @@ def test_missing_topic_is_a_clear_error(tmp_path):
     write_bag(tmp_path / 'bag', [('/joint_states', joints), ('/bellows/chambers', chambers)])
     with pytest.raises(DataError, match="no messages on /bellows/wrench with frame_id 'actuator'"):
         read_table(tmp_path / 'bag', 'actuator')
-    with pytest.raises(DataError, match='no messages on /joint_states with joint\\(s\\) segment_1'):
+    with pytest.raises(DataError,
+                       match='no messages on /joint_states with joint\\(s\\) segment_1'):
         read_table(tmp_path / 'bag', 'segment')
 
 

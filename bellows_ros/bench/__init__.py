@@ -1,23 +1,26 @@
-"""Benchmarks for `bellows bench`.
+"""
+Benchmarks for `bellows bench`.
 
 Every module in this package exposes ``run(quick=False) -> list[Result]``. Each result carries a
 median and, where it has one, a reference measured in the same run and the ratio to it: on a shared
 2-core machine absolute times drift, ratios much less. Nothing here asserts a time.
 """
+from dataclasses import asdict, dataclass, field
 import statistics
 import time
-from dataclasses import asdict, dataclass, field
 
 
 @dataclass
 class Result:
-    """One measured figure.
+    """
+    One measured figure.
 
     name: what was measured; value: the median (seconds for timings); unit: of `value`;
     samples: how many calls or samples the median is over; reference: name of the reference figure;
-    ratio: value / reference value; target: the issue's target in `unit`, if any; extra: more figures,
-    in `unit` unless `extra_units` names another unit for them ('' for a fraction).
+    ratio: value / reference value; target: the issue's target in `unit`, if any; extra: more
+    figures, in `unit` unless `extra_units` names another unit for them ('' for a fraction).
     """
+
     name: str
     value: float
     unit: str = 's'
@@ -33,9 +36,11 @@ class Result:
 
 
 def per_call(fn, calls, warmup=1000):
-    """Time `calls` calls of `fn()` one by one; returns the sorted list of durations in seconds.
+    """
+    Time `calls` calls of `fn()` one by one; returns the sorted list of durations in seconds.
 
-    Timing each call (rather than a batch) gives a true median and tail, at ~50 ns of clock overhead.
+    Timing each call (rather than a batch) gives a true median and tail, at ~50 ns of clock
+    overhead.
     """
     clock = time.perf_counter_ns
     for _ in range(warmup):
@@ -61,7 +66,7 @@ def quantile(sorted_values, q):
 
 
 def timing(name, fn, calls, reference=None, target=None):
-    """Result for the per-call median of `fn`, with p99 in `extra`; `reference` is another Result."""
+    """Time `fn` per call: median as the value, p99 in `extra`; `reference` is another Result."""
     durations = per_call(fn, calls)
     value = median(durations)
     result = Result(name, value, 's', calls, target=target,

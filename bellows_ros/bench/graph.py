@@ -1,4 +1,5 @@
-"""Benchmark of the node graph over real DDS: sim_arm_node -> driver_node -> model_node.
+"""
+Benchmark of the node graph over real DDS: sim_arm_node -> driver_node -> model_node.
 
 Measured in one run (separate processes, the DDS runtime, CAN over udp_multicast), three times:
 - `graph.*`: the host nodes at the SCHED_FIFO priority config/nodes_hw.yaml gives them on a robot,
@@ -36,6 +37,7 @@ References, measured in the same run:
 Nothing here asserts a time. A node that exits is an error (BellowsError with its log), not a zero.
 """
 import os
+from pathlib import Path
 import random
 import statistics
 import subprocess
@@ -43,13 +45,12 @@ import sys
 import tempfile
 import threading
 import time
-from pathlib import Path
 
 from bellows_ros import params
 from bellows_ros.bench import Result, timing
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.loop_timing import LoopStats, PeriodicLoop
-from bellows_ros.models.segment import SegmentModel, load_segment_params
+from bellows_ros.models.segment import load_segment_params, SegmentModel
 from bellows_ros.runtime import realtime
 
 # The installed config (a pip or colcon install has no source tree beside the package).
@@ -59,7 +60,7 @@ NODES = ('sim_arm_node', 'model_node', 'driver_node')  # in start order
 
 
 def _cpu_seconds(pid):
-    """utime + stime of a process, s (fields 14 and 15 of /proc/<pid>/stat)."""
+    """Return utime + stime of a process, s (fields 14 and 15 of /proc/<pid>/stat)."""
     with open(f'/proc/{pid}/stat') as stream:
         fields = stream.read().rsplit(')', 1)[1].split()
     return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
@@ -78,8 +79,11 @@ def _model_reference(segments):
 
 
 def _rclpy_unavailable():
-    """Why rclpy cannot run the nodes here ('' when it can), asked of a child Python (this process
-    uses the DDS runtime for its probe: one Cyclone DDS library per process)."""
+    """
+    Tell why rclpy cannot run the nodes here ('' when it can), asking a child Python.
+
+    This process uses the DDS runtime for its probe: one Cyclone DDS library per process.
+    """
     probe = subprocess.run([sys.executable, '-c', 'import rclpy, sensor_msgs.msg'],
                            capture_output=True, text=True, timeout=60)
     lines = probe.stderr.strip().splitlines()
@@ -114,8 +118,11 @@ def run(quick=False, segments=4):
 
 
 def _measure(prefix, runtime, window, segments, priorities, latency_limit, reference):
-    """Run the three nodes on `runtime` ('dds' or 'rclpy') for `window` s at the given
-    `realtime_priority` each and `cpu_latency_limit`; their figures."""
+    """
+    Run the three nodes on `runtime` ('dds' or 'rclpy') for `window` s; return their figures.
+
+    Each node runs at the given `realtime_priority` and `cpu_latency_limit`.
+    """
     from bellows_ros.runtime import dds_node
     from bellows_ros.runtime.messages import msg
 
@@ -232,9 +239,12 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
 
 
 def _wakeup_reference(name, seconds, priority, latency_limit):
-    """Lateness of a lone 1 kHz sleeping loop (PeriodicLoop, as the simulated devices use) on a
-    thread at SCHED_FIFO `priority` when granted, for `seconds` s, with this process holding
-    `latency_limit` (s; negative = none) as a node would."""
+    """
+    Measure the lateness of a lone 1 kHz sleeping loop (PeriodicLoop, as the simulated devices).
+
+    The loop runs on a thread at SCHED_FIFO `priority` when granted, for `seconds` s, with this
+    process holding `latency_limit` (s; negative = none) as a node would.
+    """
     stats = LoopStats(window=int(seconds * 1000) + 1000)
     stop = threading.Event()
     granted = []
@@ -273,8 +283,11 @@ def _wakeup_reference(name, seconds, priority, latency_limit):
 
 
 def _hold_latency_limit(limit):
-    """The bench's own CPU latency request (an fd to close), or None when off or not permitted:
-    the reference then runs without it, which its `cpu_latency_limit` figure shows."""
+    """
+    Make the bench's own CPU latency request: an fd to close, or None when off or not permitted.
+
+    Without it the reference runs unrestricted, which its `cpu_latency_limit` figure shows.
+    """
     if limit < 0:
         return None
     try:
@@ -284,7 +297,7 @@ def _hold_latency_limit(limit):
 
 
 def _cpu_times():
-    """The machine's CPU time counters (first line of /proc/stat), or None where there are none."""
+    """Return the machine's CPU time counters (first line of /proc/stat), or None."""
     try:
         with open('/proc/stat') as stream:
             return [int(x) for x in stream.readline().split()[1:]]

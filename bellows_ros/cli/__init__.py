@@ -1,4 +1,5 @@
-"""The `bellows` command (docs/interfaces.md): one entry point, one module per subcommand.
+"""
+The `bellows` command (docs/interfaces.md): one entry point, one module per subcommand.
 
 Each subcommand module has `add_arguments(parser)` and `run(args) -> int`. A `BellowsError` (a user
 mistake: bad file, bad parameter, absent device) becomes one line on stderr and exit status 2.

@@ -18,7 +18,8 @@ def _check_compressions(table, params):
 
 
 def simulate(input_path, output_path, params_path, effects):
-    """Model (no effects) or plant (effects) over the input's x_c, x_s; writes input + p, f, k.
+    """
+    Model (no effects) or plant (effects) over the input's x_c, x_s; writes input + p, f, k.
 
     With effects the plant is driven by the input: x_c moves the lead-screw nut (the plate follows
     through the backlash, if any), x_s is imposed; sensors are noise-free so the output shows the
@@ -60,15 +61,17 @@ def identify(args):
                        seed=args.seed, progress=not args.quiet)
     fitted = fit.params
     header = (f'bellows identify actuator {args.data}\n'
-              f'volume error rms {fit.volume_error_ml[0]:.3f} mL, force error rms {fit.force_error_n[0]:.3f} N')
+              f'volume error rms {fit.volume_error_ml[0]:.3f} mL, '
+              f'force error rms {fit.force_error_n[0]:.3f} N')
     param_files.write_file(args.output, params_to_flat(fitted), header)
     rms, low, high = fit.volume_error_ml
-    print(f'volume error: {low:+.2f} mL to {high:+.2f} mL (rms {rms:.3f} mL) over {fit.rows} samples')
+    print(f'volume error: {low:+.2f} mL to {high:+.2f} mL (rms {rms:.3f} mL) '
+          f'over {fit.rows} samples')
     rms, low, high = fit.force_error_n
     print(f'force error: {low:+.2f} N to {high:+.2f} N (rms {rms:.3f} N)')
-    print(f'V_tube = {fitted.v_tube * 1e6:.2f} mL, P0 (p_ref at x_c = {fitted.x_c_ref * 1e3:g} mm) = '
+    print(f'V_tube = {fitted.v_tube * 1e6:.2f} mL, '
+          f'P0 (p_ref at x_c = {fitted.x_c_ref * 1e3:g} mm) = '
           f'{fitted.p_ref:.0f} Pa, F_MTS = [{", ".join(f"{v:.5g}" for v in fitted.f_mts)}], '
           f'E_F = [{", ".join(f"{v:.5g}" for v in fitted.e_f)}]')
     print(f'wrote {args.output}')
     return 0
-

@@ -9,8 +9,10 @@ import bellows_ros.bench as bench_package
 
 def add_arguments(parser):
     parser.add_argument('--json', action='store_true', help='print results as JSON')
-    parser.add_argument('--only', metavar='TEXT', help='run only benchmark modules whose name contains TEXT')
-    parser.add_argument('--quick', action='store_true', help='fewer calls (a smoke run, less precise)')
+    parser.add_argument('--only', metavar='TEXT',
+                        help='run only benchmark modules whose name contains TEXT')
+    parser.add_argument('--quick', action='store_true',
+                        help='fewer calls (a smoke run, less precise)')
 
 
 def run(args):
@@ -39,7 +41,8 @@ def format_table(results):
     for r in results:
         ratio = f'{r.ratio:8.2f}' if r.ratio is not None else ' ' * 8
         target = _show(r.target, r.unit) if r.target is not None else ' ' * 13
-        lines.append(f'{r.name:<48} {_show(r.value, r.unit)} {ratio}  {target}  {r.reference or ""}')
+        lines.append(f'{r.name:<48} {_show(r.value, r.unit)} {ratio}  {target}  '
+                     f'{r.reference or ""}')
         for key, value in r.extra.items():
             shown = (_show(value, r.extra_units.get(key, r.unit)) if isinstance(value, float)
                      else value)

@@ -7,14 +7,15 @@ def parse_effect(text):
     name, _, rest = text.partition(':')
     name = name.strip()
     if not name:
-        raise ParameterError(f"--effect {text!r}: missing effect name")
+        raise ParameterError(f'--effect {text!r}: missing effect name')
     options = {}
     for item in filter(None, (part.strip() for part in rest.split(','))):
         key, sep, value = item.partition('=')
         if not sep or not key.strip():
-            raise ParameterError(f"--effect {text!r}: expected k=v, got {item!r}")
+            raise ParameterError(f'--effect {text!r}: expected k=v, got {item!r}')
         try:
             options[key.strip()] = float(value)
         except ValueError:
-            raise ParameterError(f"--effect {text!r}: {key.strip()} must be a number, got {value!r}") from None
+            raise ParameterError(
+                f'--effect {text!r}: {key.strip()} must be a number, got {value!r}') from None
     return name, options

@@ -13,7 +13,8 @@ def _positive(text):
 
 
 def add_arguments(parser):
-    parser.add_argument('--output', required=True, metavar='DIR', help='rosbag2 directory to create (MCAP)')
+    parser.add_argument('--output', required=True, metavar='DIR',
+                        help='rosbag2 directory to create (MCAP)')
     parser.add_argument('--topics', nargs='+', metavar='TOPIC',
                         help='topics to record (default: every topic of the contract)')
     parser.add_argument('--duration', type=str, metavar='S',

@@ -1,4 +1,5 @@
-"""`bellows simulate segment` and `bellows identify segment` (docs/interfaces.md).
+"""
+`bellows simulate segment` and `bellows identify segment` (docs/interfaces.md).
 
 simulate: without --effect the paper-A model runs over the input rows (strain memory carried from
 row to row) and the columns sa1, sa2, tau_a, tau_s, tau_f, tau_drive, tau_prev are appended. With
@@ -7,15 +8,14 @@ input p1/p2 are the pressure *commands* (kept as p1_cmd, p2_cmd); psi, psi_dot, 
 tau_motion are replaced by the plant's measurements (noise from `segment.plant.noise`), and the 7
 output columns are the plant's true values.
 """
-from pathlib import Path
 
 import numpy as np
 
 from bellows_ros import data
 from bellows_ros.errors import DataError
-from bellows_ros.identify.segment import MIN_RATE_PER_CUTOFF, fit_segment
+from bellows_ros.identify.segment import fit_segment, MIN_RATE_PER_CUTOFF
 from bellows_ros.models.segment import load_segment_params, simulate_model, velocity
-from bellows_ros.models.segment_plant import SegmentPlant, check_effects
+from bellows_ros.models.segment_plant import check_effects, SegmentPlant
 
 INPUT_REQUIRED = ('t', 'psi', 'p1', 'p2')  # a simulation input needs no measured torque
 
@@ -74,7 +74,8 @@ def _filter_summary(fit, params):
                 f'Butterworth, data at {fit.rate:.4g} Hz); tau_ext not filtered')
     if not wanted:
         return 'inputs not filtered (segment.identify.input_cutoff = 0)'
-    return (f'inputs NOT filtered: data at {fit.rate:.4g} Hz is below {MIN_RATE_PER_CUTOFF:g} x the '
+    return (f'inputs NOT filtered: data at {fit.rate:.4g} Hz is below '
+            f'{MIN_RATE_PER_CUTOFF:g} x the '
             f'segment.identify.input_cutoff of {wanted:g} Hz')
 
 
@@ -92,14 +93,19 @@ def identify(args):
     from bellows_ros.params import write_file
     write_file(args.output, fit.params.flat(), header=header)
     mu, gamma = fit.params.ogden_mu, fit.params.ogden_gamma
-    print(f'fitted: mu = [{mu[0]:.6g}, {mu[1]:.6g}] N/m, gamma = [{gamma[0]:.4g}, {gamma[1]:.4g}], '
-          f'c_psi0 = {fit.params.restoring_c_psi0:.4g}, c_psi0_p = {fit.params.restoring_c_psi0_p:.4g} rad '
+    print(f'fitted: mu = [{mu[0]:.6g}, {mu[1]:.6g}] N/m, '
+          f'gamma = [{gamma[0]:.4g}, {gamma[1]:.4g}], '
+          f'c_psi0 = {fit.params.restoring_c_psi0:.4g}, '
+          f'c_psi0_p = {fit.params.restoring_c_psi0_p:.4g} rad '
           f'({fit.evaluations} evaluations)')
     print(_filter_summary(fit, params))
-    print(f'held-out error on the last {fit.heldout_rows} of {fit.train_rows + fit.heldout_rows} rows '
+    print(f'held-out error on the last {fit.heldout_rows} of '
+          f'{fit.train_rows + fit.heldout_rows} rows '
           f'(against the raw measured tau_ext):')
     print(f'  {"model":<34} {"RMSE N·m":>10} {"MAE N·m":>10}')
-    print(f'  {"paper A (29) with strain memory":<34} {fit.heldout["model"][0]:10.4f} {fit.heldout["model"][1]:10.4f}')
-    print(f'  {"previous model (34), refitted":<34} {fit.heldout["previous"][0]:10.4f} {fit.heldout["previous"][1]:10.4f}')
+    print(f'  {"paper A (29) with strain memory":<34} '
+          f'{fit.heldout["model"][0]:10.4f} {fit.heldout["model"][1]:10.4f}')
+    print(f'  {"previous model (34), refitted":<34} '
+          f'{fit.heldout["previous"][0]:10.4f} {fit.heldout["previous"][1]:10.4f}')
     print(f'wrote {args.output}')
     return 0

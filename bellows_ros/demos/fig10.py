@@ -1,4 +1,5 @@
-"""Paper A's Fig. 10 hysteresis on the simulated segment: `python -m bellows_ros.demos.fig10`.
+"""
+Paper A's Fig. 10 hysteresis on the simulated segment: `python -m bellows_ros.demos.fig10`.
 
 Chain 1 is pressurised to 4 bar abs at Ψ = 74.5° (chain 2 vented); an external force then moves the
 segment down to -30° and back to the same (p, Ψ). Prints |τ_ext| before and after, with the paper-A
@@ -16,19 +17,25 @@ from bellows_ros.models.segment_plant import FULL_MODEL, NO_NOISE
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument('--params', metavar='P.yaml', help='parameters laid over config/segment.yaml')
-    parser.add_argument('--plot', metavar='PNG', default='fig10.png', help='output plot (default fig10.png)')
-    parser.add_argument('--noise', action='store_true', help='sensor noise from segment.plant.noise')
+    parser.add_argument('--params', metavar='P.yaml',
+                        help='parameters laid over config/segment.yaml')
+    parser.add_argument('--plot', metavar='PNG', default='fig10.png',
+                        help='output plot (default fig10.png)')
+    parser.add_argument('--noise', action='store_true',
+                        help='sensor noise from segment.plant.noise')
     args = parser.parse_args(argv)
     params = load_segment_params(args.params)
-    record, before, after = fig10_record(params, FULL_MODEL, None if args.noise else NO_NOISE, seed=0)
+    record, before, after = fig10_record(params, FULL_MODEL, None if args.noise else NO_NOISE,
+                                         seed=0)
     model = simulate_model(params, record['psi'], record['p1'], record['p2'], record['psi_dot'])
-    print(f"{'':28}{'before':>10}{'after':>10}   (N·m; paper A measured 6.7 / 9.1, previous model 9.9)")
+    print(f"{'':28}{'before':>10}{'after':>10}   "
+          '(N·m; paper A measured 6.7 / 9.1, previous model 9.9)')
     for name, values in (('measured |tau_ext|', -record['tau_ext']),
                          ('paper A model tau_drive', model['tau_drive']),
                          ('previous model (34)', model['tau_prev'])):
         print(f'{name:28}{values[before]:10.3f}{values[after]:10.3f}')
-    print(f"{'contact length s~_a1, mm':28}{1e3 * model['sa1'][before]:10.3f}{1e3 * model['sa1'][after]:10.3f}")
+    print(f"{'contact length s~_a1, mm':28}"
+          f"{1e3 * model['sa1'][before]:10.3f}{1e3 * model['sa1'][after]:10.3f}")
     _plot(args.plot, record, model, before, after)
     print(f'wrote {args.plot}')
     return 0

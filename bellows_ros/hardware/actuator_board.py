@@ -1,7 +1,8 @@
-"""Driver for the actuator board (DC motor + encoder, system pressure, spring position and force).
+"""
+Driver for the actuator board (DC motor + encoder, system pressure, spring position and force).
 
-Talks the serial protocol of `serial_protocol` over pyserial. One reader thread parses telemetry and
-reconnects when the port vanishes; one heartbeat thread sends heartbeats and runs the command
+Talks the serial protocol of `serial_protocol` over pyserial. One reader thread parses telemetry
+and reconnects when the port vanishes; one heartbeat thread sends heartbeats and runs the command
 watchdog.
 
 API
@@ -17,8 +18,8 @@ API
 - ``.connected``, ``.stale`` (bool); ``.counters() -> dict[str, int]``; ``.close()``.
 
 Safety: |duty| <= duty_max; no duty into an end stop (board status flags or the x_c soft limits);
-duty 0 while the data is stale; duty 0 when no command arrives for `command_timeout` (watchdog); the
-board itself stops after `BOARD_HEARTBEAT_TIMEOUT` without heartbeats. A sample that failed any
+duty 0 while the data is stale; duty 0 when no command arrives for `command_timeout` (watchdog);
+the board itself stops after `BOARD_HEARTBEAT_TIMEOUT` without heartbeats. A sample that failed any
 check is never delivered.
 """
 import dataclasses
@@ -30,8 +31,8 @@ import serial
 
 from bellows_ros import params
 from bellows_ros.hardware import serial_protocol as sp
+from bellows_ros.hardware.safety import into_end_stop, limit_duty, Watchdog
 from bellows_ros.hardware.sample_delivery import deliver, fresh
-from bellows_ros.hardware.safety import Watchdog, into_end_stop, limit_duty
 from bellows_ros.models.actuator import load_actuator_params
 
 log = logging.getLogger(__name__)
@@ -52,7 +53,8 @@ class ActuatorBoardConfig:
 
 
 def load_config(params_path=None, actuator_params_path=None):
-    """`ActuatorBoardConfig` from config/hardware.yaml with the user's file laid over it.
+    """
+    `ActuatorBoardConfig` from config/hardware.yaml with the user's file laid over it.
 
     The encoder scaling and the end stops are not repeated in hardware.yaml: they come from the
     actuator's drive and travel limits (config/actuator.yaml, or `actuator_params_path`), their one
@@ -68,13 +70,15 @@ def load_config(params_path=None, actuator_params_path=None):
 
 @dataclasses.dataclass(frozen=True)
 class ActuatorSample:
-    """One good telemetry frame in SI units (names: `actuator` columns of docs/interfaces.md).
+    """
+    One good telemetry frame in SI units (names: `actuator` columns of docs/interfaces.md).
 
     t_receive: time.monotonic() at reception, s; t_device: board clock (unwrapped), s; index:
     sequence number, unwrapped (starts at the first frame's seq when the port (re)opens); x_c:
     air-chamber compression from the encoder, m; x_s: spring compression, m; p: system pressure, Pa
     abs; f: spring force, N; status: `serial_protocol` status bits.
     """
+
     t_receive: float
     t_device: float
     index: int
@@ -107,7 +111,8 @@ class ActuatorBoard:
             ['samples', 'callback_errors', 'dropped', 'duplicates', 'sequence_resets',
              'reconnects', 'disconnects', 'tx_errors', 'duty_clamps', 'duty_invalid',
              'end_stop_stops', 'stale_stops', 'watchdog_stops'], 0)
-        self._reader = threading.Thread(target=self._read_loop, name='actuator-reader', daemon=True)
+        self._reader = threading.Thread(target=self._read_loop, name='actuator-reader',
+                                        daemon=True)
         self._heart = threading.Thread(target=self._heartbeat_loop, name='actuator-heartbeat',
                                        daemon=True)
         self._reader.start()

@@ -1,4 +1,5 @@
-"""Driver for the soft arm on CAN (python-can + the DBC of `can_protocol`).
+"""
+Driver for the soft arm on CAN (python-can + the DBC of `can_protocol`).
 
 A reader thread decodes and checks every frame and assembles the per-segment frames of one sampling
 instant (same Counter) into one `ArmSample`. A transmit thread sends, at the DBC cycle times, the
@@ -10,8 +11,8 @@ API
 - ``open_bus(config, **kwargs) -> can.BusABC``: ``can.Bus(interface=config.interface,
   channel=config.channel, **kwargs)`` (socketcan on the robot; virtual / udp_multicast in tests).
 - ``ArmBus(config, bus=None, on_sample=None)``; takes ownership of `bus` (default
-  ``open_bus(config)``); ``on_sample(sample: ArmSample)`` is called from the reader thread for every
-  complete sample.
+  ``open_bus(config)``); ``on_sample(sample: ArmSample)`` is called from the reader thread for
+  every complete sample.
 - ``.latest() -> ArmSample | None`` (None when there is none or it is stale); ``.stale``;
   ``.arm_status -> dict | None`` (last ARM_STATUS signals).
 - ``.send_pressures(pressures)``: 2 x n_segments set-points, Pa abs, order segment_1/chain_1,
@@ -32,8 +33,8 @@ import can
 from bellows_ros import params
 from bellows_ros.hardware import can_protocol as cp
 from bellows_ros.hardware.can_echo_filter import drop_own_frames
+from bellows_ros.hardware.safety import clamp_pressures, Watchdog
 from bellows_ros.hardware.sample_delivery import deliver, fresh
-from bellows_ros.hardware.safety import Watchdog, clamp_pressures
 from bellows_ros.models.segment import load_segment_params
 
 log = logging.getLogger(__name__)
@@ -53,7 +54,8 @@ class ArmBusConfig:
 
 
 def load_config(params_path=None, segment_params_path=None):
-    """`ArmBusConfig` from config/hardware.yaml with the user's file laid over it.
+    """
+    `ArmBusConfig` from config/hardware.yaml with the user's file laid over it.
 
     The set-point limits are the segment model's ambient pressure p0 and p_max
     (config/segment.yaml, or `segment_params_path`): the valves exhaust to ambient, and above
@@ -71,13 +73,17 @@ _LOOPBACK = socket.inet_aton('127.0.0.1')
 
 
 def open_bus(config, **kwargs):
-    """The python-can bus named by the config; `kwargs` go to the interface (e.g. udp_multicast
-    port)."""
+    """
+    Open the python-can bus named by the config.
+
+    `kwargs` go to the interface (e.g. the udp_multicast port).
+    """
     return open_can(config.interface, config.channel, **kwargs)
 
 
 def open_can(interface, channel, **kwargs):
-    """`can.Bus(interface=..., channel=...)`; a udp_multicast bus is kept to its group and host.
+    """
+    `can.Bus(interface=..., channel=...)`; a udp_multicast bus is kept to its group and host.
 
     udp_multicast stands in for the arm's CAN bus between processes of one machine:
     - its socket is bound to the wildcard address, and Linux then delivers to it every group that
@@ -102,7 +108,8 @@ def open_can(interface, channel, **kwargs):
 
 @dataclasses.dataclass(frozen=True)
 class ArmSample:
-    """One sampling instant of every segment.
+    """
+    One sampling instant of every segment.
 
     t_receive: time.monotonic() when the last frame of the instant arrived, s; index: the unwrapped
     frame counter (starts at the first counter received; exact unless more than 255 instants in a
@@ -110,6 +117,7 @@ class ArmSample:
     angles, rad; pressures: chain pressures, Pa abs, order (seg1 chain1, seg1 chain2, seg2 chain1,
     ...).
     """
+
     t_receive: float
     index: int
     t_device: float

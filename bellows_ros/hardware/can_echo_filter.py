@@ -1,4 +1,5 @@
-"""A kernel-side filter that stops a udp_multicast CAN bus hearing its own frames.
+"""
+A kernel-side filter that stops a udp_multicast CAN bus hearing its own frames.
 
 A SocketCAN socket does not receive the frames it sends (CAN_RAW_RECV_OWN_MSGS is off by default).
 python-can's udp_multicast bus does: IP multicast loopback hands every datagram to every member on
@@ -7,8 +8,8 @@ receive each one back only to discard it, at about 24 us per frame in python-can
 msgpack, Message): its bus work took 0.37 core with the echoes, 0.245 without (measured).
 
 `drop_own_frames(bus, frame_ids)` attaches a classic BPF program (socket(7) SO_ATTACH_FILTER) that
-drops such datagrams in the kernel. The program compares the start of the datagram with python-can's
-own encoding of a frame with that ID (`pack_message`): map header, timestamp type, the
+drops such datagrams in the kernel. The program compares the start of the datagram with
+python-can's own encoding of a frame with that ID (`pack_message`): map header, timestamp type, the
 `arbitration_id` and `is_extended_id` entries, skipping the 8 timestamp bytes. If python-can packs
 frames some other way, no pattern is found and nothing is attached. The filter only saves work and
 decides nothing, so callers keep their own check of the IDs they send.
@@ -19,8 +20,8 @@ import struct
 import sys
 
 import can
-import msgpack
 from can.interfaces.udp_multicast.utils import pack_message
+import msgpack
 
 SO_ATTACH_FILTER = 26  # <asm-generic/socket.h>
 _LD_ABS = {4: 0x20, 2: 0x28, 1: 0x30}  # BPF_LD | BPF_W / BPF_H / BPF_B | BPF_ABS
@@ -31,7 +32,8 @@ _FLOAT64 = 0xCB  # msgpack's type byte of a float64; python-can's timestamps are
 
 
 def drop_own_frames(bus, frame_ids):
-    """Make the kernel drop frames with `frame_ids` (standard 11-bit IDs) before `bus` reads them.
+    """
+    Make the kernel drop frames with `frame_ids` (standard 11-bit IDs) before `bus` reads them.
 
     Returns True when a filter was attached: `bus` is a udp_multicast bus on Linux and its packing
     is the known one. Any other bus is left as it is (False).
@@ -53,9 +55,12 @@ def drop_own_frames(bus, frame_ids):
 
 
 def frame_pattern(frame_id, pack=pack_message):
-    """[(offset, bytes), ...] every udp_multicast datagram carrying standard frame `frame_id`
-    starts with, or None when `pack` (python-can's packing by default) lays frames out in a way
-    this module does not know."""
+    """
+    Return the [(offset, bytes), ...] a datagram carrying standard frame `frame_id` starts with.
+
+    That is every udp_multicast datagram of that frame; None when `pack` (python-can's packing by
+    default) lays frames out in a way this module does not know.
+    """
     packed = pack(can.Message(arbitration_id=frame_id, is_extended_id=False, timestamp=0.0))
     timestamp_key = msgpack.packb('timestamp')
     identity = (msgpack.packb('arbitration_id') + msgpack.packb(frame_id) +
@@ -68,8 +73,11 @@ def frame_pattern(frame_id, pack=pack_message):
 
 
 def compile_filter(patterns):
-    """Classic BPF program (bytes, `struct sock_filter` array): drop a datagram that starts with
-    any of `patterns`, keep everything else."""
+    """
+    Build a classic BPF program (bytes, a `struct sock_filter` array) for `patterns`.
+
+    It drops a datagram that starts with any of `patterns` and keeps everything else.
+    """
     code = []
     for chunks in patterns:
         loads = []

@@ -1,7 +1,8 @@
-"""CAN protocol of the arm: frames described by config/arm.dbc, used through cantools.
+"""
+CAN protocol of the arm: frames described by config/arm.dbc, used through cantools.
 
-Every frame ends with two DBC signals, ``Counter`` (8-bit, +1 per transmission of that frame ID) and
-``CRC`` (CRC-8 SAE J1850 over the frame ID as two bytes little-endian followed by the frame's
+Every frame ends with two DBC signals, ``Counter`` (8-bit, +1 per transmission of that frame ID)
+and ``CRC`` (CRC-8 SAE J1850 over the frame ID as two bytes little-endian followed by the frame's
 other data bytes -- the data-ID idea of AUTOSAR E2E profile 1, so a frame with a valid CRC under
 another ID is still rejected). The ID goes first so that the CRC byte, last in every frame,
 directly follows the bytes it covers, as on the wire: then every error burst of up to 8 bits is
@@ -19,8 +20,8 @@ API
 - ``FrameChecker(db, resync_after=0.05)``; ``.check(frame_id, data, now) -> (Message, dict) |
   None``; counters ``unknown_ids``, ``malformed``, ``crc_errors``, ``replayed``, ``lost`` (frames
   missing per counter gaps), ``accepted``. Never raises on any input.
-- ``frame_bits(length, extended=False) -> int`` (worst-case stuffed length), ``bus_load(db, bitrate,
-  names=None) -> float`` (fraction of the bus used by the DBC's cyclic frames).
+- ``frame_bits(length, extended=False) -> int`` (worst-case stuffed length), ``bus_load(db,
+  bitrate, names=None) -> float`` (fraction of the bus used by the DBC's cyclic frames).
 """
 import functools
 import re
@@ -33,7 +34,7 @@ ARM_HEARTBEAT_TIMEOUT = 0.1  # s without ARM_HOST_HEARTBEAT before the arm vents
 
 
 def load_dbc(path=None):
-    """The arm's CAN database (default: config/arm.dbc)."""
+    """Load the arm's CAN database (default: config/arm.dbc)."""
     path = path or params.config_dir() / 'arm.dbc'
     db = cantools.database.load_file(str(path))
     for message in db.messages:
@@ -48,8 +49,11 @@ def load_dbc(path=None):
 
 @functools.lru_cache(maxsize=None)  # the DBC's signal names are few and fixed
 def chamber_of(signal_name):
-    """0-based chamber index of a set-point signal ``S<segment>_P<chain>`` (order seg1 chain1, seg1
-    chain2, seg2 chain1, ...), or None for any other signal."""
+    """
+    Return the 0-based chamber index of a set-point signal ``S<segment>_P<chain>``.
+
+    The order is seg1 chain1, seg1 chain2, seg2 chain1, ...; None for any other signal.
+    """
     match = re.fullmatch(r'S(\d+)_P([12])', signal_name)
     return None if match is None else 2 * (int(match[1]) - 1) + int(match[2]) - 1
 
@@ -68,8 +72,11 @@ _TABLE = _j1850_table()
 
 
 def crc8_j1850(data):
-    """CRC-8 SAE J1850: poly 0x1D, init 0xFF, final XOR 0xFF (check value of b'123456789' =
-    0x4B)."""
+    """
+    Compute the CRC-8 SAE J1850 of `data`.
+
+    Poly 0x1D, init 0xFF, final XOR 0xFF (check value of b'123456789' = 0x4B).
+    """
     crc = 0xFF
     for byte in data:
         crc = _TABLE[crc ^ byte]
@@ -77,7 +84,8 @@ def crc8_j1850(data):
 
 
 class FrameCodec:
-    """Encoder/decoder of one frame, precomputed from its DBC definition (a cantools Message).
+    """
+    Encoder/decoder of one frame, precomputed from its DBC definition (a cantools Message).
 
     cantools spends ~30 us per `encode` (argument and range checks, bitstruct) -- a quarter of the
     simulated arm's 1 kHz tick with four sample frames. The arm's frames are plain little-endian
@@ -109,7 +117,7 @@ class FrameCodec:
         return crc8_j1850(self._id_bytes + bytes(data[:i]) + bytes(data[i + 1:]))
 
     def encode(self, values, counter):
-        """Data bytes with `values` (physical units), the rolling `counter` and the CRC."""
+        """Encode data bytes with `values` (physical units), the rolling `counter` and the CRC."""
         values = dict(values, Counter=counter & 0xFF, CRC=0)
         if not self.plain:
             data = bytearray(self.message.encode(values))  # strict: out of range raises
@@ -146,7 +154,7 @@ class FrameCodec:
 
 
 def _bound(limit, direction, scale):
-    """A DBC minimum/maximum widened by cantools' strict-mode tolerance (none: unbounded)."""
+    """Widen a DBC minimum/maximum by cantools' strict-mode tolerance (none: unbounded)."""
     if limit is None:
         return direction * float('inf')
     return limit + direction * abs(scale) * 1e-6
@@ -154,18 +162,18 @@ def _bound(limit, direction, scale):
 
 @functools.lru_cache(maxsize=None)  # one per Message of the loaded DBCs
 def codec(message):
-    """The `FrameCodec` of a cantools Message (built once per Message)."""
+    """Return the `FrameCodec` of a cantools Message (built once per Message)."""
     return FrameCodec(message)
 
 
 def encode_frame(message, values, counter):
-    """Data bytes of `message` (a cantools Message) with `values`, the rolling counter and the
-    CRC."""
+    """Encode `message` (a cantools Message) with `values`, the rolling counter and the CRC."""
     return codec(message).encode(values, counter)
 
 
 class FrameChecker:
-    """Decode received frames; reject and count unknown, malformed, corrupt and replayed ones.
+    """
+    Decode received frames; reject and count unknown, malformed, corrupt and replayed ones.
 
     A frame is a replay when its counter did not advance (delta 0) or went back (delta > 128, i.e.
     it is older than the last accepted one). After `resync_after` seconds of silence from an ID the
@@ -216,16 +224,23 @@ class FrameChecker:
 
 
 def frame_bits(length, extended=False):
-    """Worst-case bits of a classic CAN data frame with `length` data bytes, incl. stuff bits and
-    the 3-bit interframe space (Davis, Burns, Bril, Lukkien 2007, eq. (2)): g + 8n + 13 +
-    floor((g+8n-1)/4), g = 34 (11-bit ID) or 54 (29-bit ID) bits exposed to stuffing."""
+    """
+    Count the worst-case bits of a classic CAN data frame with `length` data bytes.
+
+    Stuff bits and the 3-bit interframe space included (Davis, Burns, Bril, Lukkien 2007, eq. (2)):
+    g + 8n + 13 + floor((g+8n-1)/4), g = 34 (11-bit ID) or 54 (29-bit ID) bits exposed to
+    stuffing.
+    """
     g = 54 if extended else 34
     return g + 8 * length + 13 + (g + 8 * length - 1) // 4
 
 
 def bus_load(db, bitrate, names=None):
-    """Fraction of a `bitrate` bit/s bus taken by the cyclic frames of `db` (all, or those in
-    `names`)."""
+    """
+    Return the fraction of a `bitrate` bit/s bus the cyclic frames of `db` take.
+
+    All frames, or those in `names`.
+    """
     bits_per_second = 0.0
     for message in db.messages:
         if names is not None and message.name not in names:

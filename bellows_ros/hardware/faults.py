@@ -1,10 +1,11 @@
-"""Fault switches of the simulated devices, settable while they run.
+"""
+Fault switches of the simulated devices, settable while they run.
 
 API: ``Faults(drop_rate=0.0, corrupt_rate=0.0, replay_rate=0.0, silent=False, stuck=False,
 seed=None)``
 - ``drop_rate``: probability that a frame the device should send is not sent.
-- ``corrupt_rate``: probability that one byte of a sent frame is overwritten with a random different
-  value.
+- ``corrupt_rate``: probability that one byte of a sent frame is overwritten with a random
+  different value.
 - ``replay_rate``: probability that the previous frame is sent again (CAN: same counter and CRC).
 - ``silent``: the device sends nothing (a dead board / unplugged bus stub).
 - ``stuck``: the first sensor channel (actuator: pressure; arm: segment 1 chain 1 pressure) freezes
@@ -32,7 +33,7 @@ class Faults:
         self._held = None
 
     def sensor(self, value):
-        """What the first sensor channel reads: `value`, or while `stuck` the value it froze at."""
+        """Return what the first sensor channel reads: `value`, or while `stuck` the held one."""
         if not self.stuck:
             self._held = None
             return value
@@ -45,7 +46,7 @@ class Faults:
         return self.silent or (self.drop_rate > 0 and self.rng.random() < self.drop_rate)
 
     def corrupt(self, frame):
-        """`frame` (bytes) with one byte changed with probability `corrupt_rate`; else unchanged."""
+        """Return `frame` (bytes), one byte changed with probability `corrupt_rate`."""
         if self.corrupt_rate <= 0 or not frame or self.rng.random() >= self.corrupt_rate:
             return frame, False
         data = bytearray(frame)

@@ -1,4 +1,5 @@
-"""Absolute-deadline periodic loops and their timing statistics (no ROS).
+"""
+Absolute-deadline periodic loops and their timing statistics (no ROS).
 
 Used by the simulated devices, drivers and nodes for every 1 kHz loop (docs/nodes.md, "Timing")::
 
@@ -26,15 +27,16 @@ arrival at the driver. When a tick starts more than one period late, the slots i
 *skipped*, not replayed in a burst, and counted as deadline misses; the returned ``dt`` then covers
 the skipped slots so that simulated time keeps pace with wall time.
 """
+from collections import deque
 import threading
 import time
-from collections import deque
 
 import numpy as np
 
 
 class LoopStats:
-    """Rolling timing statistics of a periodic loop (the last `window` ticks), all in seconds.
+    """
+    Rolling timing statistics of a periodic loop (the last `window` ticks), all in seconds.
 
     Thread-safe: the loop thread records, a diagnostics thread reads `summary()`.
     """
@@ -61,7 +63,7 @@ class LoopStats:
             self.misses += n
 
     def summary(self):
-        """Counts and p50/p99/max of period, lateness and compute time over the window."""
+        """Count and take p50/p99/max of period, lateness and compute time over the window."""
         with self._lock:
             series = {'period': np.array(self._period), 'lateness': np.array(self._lateness),
                       'compute': np.array(self._compute)}
@@ -78,7 +80,8 @@ class LoopStats:
 
 
 class PeriodicLoop:
-    """Run a body every `period` seconds against absolute deadlines.
+    """
+    Run a body every `period` seconds against absolute deadlines.
 
     Parameters
     ----------
@@ -86,6 +89,7 @@ class PeriodicLoop:
         Loop period, s.
     stats : LoopStats, optional
         Where each tick's timing is recorded.
+
     """
 
     def __init__(self, period, stats=None):
@@ -126,7 +130,8 @@ class PeriodicLoop:
 
 
 class LoopThread:
-    """Run `loop(stop_event)` on a daemon thread named `name` from `start()` until `stop()`.
+    """
+    Run `loop(stop_event)` on a daemon thread named `name` from `start()` until `stop()`.
 
     Restartable (the simulated devices are stopped and started again in tests). A loop that raises
     (e.g. a simulated device's plant callback) is logged on `log` as "`what`: loop stopped"

@@ -1,4 +1,5 @@
-"""Safety limits applied in the driver layer before anything reaches a device.
+"""
+Safety limits applied in the driver layer before anything reaches a device.
 
 Pure functions plus one small watchdog; the drivers count every event they report.
 
@@ -31,7 +32,8 @@ def clamp_pressures(values, p_min, p_max):
 
 
 def into_end_stop(duty, at_low_stop, at_high_stop):
-    """True when `duty` drives further into an end stop the plate is already at.
+    """
+    Tell whether `duty` drives further into an end stop the plate is already at.
 
     Positive duty compresses the air chamber (x_c grows) towards the high stop.
     """

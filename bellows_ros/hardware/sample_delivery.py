@@ -1,4 +1,5 @@
-"""Handing a driver's samples to the next layer: the freshness check and the reader-thread callback.
+"""
+Handing a driver's samples to the next layer: the freshness check and the reader-thread callback.
 
 Shared by `actuator_board` and `arm_bus`, whose reader threads deliver samples the same way.
 """
@@ -13,8 +14,12 @@ def fresh(sample, stale_timeout):
 
 
 def deliver(on_sample, sample, counts, log, device):
-    """Call `on_sample(sample)` (if any) from the reader thread; a failure is counted in
-    counts['callback_errors'] and logged once on the driver's `log` as `device`, never raised."""
+    """
+    Call `on_sample(sample)` (if any) from the reader thread.
+
+    A failure is counted in counts['callback_errors'] and logged once on the driver's `log` as
+    `device`, never raised.
+    """
     if on_sample is None:
         return
     try:

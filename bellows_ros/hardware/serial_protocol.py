@@ -1,12 +1,13 @@
-"""Binary protocol of the actuator board's serial link (spec: docs/protocols.md, "Serial").
+"""
+Binary protocol of the actuator board's serial link (spec: docs/protocols.md, "Serial").
 
 Wire format of every frame::
 
     COBS( payload || CRC-32(payload) as uint32 little-endian ) 0x00
     payload = version:u8  type:u8  seq:u16  body          (all little-endian, `struct`)
 
-COBS (the `cobs` package) keeps 0x00 out of the frame, so a receiver resynchronises at the next 0x00
-after any garbage. CRC-32 (``zlib.crc32``, IEEE 802.3) guards the payload.
+COBS (the `cobs` package) keeps 0x00 out of the frame, so a receiver resynchronises at the next
+0x00 after any garbage. CRC-32 (``zlib.crc32``, IEEE 802.3) guards the payload.
 
 API
 ---
@@ -34,7 +35,7 @@ TYPE_MOTOR = 0x10
 TYPE_HEARTBEAT = 0x11
 
 END_STOP_LOW = 1 << 0    # chamber fully extended: negative duty would drive further into the stop
-END_STOP_HIGH = 1 << 1   # chamber fully compressed: positive duty would drive further into the stop
+END_STOP_HIGH = 1 << 1   # chamber fully compressed: positive duty would drive further into it
 MOTOR_ON = 1 << 2
 HEARTBEAT_LOST = 1 << 3  # the board stopped the motor because the host went quiet
 SENSOR_FAULT = 1 << 4
@@ -52,8 +53,13 @@ MAX_FRAME = _HEADER.size + max(s.size for s in _BODIES.values()) + _CRC.size + 2
 
 @dataclasses.dataclass(frozen=True)
 class Telemetry:
-    """Board -> host at 1 kHz. t_us: board clock, us (wraps at 2**32); pressure_pa: system pressure,
-    Pa abs; spring_um: spring compression x_s, um; force_mn: spring force, mN; status: bit flags."""
+    """
+    Board -> host at 1 kHz.
+
+    t_us: board clock, us (wraps at 2**32); pressure_pa: system pressure, Pa abs; spring_um: spring
+    compression x_s, um; force_mn: spring force, mN; status: bit flags.
+    """
+
     seq: int
     t_us: int
     encoder_counts: int
@@ -66,6 +72,7 @@ class Telemetry:
 @dataclasses.dataclass(frozen=True)
 class MotorCommand:
     """Host -> board. duty_q15: motor duty x 32767 (-32767..32767); also counts as a heartbeat."""
+
     seq: int
     duty_q15: int
 
@@ -73,6 +80,7 @@ class MotorCommand:
 @dataclasses.dataclass(frozen=True)
 class Heartbeat:
     """Host -> board, every 20 ms: the host is alive."""
+
     seq: int
 
 

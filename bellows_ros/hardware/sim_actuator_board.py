@@ -1,18 +1,19 @@
-"""Simulated actuator board: the firmware side of the serial protocol on a pseudo-terminal.
+"""
+Simulated actuator board: the firmware side of the serial protocol on a pseudo-terminal.
 
 The emulator holds the pty master; the driver opens the slave through a symlink the emulator
 controls (``.port``), just as the real board appears under ``/dev/serial/by-id/...``: udev removes
 that link when the USB device vanishes and creates it again, pointing at a new tty, when it comes
-back. ``unplug()`` and ``replug()`` do exactly that with a fresh pty, so the driver's reconnect path
-is the real one.
+back. ``unplug()`` and ``replug()`` do exactly that with a fresh pty, so the driver's reconnect
+path is the real one.
 
 API
 ---
 - ``SimActuatorBoard(step, config=None, link_path=None, faults=None, period=1e-3, record=False)``
-  ``step(dt: float, duty: float) -> state`` advances the plant by dt seconds with the motor duty the
-  board applies and returns any object with attributes ``x_c`` (m), ``p`` (Pa abs), ``x_s`` (m),
-  ``f`` (N) -- e.g. ``ActuatorState``. `config` (ActuatorBoardConfig, default from hardware.yaml)
-  gives the encoder resolution and the end-stop switch positions.
+  ``step(dt: float, duty: float) -> state`` advances the plant by dt seconds with the motor duty
+  the board applies and returns any object with attributes ``x_c`` (m), ``p`` (Pa abs), ``x_s``
+  (m), ``f`` (N) -- e.g. ``ActuatorState``. `config` (ActuatorBoardConfig, default from
+  hardware.yaml) gives the encoder resolution and the end-stop switch positions.
 - ``.start()``, ``.stop()``, ``.close()``; ``.port`` (path for the driver); ``.unplug()``,
   ``.replug()``.
 - ``.faults`` (`Faults`, settable at run time); ``.duty`` (duty applied now); ``.counters()``;
@@ -25,10 +26,10 @@ heartbeat.
 """
 import dataclasses
 import errno
+import logging
 import os
 import shutil
 import tempfile
-import logging
 import threading
 import time
 import tty
@@ -44,8 +45,13 @@ log = logging.getLogger(__name__)
 
 @dataclasses.dataclass(frozen=True)
 class ActuatorState:
-    """What the plant callback returns: chamber compression x_c (m), pressure p (Pa abs), spring
-    compression x_s (m), spring force f (N)."""
+    """
+    What the plant callback returns.
+
+    Chamber compression x_c (m), pressure p (Pa abs), spring compression x_s (m), spring force f
+    (N).
+    """
+
     x_c: float
     p: float
     x_s: float
@@ -81,7 +87,7 @@ class SimActuatorBoard:
 
     # -- the pty and its symlink ------------------------------------------------------------
     def replug(self):
-        """A fresh pty, the symlink pointed at it atomically."""
+        """Open a fresh pty and point the symlink at it atomically."""
         master, slave = os.openpty()
         tty.setraw(slave)  # no echo or line editing: the driver sees the bytes the board sends
         os.set_blocking(master, False)
@@ -94,8 +100,7 @@ class SimActuatorBoard:
             self._master, self._slave = master, slave
 
     def unplug(self):
-        """The device vanishes: the pty is closed (the driver's reads fail) and the symlink
-        removed."""
+        """Make the device vanish: close the pty (the driver's reads fail), remove the symlink."""
         with self._fd_lock:
             master, slave, self._master, self._slave = self._master, self._slave, None, None
         if os.path.lexists(self.port):
@@ -149,8 +154,7 @@ class SimActuatorBoard:
                 | (sp.END_STOP_HIGH if x_c >= self.config.x_c_max else 0))
 
     def _apply_safety(self, state):
-        """The firmware's own limits, applied before the plant sees the duty; returns status
-        bits."""
+        """Apply the firmware's limits before the plant sees the duty; return the status bits."""
         status = 0
         if time.monotonic() - self._last_host > sp.BOARD_HEARTBEAT_TIMEOUT:
             status |= sp.HEARTBEAT_LOST

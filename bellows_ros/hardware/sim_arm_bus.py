@@ -1,11 +1,12 @@
-"""Simulated arm: the firmware side of the arm's CAN protocol on a python-can bus.
+"""
+Simulated arm: the firmware side of the arm's CAN protocol on a python-can bus.
 
 API
 ---
 - ``SimArmBus(bus, step, n_segments=4, faults=None, dbc=None)`` ``step(dt: float, setpoints:
-  tuple[float, ...]) -> sequence of n_segments (p1, p2, psi)`` advances the plant by dt seconds with
-  the chamber pressure set-points the valves apply (Pa abs, order seg1 chain1, seg1 chain2, ...) and
-  returns the measured chain pressures (Pa abs) and angle (rad) per segment.
+  tuple[float, ...]) -> sequence of n_segments (p1, p2, psi)`` advances the plant by dt seconds
+  with the chamber pressure set-points the valves apply (Pa abs, order seg1 chain1, seg1 chain2,
+  ...) and returns the measured chain pressures (Pa abs) and angle (rad) per segment.
 - ``.start()``, ``.stop()``, ``.close()`` (also shuts `bus` down: the emulator owns it).
 - ``.faults`` (`Faults`, settable at run time); ``.setpoints`` (what the valves apply now);
   ``.counters()``; ``.stats`` (LoopStats).

@@ -1,4 +1,5 @@
-"""/diagnostics for every node: one DiagnosticStatus per loop or device group, about once a second.
+"""
+/diagnostics for every node: one DiagnosticStatus per loop or device group, about once a second.
 
 Reported per loop: achieved rate, loop compute time p50/p99, period p99, lateness p99, deadline
 misses (from `hardware.loop_timing.LoopStats`), the scheduling policy (SCHED_FIFO when granted),
@@ -38,7 +39,7 @@ class LoopReport:
 
 
 def status(node, name, values, level=OK, message='', hardware_id=''):
-    """A DiagnosticStatus of `node`'s runtime with `values` (dict) as string key-values."""
+    """Build a DiagnosticStatus of `node`'s runtime with `values` (dict) as string key-values."""
     msg = node.msg
     return msg.DiagnosticStatus(
         level=bytes([level]) if isinstance(msg.DiagnosticStatus.OK, bytes) else level,

@@ -1,9 +1,10 @@
-"""ROS 2 message classes for Cyclone DDS, generated from the rosbags Jazzy type store.
+"""
+ROS 2 message classes for Cyclone DDS, generated from the rosbags Jazzy type store.
 
-The definitions are not hand-copied: each class is built from `typestore.fielddefs`, recursively, so
-`JointState` pulls in `std_msgs/Header` and `builtin_interfaces/Time`. The DDS type names follow
-ROS 2's convention (`sensor_msgs/msg/JointState` -> `sensor_msgs::msg::dds_::JointState_`), which is
-what `rmw_cyclonedds_cpp` registers, so ROS 2 nodes and these classes match on the wire.
+The definitions are not hand-copied: each class is built from `typestore.fielddefs`, recursively,
+so `JointState` pulls in `std_msgs/Header` and `builtin_interfaces/Time`. The DDS type names follow
+ROS 2's convention (`sensor_msgs/msg/JointState` -> `sensor_msgs::msg::dds_::JointState_`), which
+is what `rmw_cyclonedds_cpp` registers, so ROS 2 nodes and these classes match on the wire.
 
 The classes look like rclpy's messages where the nodes touch them: keyword construction with
 defaults for every field (`JointState(name=[...], effort=[...])`), attribute access
@@ -15,7 +16,7 @@ import sys
 
 from cyclonedds.idl import IdlMeta, IdlStruct
 from cyclonedds.idl import types as idl
-from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys import get_typestore, Stores
 from rosbags.typesys.base import Nodetype
 
 # The message types the nodes publish or subscribe to (ROS names), and the short names they go by.
@@ -52,7 +53,7 @@ def dds_type_name(ros_name):
 
 
 def type_hash(ros_name):
-    """The RIHS01 type hash ROS 2 Jazzy advertises for `ros_name` (REP 2011)."""
+    """Return the RIHS01 type hash ROS 2 Jazzy advertises for `ros_name` (REP 2011)."""
     return TYPESTORE.hash_rihs01(ros_name)
 
 
@@ -60,7 +61,7 @@ _classes = {}
 
 
 def message_class(ros_name):
-    """The IdlStruct class for a ROS message type, built (once) from the type store."""
+    """Return the IdlStruct class for a ROS message type, built (once) from the type store."""
     if ros_name not in _classes:
         _classes[ros_name] = _build(ros_name)
     return _classes[ros_name]
@@ -82,13 +83,14 @@ def _build(ros_name):
     return cls
 
 
-# --- fast plain-CDR path -----------------------------------------------------------------------------
-# cyclonedds' generic serializer walks a tree of "machines" per field and costs ~40 us per JointState
-# to write and ~60 us to read: at 1 kHz x 2 topics that was a fifth of a core per node. For the types
-# built only from primitives, unbounded strings, nested structs and unbounded sequences of those,
-# the same XCDR1 little-endian bytes (what the writers use, `use_cdrv0_representation`) are produced
-# here with `struct`, compiled once per type from the same type-store definition. Anything else
-# (XCDR2, big endian, arrays, bounded types, sequences of structs) goes through cyclonedds.
+# --- fast plain-CDR path
+# ----------------------------------------------------------------------------- cyclonedds' generic
+# serializer walks a tree of "machines" per field and costs ~40 us per JointState to write and ~60
+# us to read: at 1 kHz x 2 topics that was a fifth of a core per node. For the types built only
+# from primitives, unbounded strings, nested structs and unbounded sequences of those, the same
+# XCDR1 little-endian bytes (what the writers use, `use_cdrv0_representation`) are produced here
+# with `struct`, compiled once per type from the same type-store definition. Anything else (XCDR2,
+# big endian, arrays, bounded types, sequences of structs) goes through cyclonedds.
 
 _STRUCT = {'bool': '?', 'byte': 'B', 'char': 'B', 'int8': 'b', 'uint8': 'B', 'int16': 'h',
            'uint16': 'H', 'int32': 'i', 'uint32': 'I', 'int64': 'q', 'uint64': 'Q',
@@ -131,8 +133,12 @@ def _primitive(base):
 
 
 def _write(plan, obj, out):
-    """Append `obj`'s CDR to `out` (bytearray whose first 4 bytes are the encapsulation header;
-    alignment counts from after it, as in XCDR1)."""
+    """
+    Append `obj`'s CDR to `out`.
+
+    `out` is a bytearray whose first 4 bytes are the encapsulation header; alignment counts from
+    after it, as in XCDR1.
+    """
     # Strings are written inline in both places below, as _read reads them: a helper call per
     # string measured 1-3 us more per JointState, on a path that runs 4000 times a second.
     for name, kind, code in plan:
@@ -162,7 +168,7 @@ def _write(plan, obj, out):
 
 
 def _read(plan, cls, data, pos):
-    """(instance of `cls`, position after it) from CDR `data` at `pos` (alignment from offset 4)."""
+    """Read an instance of `cls` from CDR `data` at `pos`; return it and the position after it."""
     values = {}
     for name, kind, code in plan:
         if kind == 'prim':

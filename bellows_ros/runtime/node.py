@@ -1,4 +1,5 @@
-"""The one interface every bellows node is written against, and `main`, which picks the runtime.
+"""
+The one interface every bellows node is written against, and `main`, which picks the runtime.
 
 A bellows node subclasses `Node` and gets the runtime it runs on as its constructor's argument::
 
@@ -37,7 +38,8 @@ RUNTIMES = {'rclpy': 'bellows_ros.runtime.rclpy_runtime', 'dds': 'bellows_ros.ru
 
 
 def select_runtime(choice: Optional[str] = None) -> ModuleType:
-    """Pick the runtime module: `choice` or `$BELLOWS_RUNTIME`, else rclpy when it imports.
+    """
+    Pick the runtime module: `choice` or `$BELLOWS_RUNTIME`, else rclpy when it imports.
 
     Raises ParameterError for an unknown choice, or when rclpy was asked for and does not import.
     """
@@ -61,7 +63,7 @@ def stamp_ns(stamp: Any) -> int:
 
 # rcl's parameter types, as rclpy names them in its errors.
 def parameter_type(value: Any) -> str:
-    """rcl's type name for a parameter value ('double', 'integer_array', ...)."""
+    """Return rcl's type name for a parameter value ('double', 'integer_array', ...)."""
     if isinstance(value, (list, tuple)):
         if not value:
             return 'array'
@@ -74,8 +76,11 @@ def parameter_type(value: Any) -> str:
 
 
 def check_override(node_name: str, name: str, default: Any, override: Any) -> None:
-    """ParameterError when `override` does not have the type of the declared `default` (rcl's rule:
-    no conversion, not even integer to double)."""
+    """
+    Raise ParameterError when `override` does not have the type of the declared `default`.
+
+    rcl's rule: no conversion, not even integer to double.
+    """
     if default is None:
         return
     expected, given = parameter_type(default), parameter_type(override)
@@ -114,7 +119,7 @@ class Node:
         return self._node.has_parameter(name)
 
     def check_parameters(self) -> None:
-        """ParameterError for a given parameter (file or -p) the node does not declare."""
+        """Raise ParameterError for a given parameter (file or -p) the node does not declare."""
         unknown = [name for name in self._overrides if not self.has_parameter(name)]
         if unknown:
             raise ParameterError(f"unknown parameter '{unknown[0]}' for node '{self.get_name()}' "
@@ -168,7 +173,8 @@ def _on_signal(signum, frame):
 
 def run(node_class: type, args: Optional[Sequence[str]] = None,
         runtime: Optional[ModuleType] = None) -> int:
-    """Run one node until Ctrl-C/SIGTERM; a user mistake is one line on stderr and exit status 2.
+    """
+    Run one node until Ctrl-C/SIGTERM; a user mistake is one line on stderr and exit status 2.
 
     Picks the runtime (`select_runtime`) unless one is given, builds `node_class(runtime)`, which
     must declare its parameters up front, then checks that every given parameter was declared.

@@ -1,4 +1,5 @@
-"""The rclpy runtime: the nodes on ROS 2 itself (what `ros2 run` and `ros2 launch` start).
+"""
+The rclpy runtime: the nodes on ROS 2 itself (what `ros2 run` and `ros2 launch` start).
 
 The same names as the DDS runtime (`dds_node`), so `runtime.node.run` uses either unchanged. Import
 fails with ImportError where rclpy or the message packages are absent.
@@ -6,19 +7,19 @@ fails with ImportError where rclpy or the message packages are absent.
 import sys
 import types
 
+from builtin_interfaces.msg import Time as TimeMsg
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import Vector3, Wrench, WrenchStamped
 import rclpy
 import rclpy.duration
 import rclpy.exceptions
 import rclpy.executors
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 import rclpy.node
 import rclpy.qos
 import rclpy.signals
-import rclpy.time
-from builtin_interfaces.msg import Time as TimeMsg
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import Vector3, Wrench, WrenchStamped
-from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.subscription import Subscription
+import rclpy.time
 from rclpy.waitable import NumberOfEntities
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
@@ -62,7 +63,7 @@ def init(args=None):
         rclpy.init(args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
     except _rclpy.UnknownROSArgsError as exc:
         # rclpy's message is the list of unknown arguments, as text.
-        unknown = str(exc).strip("[]").split(',')[0].strip().strip("'")
+        unknown = str(exc).strip('[]').split(',')[0].strip().strip("'")
         raise ParameterError(f"--ros-args: unknown argument '{unknown}'") from None
     except (_rclpy.RCLError, _rclpy.RCLInvalidROSArgsError) as exc:
         # rcl appends the C source locations of the error (', at /path/file.c:123'): drop them.
@@ -81,7 +82,8 @@ def parameter_overrides(node):
 
 
 class WaitLoop:
-    """One node's entities served from one reused wait set: rclpy's executor, made lean.
+    """
+    One node's entities served from one reused wait set: rclpy's executor, made lean.
 
     rclpy's SingleThreadedExecutor builds a new wait set, with a context manager around every
     handle, for each wait, and hands out one message per ready subscription per wait; at the

@@ -1,4 +1,5 @@
-"""Real-time scheduling for the nodes that run 1 kHz loops (driver, model, simulated devices).
+"""
+Real-time scheduling for the nodes that run 1 kHz loops (driver, model, simulated devices).
 
 On a general-purpose Linux kernel a Python loop at normal priority is preempted by whatever else
 runs; on a 2-core machine that is what turns a 0.3 ms median latency into a 5-10 ms p99. The usual
@@ -46,7 +47,8 @@ _POLICIES = {getattr(os, name): name for name in
 
 
 def set_fifo(priority):
-    """SCHED_FIFO at `priority` for every thread of this process; returns how many threads.
+    """
+    SCHED_FIFO at `priority` for every thread of this process; returns how many threads.
 
     Raises PermissionError when neither an rtprio limit nor CAP_SYS_NICE allows it.
     """
@@ -63,8 +65,12 @@ def set_fifo(priority):
 
 
 def declare(node):
-    """Declare and check `realtime_priority` (0 = normal scheduling, 1-99 = SCHED_FIFO) and
-    `cpu_latency_limit` (s; negative = off, 0 = idle CPUs poll); returns the priority."""
+    """
+    Declare and check `realtime_priority` and `cpu_latency_limit`; return the priority.
+
+    `realtime_priority`: 0 = normal scheduling, 1-99 = SCHED_FIFO; `cpu_latency_limit`: s,
+    negative = off, 0 = idle CPUs poll.
+    """
     priority = node.declare_parameter('realtime_priority', 0).value
     if priority != 0 and not 1 <= priority <= 99:
         raise ParameterError(f"parameter 'realtime_priority': expected 0 (off) or 1..99, "
@@ -92,7 +98,8 @@ def request(node):
     except PermissionError:
         node.get_logger().warn(
             f'realtime_priority {priority} not granted (needs an rtprio limit >= {priority}, e.g. '
-            f'"@realtime - rtprio 98" in /etc/security/limits.conf, or CAP_SYS_NICE): running with '
+            '"@realtime - rtprio 98" in /etc/security/limits.conf, or CAP_SYS_NICE): '
+            'running with '
             'normal scheduling, expect millisecond latency spikes when the machine is busy')
         return False
     node.get_logger().info(f'SCHED_FIFO priority {priority} on {threads} threads')
@@ -100,7 +107,8 @@ def request(node):
 
 
 def hold_cpu_latency(limit, device=CPU_LATENCY_DEVICE):
-    """Ask the kernel to keep every CPU's idle-state exit latency within `limit` s.
+    """
+    Ask the kernel to keep every CPU's idle-state exit latency within `limit` s.
 
     Linux PM QoS (Documentation/power/pm_qos_interface.rst): the request holds while the returned
     file descriptor stays open and ends when it is closed or the process exits, so it cannot
@@ -116,8 +124,11 @@ def hold_cpu_latency(limit, device=CPU_LATENCY_DEVICE):
 
 
 def cpu_latency_in_force(device=CPU_LATENCY_DEVICE):
-    """The CPU latency limit in force now, the least of every process's request, s (nan where
-    it cannot be read)."""
+    """
+    Return the CPU latency limit in force now, s: the least of every process's request.
+
+    nan where it cannot be read.
+    """
     try:
         fd = os.open(device, os.O_RDONLY)
     except OSError:
@@ -129,7 +140,8 @@ def cpu_latency_in_force(device=CPU_LATENCY_DEVICE):
 
 
 def limit_cpu_latency(node):
-    """Hold the node's `cpu_latency_limit` (negative or undeclared: off) while it runs.
+    """
+    Hold the node's `cpu_latency_limit` (negative or undeclared: off) while it runs.
 
     Returns the file descriptor holding the request, for the caller to close at shutdown, or None.
     """
@@ -146,12 +158,13 @@ def limit_cpu_latency(node):
             'needs root or write access to it): idle CPUs may sleep deeply, expect wake-ups late '
             'by up to milliseconds')
         return None
-    node.get_logger().info(f'CPU wake-up latency limited to {limit * 1e6:.0f} µs while the node runs')
+    node.get_logger().info(
+        f'CPU wake-up latency limited to {limit * 1e6:.0f} µs while the node runs')
     return fd
 
 
 def describe():
-    """The calling thread's scheduling policy and priority, e.g. 'SCHED_FIFO 50'."""
+    """Return the calling thread's scheduling policy and priority, e.g. 'SCHED_FIFO 50'."""
     if not hasattr(os, 'sched_getscheduler'):
         return 'unknown'
     policy = os.sched_getscheduler(0)

@@ -1,25 +1,27 @@
-"""`bellows record`: write the contract topics to a rosbag2 (MCAP) directory, without ROS.
+"""
+`bellows record`: write the contract topics to a rosbag2 (MCAP) directory, without ROS.
 
 Subscribes over Cyclone DDS with ROS 2's wire conventions (so it records ROS 2 nodes on
 rmw_cyclonedds_cpp too), converts each message to the rosbags Jazzy type store's class and
 serialises it to CDR with the type store. The bag timestamp is the receive time, as rosbag2 does;
 the sample time stays in `header.stamp`.
 """
+from pathlib import Path
 import sys
 import time
-from pathlib import Path
 
 from rosbags.rosbag2 import Writer
 from rosbags.rosbag2.enums import StoragePlugin
 
 from bellows_ros.errors import BellowsError
 from bellows_ros.runtime import dds_node
-from bellows_ros.runtime.messages import TYPESTORE, message_class
+from bellows_ros.runtime.messages import message_class, TYPESTORE
 from bellows_ros.runtime.topics import SAMPLE_DEPTH, TOPICS
 
 
 def record(output, topics=None, duration=None, ready=None):
-    """Record `topics` (default: all of TOPICS) into the new directory `output`.
+    """
+    Record `topics` (default: all of TOPICS) into the new directory `output`.
 
     Runs for `duration` seconds, or until KeyboardInterrupt. `ready()` is called once subscribed.
     Returns {topic: message count}.

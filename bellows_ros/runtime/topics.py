@@ -1,4 +1,5 @@
-"""The topic contract (docs/interfaces.md "Topics"): topic -> ROS message type.
+"""
+The topic contract (docs/interfaces.md "Topics"): topic -> ROS message type.
 
 Conventions fixed here so the driver, the recorder and the bag reader agree:
 - `/joint_states` and `/bellows/chambers` carry one message per sample per device group (the arm's
