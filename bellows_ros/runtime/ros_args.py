@@ -18,7 +18,12 @@ rclpy and on the DDS runtime):
   a file wins over `-p name:=v` given after it (that lands in the earlier `/**` entry); to override
   a node's own section from the command line, name the node: `-p node:name:=v`.
 - Remapping. `from` and `to` are expanded in the node's namespace (`joint_states` in `/` is
-  `/joint_states`); the first matching rule wins; `node:from:=to` applies to that node only.
+  `/joint_states`, `~` is the node's own name); the first matching rule wins; `node:from:=to`
+  applies to that node only, named as it is after `__node`.
+- `__node` and `__ns`: the first matching rule of each wins; `node:__ns:=/ns` names the node as it
+  is after `__node`; a namespace must be fully qualified (`/arm`, not `arm`).
+- Values. An array's elements have one type (`[1, 2.0]` is an error) and an empty array has none
+  (rcl leaves it unset): both are errors here, in a file or after `-p`.
 """
 from dataclasses import dataclass, field
 
@@ -69,9 +74,16 @@ def parse(argv, strict=True):
             continue
         elif arg == '--params-file':
             path = _value(items, arg)
-            ros.parameter_rules.append(('file', path, params_module.read_sections(path)))
+            sections = params_module.read_sections(path)
+            for values in sections.values():
+                for name, value in values.items():
+                    _check_array(path, name, value)
+            ros.parameter_rules.append(('file', path, sections))
         elif arg in ('-p', '--param'):
-            ros.parameter_rules.append(('param', *_parameter(_value(items, arg))))
+            text = _value(items, arg)
+            rule = _parameter(text)
+            _check_array(f"--ros-args -p '{text}'", rule[1], rule[2])
+            ros.parameter_rules.append(('param', *rule))
         elif arg in ('-r', '--remap'):
             _remap(ros, _value(items, arg))
         elif arg == '--log-level':
@@ -84,6 +96,18 @@ def parse(argv, strict=True):
             raise ParameterError(f"--ros-args: unknown argument '{arg}' (the DDS runtime "
                                  'takes --params-file, -p, -r and --log-level)')
     return ros, rest
+
+
+def _check_array(where, name, value):
+    """rcl's arrays: not empty (it could not tell the type), all elements of one type."""
+    if not isinstance(value, list):
+        return
+    if not value:
+        raise ParameterError(f"{where}: parameter '{name}' is an empty array (rcl cannot tell "
+                             'its type)')
+    if len({type(item) for item in value}) > 1:
+        raise ParameterError(f"{where}: parameter '{name}': array elements must all have one "
+                             f'type, got {value!r}')
 
 
 def _value(items, flag):
@@ -134,7 +158,10 @@ def _remap(ros, text):
             raise ParameterError(f"--ros-args -r '{text}': '{target}' is not a valid node name")
         ros.renames.append((node, '__node', target))
     elif source == '__ns':
-        namespace = target if target.startswith('/') else '/' + target
+        if not target.startswith('/'):
+            raise ParameterError(f"--ros-args -r '{text}': the namespace must be fully "
+                                 f"qualified ('/{target}')")
+        namespace = target
         if namespace != '/' and not all(_is_name_token(t) for t in namespace[1:].split('/')):
             raise ParameterError(f"--ros-args -r '{text}': '{target}' is not a valid namespace")
         ros.renames.append((node, '__ns', namespace))
@@ -143,15 +170,17 @@ def _remap(ros, text):
 
 
 def node_identity(ros, name, namespace='/'):
-    """(name, namespace) of a node created as `name` in `namespace`, after `__node` / `__ns`."""
-    original = name
-    for node, kind, value in ros.renames:
-        if node is None or node == original:
-            if kind == '__node':
-                name = value
-            else:
-                namespace = value
-    return name, namespace
+    """(name, namespace) of a node created as `name` in `namespace`, after `__node` / `__ns`.
+
+    As rcl: the first matching rule of each kind wins, and `__ns` rules see the new name.
+    """
+    name = _first_rename(ros, '__node', name) or name
+    return name, _first_rename(ros, '__ns', name) or namespace
+
+
+def _first_rename(ros, kind, name):
+    return next((value for node, rule_kind, value in ros.renames
+                 if rule_kind == kind and node in (None, name)), None)
 
 
 def expand(topic, node_name, namespace):
@@ -162,11 +191,11 @@ def expand(topic, node_name, namespace):
     return topic if topic.startswith('/') else f'{base}/{topic}'
 
 
-def resolve_topic(ros, topic, node_name, namespace, original_name=None):
-    """The fully qualified topic a node publishes or subscribes to, after remapping."""
+def resolve_topic(ros, topic, node_name, namespace):
+    """The fully qualified topic a node (named as after `__node`) uses, after remapping."""
     resolved = expand(topic, node_name, namespace)
     for node, source, target in ros.remaps:
-        if node is not None and node not in (node_name, original_name):
+        if node is not None and node != node_name:
             continue
         if expand(source, node_name, namespace) == resolved:
             return expand(target, node_name, namespace)
