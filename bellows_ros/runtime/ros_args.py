@@ -141,9 +141,10 @@ def _parameter(text):
         raise ParameterError(f"--ros-args -p '{text}': expected [node:]name:=value")
     try:
         value = params_module.parse_yaml(value_text) if value_text.strip() else ''
-    except yaml.YAMLError:
+    except (yaml.YAMLError, ValueError):  # ValueError: a tag that does not fit (`!!int a`)
         raise ParameterError(f"--ros-args -p '{text}': value is not valid YAML") from None
-    if isinstance(value, dict) or value is None:
+    items = value if isinstance(value, list) else [value]
+    if not all(isinstance(item, (bool, int, float, str)) for item in items):
         raise ParameterError(f"--ros-args -p '{text}': value must be a scalar or a list")
     return node, name, value
 
