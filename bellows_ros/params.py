@@ -156,6 +156,8 @@ def read_sections(path):
         where = f'{path}:{mark.line + 1}' if mark else str(path)
         problem = getattr(exc, 'problem', None) or 'invalid YAML'
         raise ParameterError(f'{where}: {problem}') from None
+    except ValueError as exc:  # a tag the value does not fit (`!!int abc`)
+        raise ParameterError(f'{path}: {exc}') from None
     if not isinstance(document, dict):
         raise ParameterError(f"{path}: expected a map of node names to 'ros__parameters'")
     sections = {}

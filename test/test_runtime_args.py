@@ -74,6 +74,22 @@ def test_values_typed_as_rcl_types_them(text, value):
     assert type(ros.parameter_rules[0][3]) is type(value)
 
 
+@pytest.mark.parametrize('text, message', [
+    ('a: {ros__parameters: {x: !!int abc}}', "invalid literal for int() with base 10: 'abc'"),
+    ('a: {ros__parameters: {x: [1, 2}}', "expected ',' or ']'"),
+    ('a: {ros__parameters: {x: []}}', "parameter 'x' is an empty array"),
+    ('a: {ros__parameters: {x: [a, 1]}}', "parameter 'x': array elements must all have one type"),
+    ('a: {x: 1}', "section 'a' has no 'ros__parameters' map"),
+])
+def test_bad_files_are_one_line(tmp_path, text, message):
+    path = tmp_path / 'bad.yaml'
+    path.write_text(text + '\n')
+    with pytest.raises(ParameterError) as info:
+        parse(['--ros-args', '--params-file', str(path)])
+    assert str(info.value).startswith(str(path)) and message in str(info.value)
+    assert '\n' not in str(info.value)
+
+
 def test_lenient_parse_passes_over_what_only_rcl_knows():
     ros, rest = parse(['--ros-args', '--enclave', '/e', '-p', 'a:=1'], strict=False)
     assert ros.parameter_rules == [('param', None, 'a', 1)]
@@ -161,6 +177,7 @@ TOKENS = st.one_of(
 @example(['--ros-args', '-p', 'x:=!!int abc'], True)
 @example(['--ros-args', '--params-file', 'a\x00b'], True)
 @example(['--ros-args', '-p', 'x:=!!binary YWJj'], True)
+@example(['--ros-args', '-p', "0:='\n"], True)
 def test_fuzz_parse(argv, strict):
     try:
         ros, rest = parse(argv, strict=strict)

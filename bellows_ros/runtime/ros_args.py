@@ -58,6 +58,15 @@ def parse(argv, strict=True):
     arguments this way first, so both runtimes word the same mistakes the same way, then lets rcl
     judge the arguments only it knows).
     """
+    try:
+        return _parse(argv, strict)
+    except ParameterError as exc:
+        # Messages quote the argument: keep them one line whatever it holds (a newline, ESC).
+        raise ParameterError(''.join(c if c.isprintable() else repr(c)[1:-1]
+                                     for c in str(exc))) from None
+
+
+def _parse(argv, strict):
     ros, rest = RosArgs(), []
     inside = False
     items = iter(argv)
