@@ -105,6 +105,7 @@ CASES = [
          error='array elements must all have one'),
     Case('empty_array_file', ['--params-file', 'E.yaml'],
          error="parameter 'segments' is an empty array"),
+    Case('empty_array_p', ['-p', 'segments:=[]'], error="parameter 'segments' is an empty array"),
     Case('undeclared', ['-p', 'extra:=1'], error="unknown parameter 'extra' for node 'probe'"),
     Case('undeclared_in_section', ['--params-file', 'FILE_WITH_EXTRA'],
          error="unknown parameter 'extra' for node 'probe'"),

@@ -4,7 +4,8 @@
          -r __node:=name -r __ns:=/ns --log-level LEVEL [--]
 
 Everything outside `--ros-args ... [--]` is handed back untouched, as rclpy does. Values after `-p`
-are YAML (`-p gain:=2.5`, `-p names:="[a, b]"`). Mistakes raise `ParameterError` with one line
+are YAML (`-p gain:=2.5`, `-p names:="[a, b]"`), scalars typed as rcl types them
+(`params.parse_yaml`: `yes` is a bool, `012` an integer, `1e-3` a double). Mistakes raise `ParameterError` with one line
 naming the argument.
 
 What rcl does, and this module does the same (test_runtime_parameters.py runs the same cases on
@@ -23,7 +24,9 @@ rclpy and on the DDS runtime):
 - `__node` and `__ns`: the first matching rule of each wins; `node:__ns:=/ns` names the node as it
   is after `__node`; a namespace must be fully qualified (`/arm`, not `arm`).
 - Values. An array's elements have one type (`[1, 2.0]` is an error) and an empty array has none
-  (rcl leaves it unset): both are errors here, in a file or after `-p`.
+  (rcl leaves it unset): both are errors here, in a file or after `-p`. A later array of another
+  element type for the same node and name replaces the earlier one here (rcl silently keeps the
+  earlier one: a quirk not copied), so the declared type reports it.
 """
 from dataclasses import dataclass, field
 
@@ -133,7 +136,7 @@ def _is_name_token(text):
 
 
 def _node_prefix(text, flag):
-    """'node:rest' -> ('node', 'rest'); 'rest' -> (None, 'rest'). rcl takes a bare node name only."""
+    """'node:rest' -> ('node', 'rest'); 'rest' -> (None, 'rest'). rcl takes a bare node name."""
     node, sep, rest = text.partition(':')
     if not sep or rest.startswith('='):
         return None, text
