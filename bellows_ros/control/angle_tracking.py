@@ -22,6 +22,12 @@ sees what the model gets wrong. The friction term (5) is evaluated at the desire
 the measured Ψ̇ is a noisy difference of encoder angles, and tanh(c_vel Ψ̇) would chatter at holds.
 Ψ̇_f is the measured velocity through a first-order low-pass (`velocity_cutoff`). The integrator is
 clamped to ±`integral_limit` and holds while the allocation saturates (anti-windup).
+
+The valves follow their set-points with a lag (first order, time constant ≈ `lead`), so a
+feedforward pressure commanded now arrives late. The model-based modes therefore add to the
+allocated pair the change of the pure feedforward pair (τ = M Ψ̈_d + C Ψ̇_d, at the desired angle,
+same contact memory) between now and `lead` seconds ahead on the set-point, when the caller gives
+the set-point there (`ahead`); 0 = no lead.
 """
 import math
 from dataclasses import dataclass
@@ -37,18 +43,20 @@ FEEDFORWARDS = ('paper_a', 'previous', 'none')
 @dataclass(frozen=True)
 class TrackingGains:
     """kp N·m/rad, ki N·m/(rad·s), kd N·m·s/rad, velocity_cutoff Hz, integral_limit N·m,
-    base_pressure Pa abs (co-contraction of the antagonistic path)."""
+    base_pressure Pa abs (co-contraction of the antagonistic path), lead s (valve lag the
+    feedforward anticipates)."""
     kp: float
     ki: float
     kd: float
     velocity_cutoff: float
     integral_limit: float
     base_pressure: float
+    lead: float = 0.0
 
 
 def check_gains(gains, params, source='arm controller'):
     """Raise ParameterError naming the first inadmissible gain."""
-    for name in ('kp', 'ki', 'kd', 'velocity_cutoff', 'integral_limit'):
+    for name in ('kp', 'ki', 'kd', 'velocity_cutoff', 'integral_limit', 'lead'):
         value = getattr(gains, name)
         if not (math.isfinite(value) and value >= 0):
             raise ParameterError(f"{source}: parameter '{name}' must be finite and >= 0, "
@@ -104,9 +112,10 @@ class AngleTracker:
             blend = 1.0 - math.exp(-2.0 * math.pi * self.gains.velocity_cutoff * dt)
             self.velocity += blend * (psi_dot - self.velocity)
 
-    def command(self, psi_d, psi_dot_d, psi_ddot_d, psi, dt):
+    def command(self, psi_d, psi_dot_d, psi_ddot_d, psi, dt, ahead=None):
         """Pressure command for set-point (Ψ_d, Ψ̇_d, Ψ̈_d) at measured Ψ; dt s since the last
-        command. Returns an `Allocation` (p1, p2 Pa abs, the torque asked for N·m, saturated)."""
+        command; `ahead`: the set-point `lead` s later, or None. Returns an `Allocation` (p1, p2
+        Pa abs, the torque asked for N·m, saturated)."""
         g, p = self.gains, self.params
         error = psi_d - psi
         if not self.saturated:
@@ -121,9 +130,19 @@ class AngleTracker:
             return Allocation(p1, p2, feedback, self.saturated)
         tau = (p.dynamics_inertia * psi_ddot_d + p.dynamics_damping * psi_dot_d
                + p.dynamics_gravity * math.sin(psi) + feedback)
-        if self.feedforward == 'paper_a':
-            out = allocate_paper_a(self.model, psi, psi_dot_d, tau, g.base_pressure)
-        else:
-            out = allocate_previous(self.model, psi, psi_dot_d, tau, g.base_pressure)
+        allocate = allocate_paper_a if self.feedforward == 'paper_a' else allocate_previous
+        out = allocate(self.model, psi, psi_dot_d, tau, g.base_pressure)
         self.saturated = out.saturated
+        if ahead is not None and g.lead > 0.0:
+            now = self._feedforward(allocate, psi_d, psi_dot_d, psi_ddot_d)
+            later = self._feedforward(allocate, *ahead)
+            out = out._replace(p1=min(p.p_max, max(p.p0, out.p1 + later.p1 - now.p1)),
+                               p2=min(p.p_max, max(p.p0, out.p2 + later.p2 - now.p2)))
         return out._replace(tau=tau)
+
+    def _feedforward(self, allocate, psi_d, psi_dot_d, psi_ddot_d):
+        """The pair for the set-point alone: (2)'s rigid-body torque at the desired state."""
+        p = self.params
+        tau = (p.dynamics_inertia * psi_ddot_d + p.dynamics_damping * psi_dot_d
+               + p.dynamics_gravity * math.sin(psi_d))
+        return allocate(self.model, psi_d, psi_dot_d, tau, self.gains.base_pressure)

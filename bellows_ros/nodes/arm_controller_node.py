@@ -21,10 +21,10 @@ built-in `trajectory`, started `trajectory_delay` s after the first sample, on s
 Parameters: segments (int array), feedforward ('paper_a' | 'previous' | 'none' = feedback only),
 trajectory ('' | 'reversals' | 'sweep'), trajectory_delay (s), pid.kp (N·m/rad), pid.ki
 (N·m/(rad·s)), pid.kd (N·m·s/rad), pid.velocity_cutoff (Hz), pid.integral_limit (N·m),
-co_contraction (Pa above ambient on both chains), control_every (samples per command),
-params_file (str: YAML over config/segment.yaml, e.g. identified parameters and the arm's
-segment.dynamics), max_pending (unmatched half-samples kept), realtime_priority,
-cpu_latency_limit (runtime/realtime.py).
+feedforward_lead (s: the valves' lag the feedforward anticipates, 0 = none), co_contraction (Pa
+above ambient on both chains), control_every (samples per command), params_file (str: YAML over
+config/segment.yaml, e.g. identified parameters and the arm's segment.dynamics), max_pending
+(unmatched half-samples kept), realtime_priority, cpu_latency_limit (runtime/realtime.py).
 """
 import math
 import time
@@ -56,9 +56,13 @@ class SegmentLoop:
         self.setpoint = (math.nan, 0.0, 0.0)
         self.squares, self.count, self.largest, self.saturated = 0.0, 0, 0.0, 0
 
-    def desired(self, t):
+    def desired(self, t, later=0.0):
+        """(Ψ_d, Ψ̇_d, Ψ̈_d) at `t` s on the trajectory clock, or `later` s after it (a topic
+        set-point is extrapolated with its velocity)."""
+        t += later
         if self.topic_setpoint is not None:
-            return self.topic_setpoint[0], self.topic_setpoint[1], 0.0
+            psi, psi_dot = self.topic_setpoint
+            return psi + later * psi_dot, psi_dot, 0.0
         if self.trajectory is not None and t >= 0.0:
             return angle_trajectory.setpoint(self.trajectory, t)
         return self.hold, 0.0, 0.0
@@ -72,11 +76,12 @@ class ArmControllerNode(rt.Node):
         feedforward = self.declare_parameter('feedforward', 'paper_a').value
         trajectory = self.declare_parameter('trajectory', '').value
         self.delay = self.declare_parameter('trajectory_delay', 1.0).value
-        kp = self.declare_parameter('pid.kp', 60.0).value
+        kp = self.declare_parameter('pid.kp', 40.0).value
         ki = self.declare_parameter('pid.ki', 640.0).value
         kd = self.declare_parameter('pid.kd', 2.0).value
         cutoff = self.declare_parameter('pid.velocity_cutoff', 20.0).value
         integral_limit = self.declare_parameter('pid.integral_limit', 20.0).value
+        lead = self.declare_parameter('feedforward_lead', 0.05).value
         co_contraction = self.declare_parameter('co_contraction', 0.0).value
         self.control_every = self.declare_parameter('control_every', 5).value
         params_file = self.declare_parameter('params_file', '').value or None
@@ -95,7 +100,9 @@ class ArmControllerNode(rt.Node):
                                f'samples (the driver vents after {watchdog:g} s without a '
                                f'command), got {self.control_every}')
         params = load_segment_params(params_file)
-        gains = TrackingGains(kp, ki, kd, cutoff, integral_limit, params.p0 + co_contraction)
+        gains = TrackingGains(kp, ki, kd, cutoff, integral_limit, params.p0 + co_contraction,
+                              lead)
+        self.lead = lead
         self.loops = [SegmentLoop(f'segment_{i}', AngleTracker(params, gains, feedforward), path)
                       for i in segments]
         self.feedforward = feedforward
@@ -178,7 +185,8 @@ class ArmControllerNode(rt.Node):
         for loop, row in zip(self.loops, inputs):
             psi_d, psi_dot_d, psi_ddot_d = loop.setpoint = loop.desired(t)
             out = loop.tracker.command(psi_d, psi_dot_d, psi_ddot_d, row[0],
-                                       self.control_every * SAMPLE_PERIOD)
+                                       self.control_every * SAMPLE_PERIOD,
+                                       loop.desired(t, self.lead))
             names.extend(loop.chains)
             efforts.extend((out.p1, out.p2))
             error = psi_d - row[0]

@@ -1,0 +1,121 @@
+"""The gain of model-based arm control, measured: RMS angle error tracking one trajectory on the
+simulated segment with feedback only, with the previous model (34) and with paper A's model.
+
+In process and deterministic (`control.closed_loop`, seed 0): the segment plant with its default
+effects (contact hysteresis, pressure friction, natural curvature; valve lag and sensor noise are
+always on), Ψ̇ by backward differences of the measured angle as the driver makes it, commands at
+the controller's rate held by the valves for the arm bus's set-point cycle (config/arm.dbc).
+Trajectory: `angle_trajectory.REVERSALS` (reversals, holds, peak speeds 0.4-2.6 rad/s within
+|Ψ| <= 0.9 rad). The same PID gains for all three (config/nodes_sim.yaml `arm_controller_node`,
+tuned once for feedback only, docs/arm_control.md). The model-based controllers get the rigid-body
+terms of (2), M and C, of the simulated segment (`segment.plant.inertia/damping`): what an arm's
+`segment.dynamics` would hold; the quasi-static figure (M = C = 0, config/segment.yaml as shipped)
+is reported beside it.
+
+Figures (rad): `arm_control.rms.feedback_only`, `.previous_model`, `.paper_a_model` (ratio to
+feedback only; target paper_a_model <= 0.5 x feedback_only and below previous_model), each with
+the RMS over the trajectory's holds, its moves that continue the previous direction, and its
+reversals (moves against the previous one: where the stored strain of the contact memory is
+released and rebuilt).
+"""
+import dataclasses
+
+from bellows_ros import params as parameters
+from bellows_ros.bench import Result
+from bellows_ros.control import angle_trajectory, closed_loop
+from bellows_ros.control.angle_tracking import TrackingGains
+from bellows_ros.hardware import can_protocol
+from bellows_ros.models.segment import load_segment_params, simulate_model
+from bellows_ros.models.segment_plant import FULL_MODEL
+
+MODES = (('feedback_only', 'none'), ('previous_model', 'previous'), ('paper_a_model', 'paper_a'))
+TARGET_RATIO = 0.5
+SEED = 0
+
+
+def controller_settings(segment):
+    """(TrackingGains, control_every) of config/nodes_sim.yaml's arm_controller_node."""
+    flat = parameters.read_file(parameters.default_file('nodes_sim'), 'arm_controller_node')
+    gains = TrackingGains(flat['pid.kp'], flat['pid.ki'], flat['pid.kd'],
+                          flat['pid.velocity_cutoff'], flat['pid.integral_limit'],
+                          segment.p0 + flat['co_contraction'], flat['feedforward_lead'])
+    return gains, int(flat['control_every'])
+
+
+def setpoint_every():
+    """Samples between the arm bus's set-point frames (config/arm.dbc cycle times)."""
+    db = can_protocol.load_dbc()
+    return round(db.get_message_by_name('ARM_HOST_HEARTBEAT').cycle_time
+                 / db.get_message_by_name('ARM_SEG1_SAMPLE').cycle_time)
+
+
+def with_rigid_body(segment):
+    """The model's (2) with the simulated segment's M, C, N (as an arm's segment.dynamics)."""
+    return segment.replace(dynamics_inertia=segment.plant_inertia,
+                           dynamics_damping=segment.plant_damping,
+                           dynamics_gravity=segment.plant_gravity)
+
+
+def windows(run, trajectory, error=None):
+    """RMS of `error` (default: the angle error, rad) over holds, same-direction moves and
+    reversals."""
+    error = run.psi_d - run.psi if error is None else error
+    kinds = [angle_trajectory.phases(trajectory, t) for t in run.t.tolist()]
+    pick = {'holds': [k == ('hold', None) for k in kinds],
+            'moves': [k == ('move', False) for k in kinds],
+            'reversals': [k == ('move', True) for k in kinds]}
+    return {name: closed_loop.rms(error[mask]) for name, mask in pick.items()}
+
+
+def track(mode, trajectory, rigid_body=True, lead=True, duration=None):
+    """One closed-loop run of controller `mode` ('none', 'previous', 'paper_a'); without the
+    rigid-body terms of (2) or the valve-lag lead on request (the ablations)."""
+    segment = load_segment_params()
+    gains, control_every = controller_settings(segment)
+    if not lead:
+        gains = dataclasses.replace(gains, lead=0.0)
+    model = with_rigid_body(segment) if rigid_body and mode != 'none' else segment
+    return closed_loop.simulate(model, gains, mode, trajectory, FULL_MODEL, seed=SEED,
+                                control_every=control_every, setpoint_every=setpoint_every(),
+                                duration=duration, plant_params=segment)
+
+
+def short_trajectory():
+    """The first moves of REVERSALS (out, reversal through Ψ = 0, back): the quick run."""
+    return angle_trajectory.Trajectory(angle_trajectory.REVERSALS.start,
+                                       angle_trajectory.REVERSALS.waypoints[:3])
+
+
+def run(quick=False):
+    trajectory = short_trajectory() if quick else angle_trajectory.REVERSALS
+    results, reference = [], None
+    for name, mode in MODES:
+        tracked = track(mode, trajectory)
+        result = Result(f'arm_control.rms.{name}', closed_loop.rms(tracked.psi_d - tracked.psi),
+                        'rad', len(tracked.t))
+        result.extra.update({f'rms_{k}': v for k, v in windows(tracked, trajectory).items()})
+        result.extra['max_error'] = float(abs(tracked.psi_d - tracked.psi).max())
+        result.extra['saturated_fraction'] = float(tracked.saturated.mean())
+        result.extra_units['saturated_fraction'] = ''
+        if mode != 'none' and not quick:
+            for label, options in (('no_lead', {'lead': False}),
+                                   ('quasi_static', {'lead': False, 'rigid_body': False})):
+                other = track(mode, trajectory, **options)
+                result.extra[f'rms_{label}'] = closed_loop.rms(other.psi_d - other.psi)
+        if reference is None:
+            reference = result
+        else:
+            result.reference, result.ratio = reference.name, result.value / reference.value
+        if mode == 'paper_a':
+            result.target = TARGET_RATIO * reference.value
+            # Where the previous model's inverse goes wrong: its torque against paper A's on the
+            # true states of this run (the plant's physics is paper A's model, default effects).
+            model = simulate_model(load_segment_params(), tracked.psi, tracked.p1, tracked.p2,
+                                   tracked.psi_dot)
+            miss = windows(tracked, trajectory, model['tau_prev'] - model['tau_drive'])
+            previous = results[-1]
+            for name, value in miss.items():
+                previous.extra[f'torque_error_{name}'] = value
+                previous.extra_units[f'torque_error_{name}'] = 'N·m'
+        results.append(result)
+    return results
