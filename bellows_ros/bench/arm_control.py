@@ -25,7 +25,9 @@ from bellows_ros.bench import Result
 from bellows_ros.control import angle_trajectory, closed_loop
 from bellows_ros.control.angle_tracking import TrackingGains
 from bellows_ros.hardware import can_protocol
-from bellows_ros.models.segment import load_segment_params, simulate_model
+from bellows_ros.models.contact import contact_angle
+from bellows_ros.models.segment import (SegmentModel, load_segment_params, simulate_model,
+                                        strain_memory)
 from bellows_ros.models.segment_plant import FULL_MODEL
 
 MODES = (('feedback_only', 'none'), ('previous_model', 'previous'), ('paper_a_model', 'paper_a'))
@@ -67,9 +69,49 @@ def windows(run, trajectory, error=None):
     return {name: closed_loop.rms(error[mask]) for name, mask in pick.items()}
 
 
-def track(mode, trajectory, rigid_body=True, lead=True, duration=None):
+class FrictionlessContact:
+    """Paper A's model without the contact memory: the stand-in for `SegmentModel` in the ablation.
+
+    Paper A: for a frictionless contact the strain on the rib equals the free strain, λ_a = λ1
+    (26 without the no-slip history). That is Algorithm 1's fixed point at constant (p, α) from
+    an empty profile (Appendix B: it converges), so s̃_a is computed by iterating a fresh
+    `StrainMemory` to convergence at every evaluation: the same equations, no history.
+    """
+
+    def __init__(self, params):
+        self.params = params
+        self._model = SegmentModel(params)
+        self._scratch = strain_memory(params)
+
+    def _contact(self, p_rel, alpha):
+        memory = self._scratch
+        memory.reset()
+        s_a = memory.step(p_rel, alpha)
+        for _ in range(200):
+            previous, s_a = s_a, memory.step(p_rel, alpha)
+            if abs(s_a - previous) < 1e-7:
+                break
+        return s_a
+
+    def peek(self, psi, psi_dot, p1, p2):
+        p0 = self.params.p0
+        s1 = self._contact(p1 - p0, contact_angle(psi, 1.0))
+        s2 = self._contact(p2 - p0, contact_angle(psi, -1.0))
+        return (s1, s2) + self._model.torques(psi, psi_dot, p1, p2, s1, s2)
+
+    step = peek  # nothing to remember
+
+    def torques(self, *args):
+        return self._model.torques(*args)
+
+    def reset(self):
+        pass
+
+
+def track(mode, trajectory, rigid_body=True, lead=True, memory=True, duration=None):
     """One closed-loop run of controller `mode` ('none', 'previous', 'paper_a'); without the
-    rigid-body terms of (2) or the valve-lag lead on request (the ablations)."""
+    rigid-body terms of (2), the valve-lag lead or (paper A) the contact memory on request (the
+    ablations)."""
     segment = load_segment_params()
     gains, control_every = controller_settings(segment)
     if not lead:
@@ -77,7 +119,8 @@ def track(mode, trajectory, rigid_body=True, lead=True, duration=None):
     model = with_rigid_body(segment) if rigid_body and mode != 'none' else segment
     return closed_loop.simulate(model, gains, mode, trajectory, FULL_MODEL, seed=SEED,
                                 control_every=control_every, setpoint_every=setpoint_every(),
-                                duration=duration, plant_params=segment)
+                                duration=duration, plant_params=segment,
+                                model=None if memory else FrictionlessContact(model))
 
 
 def short_trajectory():
@@ -98,10 +141,16 @@ def run(quick=False):
         result.extra['saturated_fraction'] = float(tracked.saturated.mean())
         result.extra_units['saturated_fraction'] = ''
         if mode != 'none' and not quick:
-            for label, options in (('no_lead', {'lead': False}),
-                                   ('quasi_static', {'lead': False, 'rigid_body': False})):
+            ablations = [('no_lead', {'lead': False}),
+                         ('quasi_static', {'lead': False, 'rigid_body': False})]
+            if mode == 'paper_a':
+                ablations.append(('no_contact_memory', {'memory': False}))
+            for label, options in ablations:
                 other = track(mode, trajectory, **options)
                 result.extra[f'rms_{label}'] = closed_loop.rms(other.psi_d - other.psi)
+                if label == 'no_contact_memory':
+                    for name, value in windows(other, trajectory).items():
+                        result.extra[f'rms_{name}_no_contact_memory'] = value
         if reference is None:
             reference = result
         else:

@@ -100,6 +100,11 @@ class AngleTracker:
 
     def reset(self):
         self.model.reset()
+        self.restart()
+
+    def restart(self):
+        """Forget the feedback state (integral, velocity), keep the model's contact memory: after
+        an interruption (the driver vented the arm) the integral no longer fits the segment."""
         self.integral = 0.0
         self.velocity = 0.0
         self.saturated = False

@@ -25,16 +25,20 @@ DT = 1e-3
 
 
 def simulate(params, gains, feedforward, trajectory, effects, seed=0, control_every=5,
-             setpoint_every=1, duration=None, noise=None, plant_params=None):
+             setpoint_every=1, duration=None, noise=None, plant_params=None, model=None):
     """Track `trajectory` on `SegmentPlant(plant_params, effects, noise, seed)` -> TrackingRun.
 
-    params: the tracker's model (SegmentParams); plant_params: the plant's (default: the same).
+    params: the tracker's model (SegmentParams); plant_params: the plant's (default: the same);
+    model: a stand-in for the tracker's `SegmentModel` (step, peek, torques, params), for
+    ablations.
     """
     total = angle_trajectory.duration(trajectory) if duration is None else duration
     steps = int(round(total / DT))
     plant = SegmentPlant(plant_params or params, effects=effects, noise=noise, seed=seed,
                          psi0=trajectory.start)
     tracker = AngleTracker(params, gains, feedforward)
+    if model is not None:
+        tracker.model = model
     out = np.zeros((steps, 10))
     sample = plant.step(DT, params.p0, params.p0)
     last_psi, command, valves = sample.psi, None, (params.p0, params.p0)

@@ -24,7 +24,8 @@ trajectory ('' | 'reversals' | 'sweep'), trajectory_delay (s), pid.kp (N·m/rad)
 feedforward_lead (s: the valves' lag the feedforward anticipates, 0 = none), co_contraction (Pa
 above ambient on both chains), control_every (samples per command), params_file (str: YAML over
 config/segment.yaml, e.g. identified parameters and the arm's segment.dynamics), max_pending
-(unmatched half-samples kept), realtime_priority, cpu_latency_limit (runtime/realtime.py).
+(unmatched half-samples kept), max_sample_age (s: no command from a sample older than this),
+realtime_priority, cpu_latency_limit (runtime/realtime.py).
 """
 import math
 import time
@@ -86,6 +87,7 @@ class ArmControllerNode(rt.Node):
         self.control_every = self.declare_parameter('control_every', 5).value
         params_file = self.declare_parameter('params_file', '').value or None
         max_pending = self.declare_parameter('max_pending', 100).value
+        max_age = self.declare_parameter('max_sample_age', 0.02).value
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: rt.main applies them
         rt.check_parameters(self)
         if not segments or any(s < 1 for s in segments):
@@ -99,6 +101,7 @@ class ArmControllerNode(rt.Node):
             raise BellowsError(f'arm_controller_node: parameter control_every must be 1..{most} '
                                f'samples (the driver vents after {watchdog:g} s without a '
                                f'command), got {self.control_every}')
+        self.watchdog_ns = round(watchdog * 1e9)
         params = load_segment_params(params_file)
         gains = TrackingGains(kp, ki, kd, cutoff, integral_limit, params.p0 + co_contraction,
                               lead)
@@ -107,9 +110,12 @@ class ArmControllerNode(rt.Node):
                       for i in segments]
         self.feedforward = feedforward
         self.pairs = SamplePairs(max_pending)
+        self.max_age_ns = round(max_age * 1e9)
         self.samples = 0
         self.first_stamp = self.last_stamp = None
-        self.counts = dict.fromkeys(['commands', 'rejected_samples', 'rejected_setpoints'], 0)
+        self.counts = dict.fromkeys(['commands', 'stale_skipped', 'restarts', 'rejected_samples',
+                                     'rejected_setpoints'], 0)
+        self.last_command = None
         self.stats = LoopStats()
         self.report = diagnostics.LoopReport(self.stats)
         self._p_limit = 2.0 * params.p_max
@@ -180,6 +186,17 @@ class ArmControllerNode(rt.Node):
         self.samples += 1
         if (self.samples - 1) % self.control_every:
             return
+        # A command from an old sample (a backlog after a stall) would act on a state long gone,
+        # which destabilises the loop; none is sent, and if that persists the driver vents.
+        now = self.get_clock().now().nanoseconds
+        if now - stamp > self.max_age_ns:
+            self.counts['stale_skipped'] += 1
+            return
+        if self.last_command is not None and now - self.last_command > self.watchdog_ns:
+            self.counts['restarts'] += 1  # the driver has vented meanwhile
+            for loop in self.loops:
+                loop.tracker.restart()
+        self.last_command = now
         t = (stamp - self.first_stamp) * 1e-9 - self.delay
         names, efforts = [], []
         for loop, row in zip(self.loops, inputs):
