@@ -71,3 +71,13 @@ def test_realtime_priority_out_of_range(tmp_path):
 def test_cpu_latency_limit_out_of_range(tmp_path):
     result = run('model_node', ['-p', 'cpu_latency_limit:=5000.0'], tmp_path)
     check(result, "'cpu_latency_limit'", 'negative value (off) or 0..2000 s', '5000')
+
+
+def test_arm_controller_bad_parameters(tmp_path):
+    check(run('arm_controller_node', ['-p', 'feedforward:=paper_b'], tmp_path),
+          "'feedforward'", 'paper_a, previous, none', 'paper_b')
+    check(run('arm_controller_node', ['-p', 'trajectory:=zigzag'], tmp_path),
+          "unknown trajectory 'zigzag'", 'reversals, sweep')
+    check(run('arm_controller_node', ['-p', 'control_every:=100'], tmp_path),
+          'control_every must be 1..25', 'got 100')
+    check(run('arm_controller_node', ['-p', 'pid.kp:=-1.0'], tmp_path), "'kp'", '>= 0')
