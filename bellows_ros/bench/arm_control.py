@@ -17,8 +17,16 @@ feedback only; target paper_a_model <= 0.5 x feedback_only and below previous_mo
 the RMS over the trajectory's holds, its moves that continue the previous direction, and its
 reversals (moves against the previous one: where the stored strain of the contact memory is
 released and rebuilt).
+
+Where the difference comes from (extras): the ablations `rms_no_lead` (no valve-lag lead),
+`rms_quasi_static` (also M = C = 0) and, for paper A, `rms_no_contact_memory` (paper A's model
+with a frictionless contact instead of the no-slip memory, `FrictionlessContact`); along the paper
+A run, the previous model's torque error against paper A's (`torque_error_*`, on the previous
+model's entry) and what the contact memory adds to paper A's torque (`memory_torque_*`).
 """
 import dataclasses
+
+import numpy as np
 
 from bellows_ros import params as parameters
 from bellows_ros.bench import Result
@@ -123,6 +131,25 @@ def track(mode, trajectory, rigid_body=True, lead=True, memory=True, duration=No
                                 model=None if memory else FrictionlessContact(model))
 
 
+def memory_torque(run, trajectory, every=10):
+    """RMS (N·m) over the windows of what the contact memory adds to paper A's driving torque
+    along a run: τ_drive with the memory minus with the frictionless contact, every `every`-th
+    sample of the true states."""
+    segment = load_segment_params()
+    model = SegmentModel(segment)
+    frictionless = FrictionlessContact(segment)
+    picked = range(0, len(run.t), every)
+    rows = list(zip(run.psi.tolist(), run.psi_dot.tolist(), run.p1.tolist(), run.p2.tolist()))
+    added = np.zeros(len(run.t))
+    for k, row in enumerate(rows):
+        with_memory = model.step(*row)[5]
+        if k % every == 0:
+            added[k] = with_memory - frictionless.peek(*row)[5]
+    index = np.asarray(picked)
+    sub = closed_loop.TrackingRun(*(np.asarray(a)[index] for a in run))
+    return windows(sub, trajectory, added[index])
+
+
 def short_trajectory():
     """The first moves of REVERSALS (out, reversal through Ψ = 0, back): the quick run."""
     return angle_trajectory.Trajectory(angle_trajectory.REVERSALS.start,
@@ -149,8 +176,8 @@ def run(quick=False):
                 other = track(mode, trajectory, **options)
                 result.extra[f'rms_{label}'] = closed_loop.rms(other.psi_d - other.psi)
                 if label == 'no_contact_memory':
-                    for name, value in windows(other, trajectory).items():
-                        result.extra[f'rms_{name}_no_contact_memory'] = value
+                    for window, value in windows(other, trajectory).items():
+                        result.extra[f'rms_{window}_no_contact_memory'] = value
         if reference is None:
             reference = result
         else:
@@ -163,8 +190,12 @@ def run(quick=False):
                                    tracked.psi_dot)
             miss = windows(tracked, trajectory, model['tau_prev'] - model['tau_drive'])
             previous = results[-1]
-            for name, value in miss.items():
-                previous.extra[f'torque_error_{name}'] = value
-                previous.extra_units[f'torque_error_{name}'] = 'N·m'
+            for window, value in miss.items():
+                previous.extra[f'torque_error_{window}'] = value
+                previous.extra_units[f'torque_error_{window}'] = 'N·m'
+            if not quick:
+                for window, value in memory_torque(tracked, trajectory).items():
+                    result.extra[f'memory_torque_{window}'] = value
+                    result.extra_units[f'memory_torque_{window}'] = 'N·m'
         results.append(result)
     return results
