@@ -119,3 +119,23 @@ def test_fig10_calibration_of_the_default_parameters(params):
     calibrated = calibrate_fig10(params)
     np.testing.assert_allclose(calibrated.actuator_theta, params.actuator_theta, rtol=1e-5, atol=1e-5)
     np.testing.assert_allclose(calibrated.previous_theta, params.previous_theta, rtol=1e-5, atol=1e-5)
+
+
+def test_peek_is_the_next_step_without_the_update(params):
+    """`peek` returns what `step` will, through contact growth, release and emptying, and changes
+    nothing (the pressure allocation evaluates its candidates with it)."""
+    model = SegmentModel(params)
+    rng = np.random.default_rng(3)
+    t = np.arange(6000) * 1e-3
+    psi = 1.2 * np.sin(2 * np.pi * 0.4 * t) + 0.02 * rng.standard_normal(t.size)
+    p1 = params.p0 + 3e5 * (0.5 + 0.5 * np.sin(2 * np.pi * 0.3 * t)) ** 2
+    p2 = params.p0 + 2e5 * (0.5 - 0.5 * np.cos(2 * np.pi * 0.7 * t))
+    released = grown = 0
+    for row in zip(psi.tolist(), (0.1 * np.cos(t)).tolist(), p1.tolist(), p2.tolist()):
+        n_before = model.memory1.n
+        first, second = model.peek(*row), model.peek(*row)
+        assert first == second
+        assert model.step(*row) == first
+        released += model.memory1.n < n_before
+        grown += model.memory1.n > n_before
+    assert released > 100 and grown > 100

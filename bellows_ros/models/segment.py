@@ -242,12 +242,24 @@ class SegmentModel:
         self.memory2.reset()
 
     def step(self, psi, psi_dot, p1, p2):
-        p0, tanh = self._p0, math.tanh
         # contact state of both chains, α_j = -σ_j Ψ/8 (13)
+        p0 = self._p0
         s1 = self.memory1.step(p1 - p0, -0.125 * psi)
         s2 = self.memory2.step(p2 - p0, 0.125 * psi)
-        q1 = (p1 - p0) * self._inv_span
-        q2 = (p2 - p0) * self._inv_span
+        return (s1, s2) + self.torques(psi, psi_dot, p1, p2, s1, s2)
+
+    def peek(self, psi, psi_dot, p1, p2):
+        """What `step` would return, the strain memories left untouched (candidate pressures)."""
+        p0 = self._p0
+        s1 = self.memory1.peek(p1 - p0, -0.125 * psi)
+        s2 = self.memory2.peek(p2 - p0, 0.125 * psi)
+        return (s1, s2) + self.torques(psi, psi_dot, p1, p2, s1, s2)
+
+    def torques(self, psi, psi_dot, p1, p2, s1, s2):
+        """(τ_a, τ_s, τ_f, τ_drive, τ_prev), N·m, at given contact lengths s1, s2 (m); no state."""
+        tanh = math.tanh
+        q1 = (p1 - self._p0) * self._inv_span
+        q2 = (p2 - self._p0) * self._inv_span
         # actuator torque (29): chain 2 sees Ψ_2 = -Ψ and acts with σ_2 = -1
         t0, t1, t2, t3, t4, t5, t6, t7 = self._theta_a
         psi_sq = psi * psi
@@ -267,7 +279,7 @@ class SegmentModel:
         u0, u1, u2, u3 = self._theta_prev
         tau_prev = (tau_f + tau_s + q1 * (u0 + q1 * (u1 + u3 * q1) + u2 * psi)
                     - q2 * (u0 + q2 * (u1 + u3 * q2) - u2 * psi))
-        return s1, s2, tau_a, tau_s, tau_f, tau_a + tau_s + tau_f, tau_prev
+        return tau_a, tau_s, tau_f, tau_a + tau_s + tau_f, tau_prev
 
 
 def simulate_model(params, psi, p1, p2, psi_dot):
