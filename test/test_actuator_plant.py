@@ -27,7 +27,8 @@ def fast_spring_step(t, start=0.5, rise=0.05, amplitude=0.012):
 
 
 def test_effect_names():
-    assert ACTUATOR_EFFECTS == ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash')
+    assert ACTUATOR_EFFECTS == ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash',
+                                'buckling')
 
 
 def test_unknown_effect_or_parameter_is_named():
