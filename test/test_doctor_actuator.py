@@ -24,6 +24,7 @@ EFFECTS = {
     'wall_bulging': lambda rng: {'scale': rng.uniform(0.6, 1.5)},
     'sensor_lag': lambda rng: {'time_constant': rng.uniform(0.02, 0.1)},
     'backlash': lambda rng: {'width': rng.uniform(2e-4, 6e-4)},
+    'buckling': lambda rng: {'scale': rng.uniform(0.6, 1.4)},
 }
 
 

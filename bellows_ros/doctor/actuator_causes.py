@@ -35,6 +35,7 @@ import dataclasses
 import numpy as np
 
 from bellows_ros.doctor.filters import lag, play, recurrence, relax
+from bellows_ros.errors import ParameterError
 from bellows_ros.doctor.scoring import Model, noise_floor, noise_floor_ramps
 from bellows_ros.models.actuator import (Buckling, buckling_force, params_to_flat, pressure,
                                          without_buckling, without_bulging)
@@ -288,7 +289,11 @@ def build_model(record, params, causes, warm=None, scales=None):
 
     def run(theta, train):
         values = physical(causes, theta)
-        p, p_gas = predict_state(params, causes, values, x_c, x_s, dt, geometry)
+        try:
+            p, p_gas = predict_state(params, causes, values, x_c, x_s, dt, geometry)
+        except ParameterError:
+            # E_V so large that (17) has no positive root: a trial step of the fit, far off.
+            return np.full((2, len(x_s)), 1e9), {'force': np.zeros(F_MTS_DEGREE + 2)}
         known, columns = force_columns(params, causes, values, x_s, p_gas)
         coef = solve_force(known, columns, f, train)
         force = known + columns @ coef

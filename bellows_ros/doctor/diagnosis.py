@@ -202,7 +202,8 @@ def diagnose(system, path, params_path=None, progress=False, causes=None):
             candidate.score, candidate.extends = result, tuple(chosen)
             candidate.gain = scoring.gain(result.rmse, current.rmse)
         for cause, result in round_scores.items():
-            candidates[cause].note = _doubt(result, cause, floor)
+            candidates[cause].note = (_doubt(result, cause, floor)
+                                      or _worsens(result, current, outputs))
         credible = [c for c in round_scores if candidates[c].note is None]
         if not credible:
             break
@@ -258,6 +259,17 @@ def _doubt(result, cause, floor):
     if edge:
         return f'fitted {", ".join(edge)} at the edge of its physical range'
     return scoring.heldout_failure(result, floor)
+
+
+def _worsens(result, current, outputs):
+    """None, or which output `result` makes worse than `current` by more than `scoring.MIN_GAIN`:
+    a cause must not buy a better fit of one output with a worse one of another (the combined
+    residual is dominated by whichever output is furthest above its noise floor)."""
+    for i, (name, unit, label) in enumerate(outputs or ()):
+        loss = -scoring.gain(result.output_rmse(i), current.output_rmse(i))
+        if loss > scoring.MIN_GAIN:
+            return f'makes the {label} ({name}) held-out RMSE {100 * loss:.0f} % worse'
+    return None
 
 
 def residual_evidence(record, residual, noise, system):
