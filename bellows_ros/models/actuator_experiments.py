@@ -134,7 +134,8 @@ def actuator_record(params, effects=None, noise=None, seed=None, duration=60.0, 
     return out
 
 
-def volume_test_series(params, gases=(0.92, 0.96, 1.0, 1.04, 1.08), effects=('wall_bulging',),
+def volume_test_series(params, gases=(0.92, 0.96, 1.0, 1.04, 1.08),
+                       effects=('wall_bulging', 'buckling'),
                        noise=None, seed=0, duration=12.0, dt=1e-3):
     """Paper B's volume test (Fig. 4, 8): sealed runs at several gas amounts, concatenated.
 
