@@ -70,7 +70,8 @@ class StiffnessSetpoint:
         self.warning = None
         if k != self.k_target:
             self.warning = (f'stiffness set-point {self.k_target:.1f} N/m is no longer reachable '
-                            f'(range [{k_min:.1f}, {k_max:.1f}] N/m on the {BRANCH} branch with gas '
+                            f'(range [{k_min:.1f}, {k_max:.1f}] N/m on the {BRANCH} branch '
+                            f'with gas '
                             f'p_ref = {self.gas:.0f} Pa); holding {k:.1f} N/m')
         return compression_for_stiffness(self.params, k, self.gas)
 

@@ -43,8 +43,8 @@ from bellows_ros.models.actuator_geometry import P_ATM, e_v, frustum_state, volu
 
 CAUSES = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash', 'buckling')
 BASELINE = ('paper B (17): geometric volume (no E_V), isothermal sealed gas, '
-            'p_ref and v_tube refitted; force (7)-(12) on the predicted pressure, F_MTS a cubic in '
-            'x_s and E_F amplitude refitted, no buckling')
+            'p_ref and v_tube refitted; force (7)-(12) on the predicted pressure, F_MTS a cubic '
+            'in x_s and E_F amplitude refitted, no buckling')
 # Measured outputs: (column, unit, name). The first is the legacy single output.
 OUTPUTS = (('p', 'Pa', 'pressure'), ('f', 'N', 'force'))
 F_MTS_DEGREE = 3
@@ -67,7 +67,8 @@ SPECS = {
     'sensor_lag': [('log10_time_constant', -1.5, -3.5, 0.5)],
     'backlash': [('width_mm', 0.3, 0.0, 3.0)],
     # Bounds from actuator.buckling.bounds (`buckling_specs`); these are the fallbacks.
-    'buckling': [('stiffness_loss_kn', 2.0, 0.0, 10.0), ('critical_pressure_kpa', 25.0, 5.0, 300.0),
+    'buckling': [('stiffness_loss_kn', 2.0, 0.0, 10.0),
+                 ('critical_pressure_kpa', 25.0, 5.0, 300.0),
                  ('critical_compression_mm', 20.0, 5.0, 80.0)],
 }
 STARTS = {
@@ -79,18 +80,20 @@ STARTS = {
     'buckling': [[4.0, 15.0, 15.0], [1.0, 60.0, 40.0]],
 }
 # SI factor of each scaled buckling variable.
-_BUCKLING_SI = {'stiffness_loss_kn': ('stiffness_loss', 1e3), 'critical_pressure_kpa':
-                ('critical_pressure', 1e3), 'critical_compression_mm': ('critical_compression', 1e-3)}
+_BUCKLING_SI = {'stiffness_loss_kn': ('stiffness_loss', 1e3),
+                'critical_pressure_kpa': ('critical_pressure', 1e3),
+                'critical_compression_mm': ('critical_compression', 1e-3)}
 
 
 def buckling_specs(params):
-    """SPECS['buckling'] with the bounds of `actuator.buckling.bounds` where the YAML gives them."""
+    """SPECS['buckling'] with the bounds of `actuator.buckling.bounds` where the YAML has them."""
     specs = []
     bounds = dict(params.buckling.bounds) if params.buckling is not None else {}
     for name, start, low, high in SPECS['buckling']:
         si, factor = _BUCKLING_SI[name]
         if si in bounds:
-            low, high = (max(v / factor, 1e-3 if si != 'stiffness_loss' else 0.0) for v in bounds[si])
+            floor = 0.0 if si == 'stiffness_loss' else 1e-3
+            low, high = (max(v / factor, floor) for v in bounds[si])
         specs.append((name, min(max(start, low), high), low, high))
     return specs
 
@@ -195,7 +198,8 @@ def predict_state(params, causes, values, x_c, x_s, dt, geometry=None):
 
 def force_columns(params, causes, values, x_s, p_gas):
     """The force the model knows, (7)-(10) (+ buckling), and the columns of the linear material
-    force: 1 (load cell zero), x_s .. x_s^3 (F_MTS), E_F's shape exp(C2 (P - P_atm) + C3 Δh) (11)."""
+    force: 1 (load cell zero), x_s .. x_s^3 (F_MTS), E_F's shape exp(C2 (P - P_atm) + C3 Δh)
+    (11)."""
     s = params.spring
     _, _, f = frustum_state(s, x_s)
     area = s._k * f
@@ -250,7 +254,8 @@ def _to_si(part, raw):
     if part == 'backlash':
         return {'width': raw['width_mm'] * 1e-3}
     if part == 'buckling':
-        return {_BUCKLING_SI[name][0]: value * _BUCKLING_SI[name][1] for name, value in raw.items()}
+        return {_BUCKLING_SI[name][0]: value * _BUCKLING_SI[name][1]
+                for name, value in raw.items()}
     return {name[:-3]: value * ML for name, value in raw.items()}  # wall_bulging, m³
 
 
@@ -326,7 +331,8 @@ def extended_flat(params, causes, values):
         b = values['buckling']
         model = dataclasses.replace(model, buckling=dataclasses.replace(
             params.buckling, stiffness_loss=b['stiffness_loss'],
-            critical_pressure=b['critical_pressure'], critical_compression=b['critical_compression']))
+            critical_pressure=b['critical_pressure'],
+            critical_compression=b['critical_compression']))
     if 'wall_bulging' in causes:
         e = values['wall_bulging']
         model = bulged(model, [e['e_q'], e['e_dq_chamber'], e['e_dq_spring'], e['e_dd_chamber'],

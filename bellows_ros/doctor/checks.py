@@ -196,9 +196,9 @@ def identifiability(record, noise):
         spread = float(np.ptp(loaded)) if len(loaded) > 0.02 * len(p) else 0.0
         top = float(loaded.max()) - P_ATM if len(loaded) else 0.0
         reasons['buckling'] = (None if spread > 8e3 and top > 5e3 else
-                               'the spring is never compressed by more than 4 mm over a span of '
-                               'pressures reaching 5 kPa gauge, so a buckling onset that moves with '
-                               'the pressure cannot be seen')
+                               'the spring is never compressed by more than 4 mm over a span '
+                               'of pressures reaching 5 kPa gauge, so a buckling onset that '
+                               'moves with the pressure cannot be seen')
     else:
         psi, p1, p2 = record['psi'], record['p1'], record['p2']
         turns = reversals(psi, np.radians(1.0))

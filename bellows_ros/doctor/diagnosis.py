@@ -45,7 +45,7 @@ class Candidate:
 
 @dataclass
 class OutputView:
-    """One measured output of a diagnosis, in its own unit (held-out residuals, RMSEs, evidence)."""
+    """One measured output of a diagnosis in its own unit: held-out residuals, RMSEs, evidence."""
     name: str
     unit: str
     label: str

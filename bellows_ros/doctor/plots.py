@@ -52,7 +52,8 @@ def _views(d):
     for index, o in enumerate(d.outputs):
         views.append(('' if index == 0 else f'_{o.label}', SimpleNamespace(
             record=d.record, system=d.system, causes=d.causes, signal=o.signal, unit=o.unit,
-            what=o.label, baseline=SimpleNamespace(heldout=o.baseline_heldout, rmse=o.baseline_rmse),
+            what=o.label,
+            baseline=SimpleNamespace(heldout=o.baseline_heldout, rmse=o.baseline_rmse),
             final=SimpleNamespace(heldout=o.final_heldout, rmse=o.final_rmse))))
     return views
 

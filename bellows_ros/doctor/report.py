@@ -148,28 +148,32 @@ def markdown(d, plots):
                      'finding about the system.')
     else:
         lines.append(f'**Cause: `none`.** No candidate cause improves the held-out RMSE '
-                     f'({d.baseline_rmse:.4g} {d.unit}) by at least {100 * scoring.MIN_GAIN:.0f} %.')
+                     f'({d.baseline_rmse:.4g} {d.unit}) by at least '
+                     f'{100 * scoring.MIN_GAIN:.0f} %.')
     if d.outputs:
         lines += ['', '## Both measured outputs', '',
                   'Fitted and scored together, each over its own noise floor; the decision rule '
                   'works on the combined residual in noise floors.', '',
-                  '| output | noise floor (full rate) | baseline held-out RMSE | extended | gain |',
+                  '| output | noise floor (full rate) | baseline held-out RMSE | extended '
+                  '| gain |',
                   '|---|---|---|---|---|']
         for o in d.outputs:
             lines.append(f'| {o.label} `{o.name}` ({o.unit}) | {o.noise:.3g} | '
                          f'{o.baseline_rmse:.4g} ({o.baseline_rmse / o.scale:.1f} × floor) | '
                          f'{o.final_rmse:.4g} ({o.final_rmse / o.scale:.1f} × floor) | '
                          f'{100 * o.gain:.1f} % |')
-        lines.append(f'\nThe headline figures above are the {d.outputs[d.primary].label}\'s, where '
-                     'the first cause pays most.')
+        lines.append(f'\nThe headline figures above are the {d.outputs[d.primary].label}\'s, '
+                     'where the first cause pays most.')
     lines += ['', '## What is left', '']
     for label, unit, ev in ([(o.label + ': ', o.unit, o.evidence) for o in d.outputs]
                             or [('', d.unit, d.evidence)]):
-        lines += [f'{label}Held-out residual RMSE {ev["rmse"]:.4g} {unit} = {ev["rmse_over_noise"]:.2f} × '
-                  f'the noise floor ({ev["noise_floor"]:.3g} {unit} after averaging); Ljung-Box Q = '
-                  f'{ev["ljung_box_q"]:.4g} over {ev["ljung_box_lags"]} lags (p = {ev["ljung_box_p"]:.2g}); '
-                  f'lag-1 autocorrelation {ev["autocorrelation_lag1"]:.2f}; correlation with rate '
-                  f'{ev["correlation_with_rate"]:.2f}, position {ev["correlation_with_position"]:.2f}, '
+        lines += [f'{label}Held-out residual RMSE {ev["rmse"]:.4g} {unit} = '
+                  f'{ev["rmse_over_noise"]:.2f} × the noise floor ({ev["noise_floor"]:.3g} {unit} '
+                  f'after averaging); Ljung-Box Q = {ev["ljung_box_q"]:.4g} over '
+                  f'{ev["ljung_box_lags"]} lags (p = {ev["ljung_box_p"]:.2g}); lag-1 '
+                  f'autocorrelation {ev["autocorrelation_lag1"]:.2f}; correlation with rate '
+                  f'{ev["correlation_with_rate"]:.2f}, '
+                  f'position {ev["correlation_with_position"]:.2f}, '
                   f'pressure {ev["correlation_with_pressure"]:.2f}, '
                   f'direction {ev["correlation_with_direction"]:.2f}.', '']
     if d.unexplained:

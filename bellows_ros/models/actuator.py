@@ -99,8 +99,8 @@ class Buckling:
             object.__setattr__(self, name, value)
             low, high = bounds.get(name, (-math.inf, math.inf))
             if not (math.isfinite(value) and low <= value <= high):
-                raise ParameterError(f'actuator.buckling.{name}: {value:g} is outside its physical '
-                                     f'range [{low:g}, {high:g}]')
+                raise ParameterError(f'actuator.buckling.{name}: {value:g} is outside its '
+                                     f'physical range [{low:g}, {high:g}]')
         if min(self.critical_pressure, self.critical_compression, self.onset_width) <= 0.0:
             raise ParameterError('actuator.buckling: critical_pressure, critical_compression and '
                                  'onset_width must be > 0')
@@ -164,8 +164,8 @@ def params_from_flat(flat, source='parameters'):
     values = param_files.section(flat, 'actuator')
     build = param_files.build
     parts = {}
-    for prefix in ('air_chamber', 'spring', 'gas', 'force', 'stiffness', 'drive', 'sensors', 'effects',
-                   'buckling'):
+    for prefix in ('air_chamber', 'spring', 'gas', 'force', 'stiffness', 'drive', 'sensors',
+                   'effects', 'buckling'):
         parts[prefix] = param_files.section(values, prefix)
     known = {name.split('.')[0] for name in values}
     unknown = sorted(known - set(parts))
@@ -201,7 +201,8 @@ def _buckling(values, source):
     bounds = {}
     for name, value in param_files.section(values, 'bounds').items():
         if not (isinstance(value, (list, tuple)) and len(value) == 2):
-            raise ParameterError(f'{source}: actuator.buckling.bounds.{name}: expected [low, high]')
+            raise ParameterError(f'{source}: actuator.buckling.bounds.{name}: '
+                                 'expected [low, high]')
         bounds[name] = (float(value[0]), float(value[1]))
     plain = {k: v for k, v in values.items() if not k.startswith('bounds.')}
     plain['bounds'] = tuple(sorted(bounds.items()))
@@ -427,7 +428,7 @@ def _spring_force(params, x_s, p, dp_dx, exp, area=None):
 
 
 def buckling_force(b, x_s, p, exp=math.exp):
-    """Force the buckled spring loses, F_b <= 0 (N), and its partials ∂F_b/∂x_s (N/m), ∂F_b/∂P (N/Pa).
+    """Force the buckled spring loses, F_b <= 0 (N), and ∂F_b/∂x_s (N/m), ∂F_b/∂P (N/Pa).
 
     [choice: paper B sees buckling "under high pressure and compression" but gives no model.]
     A pressurised bellows column buckles when its load index λ = x_s/x_cr + (P - P_atm)/p_cr
@@ -437,7 +438,8 @@ def buckling_force(b, x_s, p, exp=math.exp):
 
         F_b = -k_b x_cr δ softplus((λ - 1)/δ),   softplus(z) = ln(1 + e^z).
 
-    Below the onset F_b vanishes (relative size e^(-1/δ)); far above it F_b = -k_b (x_s - x_onset(P)).
+    Below the onset F_b vanishes (relative size e^(-1/δ)); far above it
+    F_b = -k_b (x_s - x_onset(P)).
     Floats or arrays (`exp` is `math.exp` or `np.exp`).
     """
     k_b, p_cr = b.stiffness_loss, b.critical_pressure

@@ -35,7 +35,8 @@ from bellows_ros.models.actuator import (_forward, gas_amount, p_ref_of_amount, 
                                          scaled_bulging, without_buckling, without_bulging)
 from bellows_ros.models.actuator_geometry import P_ATM, frustum_state, volume
 
-ACTUATOR_EFFECTS = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash', 'buckling')
+ACTUATOR_EFFECTS = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash',
+                    'buckling')
 NOISE_KEYS = ('pressure_noise', 'pressure_quantum', 'force_noise', 'force_quantum')
 
 
@@ -99,7 +100,8 @@ def model_params(params, effects=None):
         params = without_bulging(params)
     if 'buckling' in chosen:
         if params.buckling is None:
-            raise ParameterError("effect 'buckling': the parameters have no actuator.buckling section")
+            raise ParameterError("effect 'buckling': the parameters have no actuator.buckling "
+                                 'section')
         return scaled_buckling(params, chosen['buckling']['scale'])
     return without_buckling(params)
 

@@ -50,9 +50,9 @@ class StiffnessMap:
             rising = [k for x, k in zip(self.x_nodes, row) if x <= x_peak]
             if any(b <= a for a, b in zip(rising, rising[1:])):
                 raise ParameterError(
-                    f'actuator: stiffness is not monotone in the chamber compression below its peak '
-                    f'at p_ref = {gas:.0f} Pa; check actuator.air_chamber.x_min/x_max and the force '
-                    'parameters')
+                    f'actuator: stiffness is not monotone in the chamber compression below '
+                    f'its peak at p_ref = {gas:.0f} Pa; check actuator.air_chamber.x_min/x_max '
+                    'and the force parameters')
 
     def _peak(self, gas, row=None):
         """(x_peak, k_peak): compression (m) and value (N/m) of the first peak of K(x_c)."""
@@ -103,7 +103,7 @@ class StiffnessMap:
 
     def reachable(self, gas=None):
         """What the actuator can give with gas `gas`, for reports: a dict with the branch used
-        (x_low, x_high, k_low, k_high) and the stiffness at the compressed end stop (k_end, N/m)."""
+        (x_low, x_high, k_low, k_high) and the stiffness at the compressed end stop (k_end)."""
         g = self.params.p_ref if gas is None else gas
         x_low, x_high = self.branch(g)
         k_low, k_high = self.range(g)
@@ -111,7 +111,7 @@ class StiffnessMap:
                 'k_high': k_high, 'k_end': stiffness(self.params, self.x_max, g)}
 
     def compression(self, k_target, gas=None):
-        """Chamber compression x_c (m) on the rising branch at which the stiffness is `k_target`."""
+        """Chamber compression x_c (m) on the rising branch where the stiffness is `k_target`."""
         params = self.params
         g, j, w = self._gas_position(gas)
         if j is None:

@@ -60,8 +60,8 @@ class StiffnessControllerNode(rt.Node):
         self.pd = PDController(gains)
         k_low, k_high = self.setpoint.range()
         x_low, x_high = self.setpoint.branch()
-        self.get_logger().info(f'stiffness range [{k_low:.1f}, {k_high:.1f}] N/m on the rising branch '
-                               f'x_c {x_low * 1e3:.2f}-{x_high * 1e3:.2f} mm')
+        self.get_logger().info(f'stiffness range [{k_low:.1f}, {k_high:.1f}] N/m on the rising '
+                               f'branch x_c {x_low * 1e3:.2f}-{x_high * 1e3:.2f} mm')
         self._warned = None
         if initial:
             self.setpoint.set_stiffness(initial)
