@@ -1,8 +1,8 @@
 """Acceptance: stiffness step on the simulated actuator, and holding it against an air leak.
 
-Processes: sim_actuator_node (pty; effects wall_bulging + air_leak), driver_node (serial),
-stiffness_controller_node; the test publishes set-points and listens to /actuator/stiffness (the
-controller's estimate from the measured pressure) and /diagnostics (the plant's true chamber
+Processes: sim_actuator_node (pty; effects wall_bulging + air_leak + buckling), driver_node
+(serial), stiffness_controller_node; the test publishes set-points and listens to
+/actuator/stiffness (the controller's estimate from the measured pressure) and /diagnostics (the plant's true chamber
 compression and gas amount, from which the true stiffness follows with paper B's model).
 
 Criteria (issue): after a step to 1900 N/m, within 2 % of the target in <= 1.2x the lead screw's
@@ -57,7 +57,7 @@ def test_stiffness_step_and_leak_hold(tmp_path, monkeypatch):
     port = str(tmp_path / 'actuator')
     processes = [
         launch('sim_actuator_node', ['-p', f'port:={port}', '-p', f'x_c0:={x_low}',
-                                     '-p', 'effects:=[wall_bulging, air_leak]'], env, tmp_path),
+                                     '-p', 'effects:=[wall_bulging, air_leak, buckling]'], env, tmp_path),
         launch('stiffness_controller_node', ['-p', f'initial_stiffness:={k_low}'], env, tmp_path),
     ]
     time.sleep(1.0)
