@@ -1,6 +1,6 @@
 """Pairs the two halves of an arm sample: `/joint_states` and `/bellows/chambers` with one stamp.
 
-The driver publishes each 1 kHz sample as two messages with the same header stamp (DESIGN.md
+The driver publishes each 1 kHz sample as two messages with the same header stamp (docs/interfaces.md
 topic contract); a node that needs Ψ and the chain pressures of the same instant (the model node,
 the arm controller) waits until both have arrived. Halves that never find their partner are kept up
 to `max_pending` stamps, then the oldest is dropped and counted.
