@@ -163,7 +163,7 @@ def read_sections(path):
     sections = {}
     for section, body in document.items():
         if not isinstance(body, dict) or not isinstance(body.get('ros__parameters'), dict):
-            raise ParameterError(f"{path}: section '{section}' has no 'ros__parameters' map")
+            raise ParameterError(f"{path}: section {str(section)!r} has no 'ros__parameters' map")
         flat = flatten(body['ros__parameters'])
         for name, value in flat.items():
             # A blank, a control character or an empty part between dots names no parameter (and
