@@ -24,6 +24,7 @@ from collections import OrderedDict
 
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.loop_timing import LoopStats
+from bellows_ros.models.derivatives import rate
 from bellows_ros.models.segment import SegmentModel, external_torque, load_segment_params
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime, run, stamp_ns
@@ -48,6 +49,7 @@ class ModelNode(Node):
         self.chains = [(f'{n}/chain_1', f'{n}/chain_2') for n in self.names]
         self.models = [SegmentModel(self.params) for _ in segments]
         self.previous_psi_dot = [None] * len(segments)
+        self.psi_ddot = [0.0] * len(segments)
         self.pending = OrderedDict()  # stamp (ns) -> [joint_state or None, chambers or None]
         self.counts = dict.fromkeys(['evaluated', 'rejected', 'unmatched_dropped', 'late'], 0)
         self.stats = LoopStats()
@@ -112,9 +114,9 @@ class ModelNode(Node):
         self._last_stamp = stamp
         drive, external = [], []
         for i, (model, (psi, psi_dot, p1, p2)) in enumerate(zip(self.models, inputs)):
-            tau_drive = model.step(psi, psi_dot, p1, p2)[5]
-            previous = self.previous_psi_dot[i]
-            psi_ddot = (psi_dot - previous) / dt if previous is not None and dt else 0.0
+            tau_drive = model.step(psi, psi_dot, p1, p2).tau_drive
+            psi_ddot = self.psi_ddot[i] = rate(psi_dot, self.previous_psi_dot[i], dt or 0.0,
+                                               self.psi_ddot[i])
             self.previous_psi_dot[i] = psi_dot
             drive.append(tau_drive)
             external.append(float(external_torque(self.params, psi, psi_dot, psi_ddot, tau_drive)))
