@@ -22,8 +22,8 @@ COLUMNS = {
 class Table:
     """Columns of one data file.
 
-    `values` holds float arrays for the columns the caller asked for (required and present optional);
-    `extras` holds every other column as text, in file order, so it can be written back unchanged.
+    `values` holds float arrays for the columns the caller asked for (required, and optional ones
+    present); `extras` holds every other column as text, in file order, so it can be written back unchanged.
     `lines` gives the file line of each row, for error messages (None for non-CSV sources).
     """
     path: str

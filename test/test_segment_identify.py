@@ -100,7 +100,9 @@ def test_least_squares_plain_and_with_the_doctors_ridge():
         augmented = np.vstack([x, np.sqrt(ridge) * np.diag(scale)])
         expected = np.linalg.lstsq(augmented, np.concatenate([y, np.zeros(5)]), rcond=None)[0]
         np.testing.assert_allclose(least_squares(x, y, ridge, scale), expected, rtol=1e-8)
-    assert np.linalg.norm((least_squares(x, y, 10.0, scale) * scale)) < np.linalg.norm(plain * scale)
+    shrunk = least_squares(x, y, 10.0, scale)
+    assert np.linalg.norm(shrunk * scale) < np.linalg.norm(plain * scale)
     np.testing.assert_allclose(least_squares(x, y, 1e-12, scale), plain, rtol=1e-6)
     dead = np.column_stack([x, np.zeros(400)])
-    assert least_squares(dead, y)[-1] == 0.0 and least_squares(dead, y, 1e-6, np.ones(6))[-1] == 0.0
+    assert least_squares(dead, y)[-1] == 0.0
+    assert least_squares(dead, y, 1e-6, np.ones(6))[-1] == 0.0

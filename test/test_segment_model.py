@@ -121,21 +121,23 @@ def test_fig10_calibration_of_the_default_parameters(params):
     np.testing.assert_allclose(calibrated.previous_theta, params.previous_theta, rtol=1e-5, atol=1e-5)
 
 
-# --- the fast 1 kHz path against the reference functions ------------------------------------------
+# --- the fast 1 kHz path against the reference functions ---------------------------------------
 
 def _random_params(params, rng):
     """Parameters with every linear and natural-curvature constant drawn at random (seeded), so a
     coefficient applied to the wrong term cannot cancel out."""
     return params.replace(
-        actuator_theta=tuple(rng.normal(0.0, 5.0, 8)), previous_theta=tuple(rng.normal(0.0, 5.0, 4)),
+        actuator_theta=tuple(rng.normal(0.0, 5.0, 8)),
+        previous_theta=tuple(rng.normal(0.0, 5.0, 4)),
         restoring_k_s=rng.normal(), restoring_k_sp=rng.normal(),
         restoring_c_psi0=rng.uniform(0.1, 20.0), restoring_c_psi0_p=rng.uniform(-1.5, 1.5),
-        friction_c_f=rng.normal(), friction_c_fp=rng.normal(), friction_c_vel=rng.uniform(1.0, 20.0))
+        friction_c_f=rng.normal(), friction_c_fp=rng.normal(),
+        friction_c_vel=rng.uniform(1.0, 20.0))
 
 
 def _random_states(params, rng, n=3000):
-    """Random (Ψ, Ψ̇, p1, p2) rows: angles ±1.5 rad, rates ±3 rad/s, pressures from below ambient to
-    p_max (independent rows, so the strain memories jump between fill and release)."""
+    """Random (Ψ, Ψ̇, p1, p2) rows: angles ±1.5 rad, rates ±3 rad/s, pressures from below
+    ambient to p_max (independent rows, so the strain memories jump between fill and release)."""
     return (rng.uniform(-1.5, 1.5, n), rng.uniform(-3.0, 3.0, n),
             rng.uniform(0.5e5, params.p_max, n), rng.uniform(0.5e5, params.p_max, n))
 
@@ -170,7 +172,8 @@ def test_fast_step_equals_the_reference_functions(params, seed):
     trial = _random_params(params, rng)
     psi, psi_dot, p1, p2 = _random_states(trial, rng)
     model = SegmentModel(trial)
-    rows = [model.step(*row) for row in zip(psi.tolist(), psi_dot.tolist(), p1.tolist(), p2.tolist())]
+    rows = [model.step(*row)
+            for row in zip(psi.tolist(), psi_dot.tolist(), p1.tolist(), p2.tolist())]
     fast = {name: np.array([getattr(row, name) for row in rows]) for name in OUTPUTS}
     sa1, sa2 = contact_lengths(trial, psi, p1, p2)
     assert np.array_equal(fast['sa1'], sa1) and np.array_equal(fast['sa2'], sa2)
@@ -197,7 +200,8 @@ def test_bench_reference_equals_the_previous_model(params):
 def test_step_returns_named_fields_that_are_still_a_tuple(params):
     out = SegmentModel(params).step(0.4, 0.2, 4e5, 2e5)
     assert isinstance(out, SegmentOutput) and isinstance(out, tuple)
-    assert out._fields == OUTPUTS == ('sa1', 'sa2', 'tau_a', 'tau_s', 'tau_f', 'tau_drive', 'tau_prev')
+    assert out._fields == OUTPUTS == ('sa1', 'sa2', 'tau_a', 'tau_s', 'tau_f', 'tau_drive',
+                                      'tau_prev')
     assert out[5] == out.tau_drive == out.tau_a + out.tau_s + out.tau_f
     assert out[6] == out.tau_prev
 
@@ -209,8 +213,9 @@ def test_relative_and_scaled_pressure(params):
 
 
 def test_external_torque_is_the_equation_of_motion(params):
-    """A(2) with non-zero M, C, N on an imposed Ψ(t) = A sin ωt with its exact rates: τ_ext =
-    M Ψ̈ + C Ψ̇ + N sin Ψ - τ_drive; the scalar path (math.sin) gives the same as the array path."""
+    """A(2) with non-zero M, C, N on an imposed Ψ(t) = A sin ωt with its exact rates:
+    τ_ext = M Ψ̈ + C Ψ̇ + N sin Ψ - τ_drive; the scalar path (math.sin) gives the same as the
+    array path."""
     m, c, g = 0.03, 0.4, 2.5
     p = params.replace(dynamics_inertia=m, dynamics_damping=c, dynamics_gravity=g)
     t = np.linspace(0.0, 2.0, 401)
@@ -225,4 +230,5 @@ def test_external_torque_is_the_equation_of_motion(params):
               for x, v, acc, d in zip(psi, psi_dot, psi_ddot, tau_drive)]
     np.testing.assert_allclose(scalar, tau_ext, rtol=1e-13, atol=1e-13)
     # quasi-static defaults: τ_ext = -τ_drive whatever the motion
-    np.testing.assert_array_equal(external_torque(params, psi, psi_dot, psi_ddot, tau_drive), -tau_drive)
+    np.testing.assert_array_equal(external_torque(params, psi, psi_dot, psi_ddot, tau_drive),
+                                  -tau_drive)

@@ -109,8 +109,8 @@ def test_any_admissible_input_is_solved_to_1e10(log_load, log_mu1, log_mu2, gamm
 
 
 def test_free_strain_solves_the_reference_stress():
-    """A(15) has one home, `stress`; `free_strain` writes T in ln λ1 (for precision and speed in the
-    1 kHz loop). Held equal: over random materials and loads (seeded), T(free_strain(load)) = load
+    """A(15) has one home, `stress`; `free_strain` writes T in ln λ1 (for precision and speed in
+    the 1 kHz loop). Held equal: over random materials and loads (seeded), T(free_strain(load)) = load
     to 1e-12, where λ1 - 1 ≥ 1e-3 (closer to 1, `stress` itself cancels digits)."""
     import numpy as np
 

@@ -7,7 +7,6 @@ input p1/p2 are the pressure *commands* (kept as p1_cmd, p2_cmd); psi, psi_dot, 
 tau_motion are replaced by the plant's measurements (noise from `segment.plant.noise`), and the 7
 output columns are the plant's true values.
 """
-from pathlib import Path
 
 import numpy as np
 

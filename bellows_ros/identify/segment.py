@@ -219,7 +219,8 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=1
        which only enter X_s, by least squares for the best material — no forward runs — and a
        shorter Nelder-Mead polish of the material with them, twice;
     4. on every training row (full rate: any stride shifts the optimum, docs/segment.md): a bounded
-       trust-region Gauss-Newton (`scipy.optimize.least_squares`) on all six, θ re-solved by (32) in each residual, of
+       trust-region Gauss-Newton (`scipy.optimize.least_squares`) on all six, θ re-solved by (32)
+       in each residual, of
        at most ~`polish_evaluations` forward runs (0: skip the step).
     The two Ogden terms are interchangeable, so (μ1, γ1) and (μ2, γ2) may come out swapped.
     Before all of it the inputs are low-pass filtered (`filter_inputs`) at `input_cutoff` Hz

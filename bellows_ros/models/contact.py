@@ -97,4 +97,3 @@ class StrainMemory:
         s_a = 0.0 if s_a < 0.0 else (self.sa_max if s_a > self.sa_max else s_a)
         self.s_a = s_a
         return s_a
-

@@ -12,10 +12,11 @@ record (`rates`); the two give the same floats on the same data. Where the time 
 estimate is `initial` (0: at rest).
 
 Delay and noise, for a uniform step h:
-- Delay: the difference is exact for the slope of the chord, i.e. the rate at t_k − h/2; the estimate
-  lags the true rate by h/2 (0.5 ms at 1 kHz), with an O(h²) error at that instant.
-- Noise gain: white noise of standard deviation σ on x gives σ·√2/h on ẋ (the coefficients are
-  +1, −1). Applied twice (Ψ̈ from an estimated Ψ̇) the delay is h and the gain σ·√6/h² (+1, −2, +1).
+- Delay: the difference is the slope of the chord, i.e. the rate at t_k − h/2 to O(h²): the
+  estimate lags the true rate by h/2 (0.5 ms at 1 kHz).
+- Noise gain: white noise of standard deviation σ on x gives σ·√2/h on ẋ (the coefficients
+  are +1, −1). Applied twice (Ψ̈ from an estimated Ψ̇) the delay is h and the gain σ·√6/h²
+  (coefficients +1, −2, +1).
 No smoothing is applied: the sensors' own filters and, for identification, the zero-phase input
 filter (`bellows_ros.identify.segment.filter_inputs`) set the bandwidth.
 """
@@ -23,7 +24,7 @@ import numpy as np
 
 
 def rate(x, x_previous, dt, held=0.0):
-    """Backward difference (x − x_previous)/dt, in units of x per s; `held` if dt ≤ 0 or no previous.
+    """Backward difference (x − x_previous)/dt, units of x per s; `held` if dt ≤ 0 or no previous.
 
     The streaming form: call once per sample with the previous sample (None before the second) and
     the last estimate as `held`.

@@ -30,7 +30,7 @@ SIGNS = (1.0, -1.0)  # σ_j of chains 1 and 2 ([choice], docs/equations.md)
 
 
 class SegmentOutput(NamedTuple):
-    """What `SegmentModel.step` returns: contact lengths s̃_a (m) and torques (N·m) of one sample."""
+    """What `SegmentModel.step` returns: contact lengths s̃_a (m), torques (N·m) of one sample."""
 
     sa1: float
     sa2: float
@@ -274,9 +274,9 @@ class SegmentModel:
     def step(self, psi, psi_dot, p1, p2):
         """One sample of both chains: the fast form of (3)-(5), (13), (17), (29), (34).
 
-        Hand-expanded for speed; `test/test_segment_model.py::test_fast_step_equals_the_reference_
-        functions` holds it equal to `relative_pressure`, `scaled_pressure`, `contact_angle` and the
-        regressors.
+        Hand-expanded for speed; `test_fast_step_equals_the_reference_functions` in
+        test/test_segment_model.py holds it equal to `relative_pressure`, `scaled_pressure`,
+        `contact_angle` and the regressors.
         """
         tanh = math.tanh
         p0, inv_span = self._pressure
@@ -307,7 +307,8 @@ class SegmentModel:
         u0, u1, u2, u3 = self._theta_prev
         tau_prev = (tau_f + tau_s + q1 * (u0 + q1 * (u1 + u3 * q1) + u2 * psi)
                     - q2 * (u0 + q2 * (u1 + u3 * q2) - u2 * psi))
-        return _output(_SegmentOutput, (s1, s2, tau_a, tau_s, tau_f, tau_a + tau_s + tau_f, tau_prev))
+        return _output(_SegmentOutput,
+                       (s1, s2, tau_a, tau_s, tau_f, tau_a + tau_s + tau_f, tau_prev))
 
 
 # tuple.__new__ on the tuple of values: a NamedTuple without the keyword-argument call of its

@@ -91,8 +91,8 @@ class SegmentPlant:
     """The simulated segment. `step(...)` advances it by `dt` and returns the measured SegmentSample.
 
     True state: `t`, `psi`, `psi_dot`, `psi_ddot`, `p1`, `p2` (chamber pressures), `tau_ext`,
-    `tau_drive`, `tau_motion` (= M Ψ̈ + C Ψ̇ + N, true) and `outputs` (the model's `SegmentOutput` of
-    the last step).
+    `tau_drive`, `tau_motion` (= M Ψ̈ + C Ψ̇ + N, true) and `outputs` (the model's
+    `SegmentOutput` of the last step).
     """
 
     def __init__(self, params, effects=None, noise=None, seed=None, psi0=0.0):
@@ -187,7 +187,7 @@ class SegmentPlant:
                              - motion_torque(*dynamics, psi, self.psi_dot, 0.0)) / p.plant_inertia
             self.psi_dot += dt * self.psi_ddot
             self.psi += dt * self.psi_dot
-            # Semi-implicit Euler: the damping acts with the updated rate, gravity at the old angle.
+            # Semi-implicit Euler: damping acts with the updated rate, gravity at the old angle.
             self.tau_motion = motion_torque(*dynamics, psi, self.psi_dot, self.psi_ddot)
         if self.lag > 0.0:
             follow = 1.0 - math.exp(-dt / self.lag)
