@@ -142,9 +142,9 @@ def memory_torque(run, trajectory, every=10):
     rows = list(zip(run.psi.tolist(), run.psi_dot.tolist(), run.p1.tolist(), run.p2.tolist()))
     added = np.zeros(len(run.t))
     for k, row in enumerate(rows):
-        with_memory = model.step(*row)[5]
+        with_memory = model.step(*row).tau_drive
         if k % every == 0:
-            added[k] = with_memory - frictionless.peek(*row)[5]
+            added[k] = with_memory - frictionless.peek(*row).tau_drive
     index = np.asarray(picked)
     sub = closed_loop.TrackingRun(*(np.asarray(a)[index] for a in run))
     return windows(sub, trajectory, added[index])

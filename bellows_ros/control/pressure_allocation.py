@@ -67,7 +67,7 @@ def allocate_paper_a(model, psi, psi_dot, tau, p_base):
     psi (rad), psi_dot (rad/s, friction (5)), tau (N·m), p_base (co-contraction, Pa abs).
     """
     def torque(p1, p2):
-        return model.peek(psi, psi_dot, p1, p2)[5]
+        return model.peek(psi, psi_dot, p1, p2).tau_drive
     return invert(torque, model.params, tau, p_base)
 
 

@@ -15,11 +15,14 @@ import math
 from bellows_ros.models.ogden import free_strain
 
 HALF_PI = 0.5 * math.pi
+# dα_1/dΨ of (13): α_j = -½ σ_j ψ_4 with ψ_4 = Ψ/4 ([choice]: equal joints, sign from Fig. 10).
+# A constant so that the 1 kHz `SegmentModel.step` can use it without a call.
+ALPHA_PER_PSI = -0.125
 
 
 def contact_angle(psi, sign):
     """α_j = -½ σ_j ψ_4 with ψ_4 = Ψ/4 (13; [choice]: equal joints, sign from Fig. 10), rad."""
-    return -0.125 * sign * psi
+    return ALPHA_PER_PSI * sign * psi
 
 
 class StrainMemory:

@@ -23,6 +23,7 @@ import time
 
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.loop_timing import LoopStats
+from bellows_ros.models.derivatives import rate
 from bellows_ros.models.segment import SegmentModel, external_torque, load_segment_params
 from bellows_ros.nodes import diagnostics
 from bellows_ros.nodes.sample_pairing import CHAMBERS, JOINTS, SamplePairs
@@ -48,6 +49,7 @@ class ModelNode(Node):
         self.chains = [(f'{n}/chain_1', f'{n}/chain_2') for n in self.names]
         self.models = [SegmentModel(self.params) for _ in segments]
         self.previous_psi_dot = [None] * len(segments)
+        self.psi_ddot = [0.0] * len(segments)
         self.pairs = SamplePairs(max_pending)
         self.counts = dict.fromkeys(['evaluated', 'rejected', 'late'], 0)
         self.stats = LoopStats()
@@ -104,9 +106,9 @@ class ModelNode(Node):
         self._last_stamp = stamp
         drive, external = [], []
         for i, (model, (psi, psi_dot, p1, p2)) in enumerate(zip(self.models, inputs)):
-            tau_drive = model.step(psi, psi_dot, p1, p2)[5]
-            previous = self.previous_psi_dot[i]
-            psi_ddot = (psi_dot - previous) / dt if previous is not None and dt else 0.0
+            tau_drive = model.step(psi, psi_dot, p1, p2).tau_drive
+            psi_ddot = self.psi_ddot[i] = rate(psi_dot, self.previous_psi_dot[i], dt or 0.0,
+                                               self.psi_ddot[i])
             self.previous_psi_dot[i] = psi_dot
             drive.append(tau_drive)
             external.append(float(external_torque(self.params, psi, psi_dot, psi_ddot, tau_drive)))
