@@ -24,46 +24,17 @@ with a frictionless contact instead of the no-slip memory, `FrictionlessContact`
 A run, the previous model's torque error against paper A's (`torque_error_*`, on the previous
 model's entry) and what the contact memory adds to paper A's torque (`memory_torque_*`).
 """
-import dataclasses
-
 import numpy as np
 
-from bellows_ros import params as parameters
 from bellows_ros.bench import Result
 from bellows_ros.control import angle_trajectory, closed_loop
-from bellows_ros.control.angle_tracking import TrackingGains
-from bellows_ros.hardware import can_protocol
 from bellows_ros.models.contact import contact_angle
 from bellows_ros.models.segment import (SegmentModel, load_segment_params, simulate_model,
                                         strain_memory)
-from bellows_ros.models.segment_plant import FULL_MODEL
 
 MODES = (('feedback_only', 'none'), ('previous_model', 'previous'), ('paper_a_model', 'paper_a'))
 TARGET_RATIO = 0.5
 SEED = 0
-
-
-def controller_settings(segment):
-    """(TrackingGains, control_every) of config/nodes_sim.yaml's arm_controller_node."""
-    flat = parameters.read_file(parameters.default_file('nodes_sim'), 'arm_controller_node')
-    gains = TrackingGains(flat['pid.kp'], flat['pid.ki'], flat['pid.kd'],
-                          flat['pid.velocity_cutoff'], flat['pid.integral_limit'],
-                          segment.p0 + flat['co_contraction'], flat['feedforward_lead'])
-    return gains, int(flat['control_every'])
-
-
-def setpoint_every():
-    """Samples between the arm bus's set-point frames (config/arm.dbc cycle times)."""
-    db = can_protocol.load_dbc()
-    return round(db.get_message_by_name('ARM_HOST_HEARTBEAT').cycle_time
-                 / db.get_message_by_name('ARM_SEG1_SAMPLE').cycle_time)
-
-
-def with_rigid_body(segment):
-    """The model's (2) with the simulated segment's M, C, N (as an arm's segment.dynamics)."""
-    return segment.replace(dynamics_inertia=segment.plant_inertia,
-                           dynamics_damping=segment.plant_damping,
-                           dynamics_gravity=segment.plant_gravity)
 
 
 def windows(run, trajectory, error=None):
@@ -117,18 +88,11 @@ class FrictionlessContact:
 
 
 def track(mode, trajectory, rigid_body=True, lead=True, memory=True, duration=None):
-    """One closed-loop run of controller `mode` ('none', 'previous', 'paper_a'); without the
-    rigid-body terms of (2), the valve-lag lead or (paper A) the contact memory on request (the
-    ablations)."""
-    segment = load_segment_params()
-    gains, control_every = controller_settings(segment)
-    if not lead:
-        gains = dataclasses.replace(gains, lead=0.0)
-    model = with_rigid_body(segment) if rigid_body and mode != 'none' else segment
-    return closed_loop.simulate(model, gains, mode, trajectory, FULL_MODEL, seed=SEED,
-                                control_every=control_every, setpoint_every=setpoint_every(),
-                                duration=duration, plant_params=segment,
-                                model=None if memory else FrictionlessContact(model))
+    """`closed_loop.track`, and for paper A without its contact memory on request (an ablation:
+    `FrictionlessContact` in place of the no-slip memory)."""
+    return closed_loop.track(mode, trajectory, rigid_body=rigid_body, lead=lead, seed=SEED,
+                             duration=duration,
+                             model_factory=None if memory else FrictionlessContact)
 
 
 def memory_torque(run, trajectory, every=10):

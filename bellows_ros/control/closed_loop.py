@@ -7,13 +7,17 @@ sample the tracker commands new pressures; the plant's valves get the newest com
 `setpoint_every` samples (the arm bus sends its set-point frames at a fixed cycle, config/arm.dbc)
 and hold it in between. Deterministic for a given seed.
 """
+import dataclasses
 from collections import namedtuple
 
 import numpy as np
 
+from bellows_ros import params as parameters
 from bellows_ros.control import angle_trajectory
-from bellows_ros.control.angle_tracking import AngleTracker
-from bellows_ros.models.segment_plant import SegmentPlant
+from bellows_ros.control.angle_tracking import AngleTracker, TrackingGains
+from bellows_ros.hardware import can_protocol
+from bellows_ros.models.segment import load_segment_params
+from bellows_ros.models.segment_plant import FULL_MODEL, SegmentPlant
 
 TrackingRun = namedtuple('TrackingRun',
                          't psi_d psi psi_dot p1 p2 tau_drive p1_cmd p2_cmd saturated')
@@ -64,3 +68,43 @@ def rms(values):
     """Root mean square, NaN for an empty selection."""
     values = np.asarray(values, float)
     return float(np.sqrt(np.mean(values * values))) if values.size else float('nan')
+
+
+def controller_settings(segment):
+    """(TrackingGains, control_every) of config/nodes_sim.yaml's arm_controller_node."""
+    flat = parameters.read_file(parameters.default_file('nodes_sim'), 'arm_controller_node')
+    gains = TrackingGains(flat['pid.kp'], flat['pid.ki'], flat['pid.kd'],
+                          flat['pid.velocity_cutoff'], flat['pid.integral_limit'],
+                          segment.p0 + flat['co_contraction'], flat['feedforward_lead'])
+    return gains, int(flat['control_every'])
+
+
+def setpoint_every():
+    """Samples between the arm bus's set-point frames (config/arm.dbc cycle times)."""
+    db = can_protocol.load_dbc()
+    return round(db.get_message_by_name('ARM_HOST_HEARTBEAT').cycle_time
+                 / db.get_message_by_name('ARM_SEG1_SAMPLE').cycle_time)
+
+
+def with_rigid_body(segment):
+    """The model's (2) with the simulated segment's M, C, N (as an arm's segment.dynamics)."""
+    return segment.replace(dynamics_inertia=segment.plant_inertia,
+                           dynamics_damping=segment.plant_damping,
+                           dynamics_gravity=segment.plant_gravity)
+
+
+def track(mode, trajectory, rigid_body=True, lead=True, seed=0, duration=None,
+          model_factory=None):
+    """One closed-loop run of controller `mode` ('none', 'previous', 'paper_a') on the default
+    simulated segment with its full physics (`FULL_MODEL`), the gains of config/nodes_sim.yaml's
+    arm_controller_node -> TrackingRun. Optionally without the rigid-body terms of (2) or the
+    valve-lag lead; `model_factory(params)` replaces the tracker's own SegmentModel."""
+    segment = load_segment_params()
+    gains, control_every = controller_settings(segment)
+    if not lead:
+        gains = dataclasses.replace(gains, lead=0.0)
+    model = with_rigid_body(segment) if rigid_body and mode != 'none' else segment
+    return simulate(model, gains, mode, trajectory, FULL_MODEL, seed=seed,
+                    control_every=control_every, setpoint_every=setpoint_every(),
+                    duration=duration, plant_params=segment,
+                    model=None if model_factory is None else model_factory(model))

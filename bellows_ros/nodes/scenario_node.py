@@ -24,7 +24,6 @@ import math
 import time
 from pathlib import Path
 
-from bellows_ros.bench import arm_control
 from bellows_ros.control import angle_trajectory, closed_loop
 from bellows_ros.errors import BellowsError
 from bellows_ros.models.actuator import load_actuator_params
@@ -164,7 +163,7 @@ class ScenarioNode(Node):
     def feedback_only(self):
         """The feedback-only controller on the same trajectory, in process (cached)."""
         if not hasattr(self, '_feedback_only'):
-            self._feedback_only = arm_control.track('none', self.trajectory)
+            self._feedback_only = closed_loop.track('none', self.trajectory)
         return self._feedback_only
 
     def write(self):
