@@ -49,6 +49,7 @@ setup(
             'driver_node = bellows_ros.nodes.driver_node:main',
             'model_node = bellows_ros.nodes.model_node:main',
             'stiffness_controller_node = bellows_ros.nodes.stiffness_controller_node:main',
+            'arm_controller_node = bellows_ros.nodes.arm_controller_node:main',
             'sim_arm_node = bellows_ros.nodes.sim_arm_node:main',
             'sim_actuator_node = bellows_ros.nodes.sim_actuator_node:main',
             'scenario_node = bellows_ros.nodes.scenario_node:main',

@@ -19,7 +19,7 @@ import yaml
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
 
-from bellows_ros.data import COLUMNS, Table, check_increasing
+from bellows_ros.table import COLUMNS, Table, check_increasing
 from bellows_ros.errors import DataError
 
 SEGMENT = 'segment_1'

@@ -4,24 +4,18 @@ CSV with a header row, SI units, one row per sample. Every problem is reported a
 naming the file, the line (header = line 1) and the column. Extra columns are carried along
 untouched so that `bellows simulate` can write "the input plus outputs".
 
-A directory is read as a rosbag2 recording (see `bellows_ros.bag`).
+A directory is read as a rosbag2 recording (see `bellows_ros.bag`). Both readers return a
+`bellows_ros.table.Table`; this module imports the bag reader, never the other way round.
 """
 import csv
 import io
 import math
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from bellows_ros.errors import DataError
-
-# Required and optional columns of each system's files.
-COLUMNS = {
-    'segment': (('t', 'psi', 'p1', 'p2', 'tau_ext'), ('psi_dot', 'tau_motion')),
-    # `run` numbers separate sealed runs of one record (used by `bellows identify actuator`).
-    'actuator': (('t', 'x_c', 'x_s', 'p', 'f'), ('run',)),
-}
+from bellows_ros.table import COLUMNS, Table, check_increasing
 
 # Pressure columns of each system: absolute, in Pa.
 PRESSURES = {'segment': ('p1', 'p2'), 'actuator': ('p',)}
@@ -30,34 +24,6 @@ PRESSURES = {'segment': ('p1', 'p2'), 'actuator': ('p',)}
 MIN_PLAUSIBLE_PRESSURE = 2e3
 # The segment's bending angle cannot pass a half turn; larger values are degrees.
 MAX_ANGLE = math.pi
-
-
-@dataclass
-class Table:
-    """Columns of one data file.
-
-    `values` holds float arrays for the columns the caller asked for (required and present optional);
-    `extras` holds every other column as text, in file order, so it can be written back unchanged.
-    `lines` gives the file line of each row, for error messages (None for non-CSV sources).
-    """
-    path: str
-    names: list
-    values: dict
-    extras: dict = field(default_factory=dict)
-    lines: list = None
-
-    def line(self, row):
-        """File line of data row `row` (0-based); None where rows have no lines (rosbag2)."""
-        return None if self.lines is None else self.lines[row]
-
-    def __len__(self):
-        return len(next(iter(self.values.values())))
-
-    def __getitem__(self, name):
-        return self.values[name]
-
-    def __contains__(self, name):
-        return name in self.values
 
 
 def read_csv(path, required, optional=()):
@@ -161,16 +127,6 @@ def _parse_column(path, name, cells, lines):
         first = int(np.argmax(bad))
         raise DataError(path, f'{column[first]} is not a finite number', lines[first], name)
     return column
-
-
-def check_increasing(table, name='t'):
-    """Time (or any column) must strictly increase."""
-    column = table[name]
-    bad = np.flatnonzero(np.diff(column) <= 0)
-    if bad.size:
-        i = int(bad[0]) + 1
-        raise DataError(table.path, f'not increasing ({column[i]:g} after {column[i - 1]:g})',
-                        table.line(i), name)
 
 
 def check_range(table, name, low, high, unit=''):

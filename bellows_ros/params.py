@@ -77,17 +77,60 @@ def unflatten(flat):
 
 
 class _RosLoader(yaml.SafeLoader):
-    """YAML as rcl's parameter parser reads it: `1e-5` is a double (YAML 1.1 would say string)."""
+    """YAML as rcl's parameter parser reads it (`_rcl_scalar`), not as YAML 1.1 would."""
+
+    # Only `~`/`null` are resolved by pattern; every other plain scalar is a str node, which
+    # `_construct_plain` reads as rcl does.
+    yaml_implicit_resolvers = {
+        first: [(tag, regexp) for tag, regexp in resolvers if tag == 'tag:yaml.org,2002:null']
+        for first, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()}
+
+    def construct_mapping(self, node, deep=False):
+        # Keys are parameter names, taken as written (`on:` is the name 'on', not True).
+        for key, _ in node.value:
+            if isinstance(key, yaml.ScalarNode) and key.tag == 'tag:yaml.org,2002:str':
+                key.style = key.style or "'"
+        return super().construct_mapping(node, deep=deep)
 
 
-_RosLoader.add_implicit_resolver(
-    'tag:yaml.org,2002:float',
-    re.compile(r'^[-+]?(?:[0-9][0-9_]*)?(?:\.[0-9_]*)?(?:[eE][-+]?[0-9]+)$'),
-    list('-+0123456789.'))
+_TRUE = {'Y', 'y', 'yes', 'Yes', 'YES', 'true', 'True', 'TRUE', 'on', 'On', 'ON'}
+_FALSE = {'N', 'n', 'no', 'No', 'NO', 'false', 'False', 'FALSE', 'off', 'Off', 'OFF'}
+_INTEGER = re.compile(r'[+-]?(?:0[xX][0-9a-fA-F]+|0[0-7]*|[1-9][0-9]*)')
+_DOUBLE = re.compile(r'[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?'
+                     r'|[+-]?\.?(?:inf|infinity|nan)', re.IGNORECASE)
+_HEX_DOUBLE = re.compile(r'[+-]?0[xX](?:[0-9a-fA-F]+\.?[0-9a-fA-F]*|\.[0-9a-fA-F]+)'
+                         r'(?:[pP][+-]?[0-9]+)?')
+
+
+def _rcl_scalar(text):
+    """A plain (unquoted) scalar as rcl's YAML parser types it: its bool words, then C's strtol
+    (base 0: `0x1F`, `012` octal), then strtod (`1e-3`, `.5`, `inf`, hex), else a string.
+    `1_000`, `1:20` and `2026-01-01` stay strings, as on rcl (YAML 1.1 would make numbers and a
+    date of them)."""
+    if text in _TRUE or text in _FALSE:
+        return text in _TRUE
+    if _INTEGER.fullmatch(text):
+        sign, digits = (-1, text[1:]) if text[0] == '-' else (1, text.lstrip('+'))
+        base = 16 if digits[:2] in ('0x', '0X') else 8 if digits[0] == '0' else 10
+        return sign * int(digits, base)
+    if _DOUBLE.fullmatch(text):
+        # YAML's `.inf` / `.nan` spellings: Python's float wants them without the dot.
+        return float(re.sub(r'\.(?=[a-zA-Z])', '', text))
+    if _HEX_DOUBLE.fullmatch(text):
+        return float.fromhex(text)
+    return text
+
+
+def _construct_plain(loader, node):
+    text = loader.construct_scalar(node)
+    return _rcl_scalar(text) if node.style is None else text
+
+
+_RosLoader.add_constructor('tag:yaml.org,2002:str', _construct_plain)
 
 
 def parse_yaml(text):
-    """Parse YAML text with rcl's reading of numbers (`yaml.YAMLError` on a syntax error)."""
+    """Parse YAML text with rcl's reading of scalars (`yaml.YAMLError` on a syntax error)."""
     return yaml.load(text, Loader=_RosLoader)
 
 
@@ -104,6 +147,8 @@ def read_sections(path):
         raise ParameterError(f'{path}: cannot read parameter file ({exc.strerror})') from None
     except UnicodeDecodeError:
         raise ParameterError(f'{path}: not a text file') from None
+    except ValueError:  # a path no file can have (a NUL byte in it)
+        raise ParameterError(f'{path!r}: not a valid file name') from None
     try:
         document = parse_yaml(text)
     except yaml.YAMLError as exc:
@@ -111,12 +156,14 @@ def read_sections(path):
         where = f'{path}:{mark.line + 1}' if mark else str(path)
         problem = getattr(exc, 'problem', None) or 'invalid YAML'
         raise ParameterError(f'{where}: {problem}') from None
+    except ValueError as exc:  # a tag the value does not fit (`!!int abc`)
+        raise ParameterError(f'{path}: {exc}') from None
     if not isinstance(document, dict):
         raise ParameterError(f"{path}: expected a map of node names to 'ros__parameters'")
     sections = {}
     for section, body in document.items():
         if not isinstance(body, dict) or not isinstance(body.get('ros__parameters'), dict):
-            raise ParameterError(f"{path}: section '{section}' has no 'ros__parameters' map")
+            raise ParameterError(f"{path}: section {str(section)!r} has no 'ros__parameters' map")
         flat = flatten(body['ros__parameters'])
         for name, value in flat.items():
             # A blank, a control character or an empty part between dots names no parameter (and

@@ -5,9 +5,9 @@
 #                         [-- extra --ros-args for every node]
 #
 # Starts sim_arm_node (CAN over udp_multicast) and sim_actuator_node (serial on a pty), then
-# driver_node, model_node and stiffness_controller_node, all in the background with their logs in
-# DIR/logs. Then runs scenario_node (stiffness step 1400 -> 1900 N/m, segment_1 pressure
-# excursion to 4 bar): it prints a summary and writes DIR/scenario.png and DIR/scenario.csv, and the
+# driver_node, model_node, stiffness_controller_node and arm_controller_node, all in the background
+# with their logs in DIR/logs. Then runs scenario_node (stiffness step 1400 -> 1900 N/m, segment_1
+# tracking an angle sweep): it prints a summary and writes DIR/scenario.png and .csv, and the
 # graph is stopped. With --no-scenario the graph runs until Ctrl-C. Every process is stopped on
 # exit, Ctrl-C or error (trap). Works from a checkout, a pip install and a colcon install (the
 # executables are found as `ros2 run` finds them). DDS discovery stays on this host.
@@ -77,6 +77,7 @@ nodes_alive launch_sim
 start driver_node -p "driver_node:arm.channel:=$group" -p "driver_node:actuator.port:=$port"
 start model_node
 start stiffness_controller_node
+start arm_controller_node
 sleep 3
 nodes_alive launch_sim
 

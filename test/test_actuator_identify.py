@@ -28,7 +28,7 @@ def start():
     def fitted_terms_zeroed(bellows):
         kept = {0, 1, 2, 5, 9}
         return dataclasses.replace(bellows, e_v=tuple(a if k in kept else 0.0 for k, a in enumerate(bellows.e_v)))
-    return dataclasses.replace(TRUTH, v_tube=5e-6, f_mts=(900.0, -2000.0), e_f=(0.5, 1e-5, 300.0, -1.01325),
+    return dataclasses.replace(TRUTH, v_tube=5e-6, f_mts=(900.0, -2000.0, 0.0), e_f=(0.5, 1e-5, 300.0, -1.01325),
                                chamber=fitted_terms_zeroed(TRUTH.chamber), spring=fitted_terms_zeroed(TRUTH.spring))
 
 

@@ -5,7 +5,7 @@ import pytest
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.actuator import load_actuator_params, pressure, stiffness
 from bellows_ros.models.stiffness_map import (compression_for_pressure, compression_for_stiffness,
-                                              stiffness_range)
+                                              stiffness_branch, stiffness_range)
 
 PARAMS = load_actuator_params()
 
@@ -28,10 +28,28 @@ def test_outside_the_range_names_the_range():
         assert f'{k_min:.1f}' in str(info.value) and f'{k_max:.1f}' in str(info.value)
 
 
-def test_range_is_wider_with_more_gas():
-    low_gas = stiffness_range(PARAMS, 95e3)
-    high_gas = stiffness_range(PARAMS, 105e3)
-    assert high_gas[0] > low_gas[0] and high_gas[1] > low_gas[1]
+def test_more_gas_raises_the_low_end_and_buckles_sooner():
+    low_gas, high_gas = stiffness_range(PARAMS, 95e3), stiffness_range(PARAMS, 105e3)
+    assert high_gas[0] > low_gas[0]
+    # the rising branch ends at the buckling peak, reached at a smaller compression with more gas
+    assert stiffness_branch(PARAMS, 105e3)[1] < stiffness_branch(PARAMS, 95e3)[1] < PARAMS.chamber.x_max
+
+
+def test_branch_is_the_rising_one_and_the_range_is_its_ends():
+    x_low, x_high = stiffness_branch(PARAMS)
+    assert x_low == PARAMS.chamber.x_min and x_high < PARAMS.chamber.x_max
+    k_min, k_max = stiffness_range(PARAMS)
+    assert k_max == pytest.approx(stiffness(PARAMS, x_high), rel=1e-9)
+    assert k_max > max(stiffness(PARAMS, x) for x in np.linspace(x_low, PARAMS.chamber.x_max, 60))
+    # a stiffness the falling branch also gives is mapped onto the rising branch
+    k_end = stiffness(PARAMS, PARAMS.chamber.x_max)
+    assert compression_for_stiffness(PARAMS, k_end) < x_high
+    # with a little more gas the buckled spring ends below the elongated end: that low a stiffness
+    # is not on the branch used, and the error says so
+    gas = 106e3
+    k_below = 0.5 * (stiffness(PARAMS, PARAMS.chamber.x_max, gas) + stiffness_range(PARAMS, gas)[0])
+    with pytest.raises(ParameterError, match='past the peak'):
+        compression_for_stiffness(PARAMS, k_below, gas)
 
 
 def test_compression_for_pressure_round_trip():

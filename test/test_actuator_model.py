@@ -5,9 +5,11 @@ import numpy as np
 import pytest
 
 from bellows_ros.errors import ParameterError
-from bellows_ros.models.actuator import (estimate_gas, evaluate, evaluate_array, gas_amount,
-                                         load_actuator_params, pressure, rest_length_change,
-                                         stiffness, total_volume, without_bulging)
+from bellows_ros.models.actuator import (buckling_force, estimate_gas, evaluate, evaluate_array,
+                                         gas_amount, load_actuator_params, pressure,
+                                         rest_compression, rest_length_change, stiffness,
+                                         stiffness_from_rest, total_volume, without_buckling,
+                                         without_bulging)
 from bellows_ros.models.actuator_geometry import P_ATM, volume_geo
 
 PARAMS = load_actuator_params()
@@ -50,7 +52,8 @@ def test_pressures_over_the_test_grid_stay_in_the_papers_band():
     assert p.min() > 87e3 and p.max() < 115e3
 
 
-@pytest.mark.parametrize('x_c,x_s', [(-0.02, 0.0), (0.0, 0.006), (0.02, 0.012), (0.045, 0.02)])
+@pytest.mark.parametrize('x_c,x_s', [(-0.02, 0.0), (0.0, 0.006), (0.02, 0.012), (0.045, 0.02),
+                                     (0.048, 0.008)])
 def test_stiffness_is_the_exact_derivative_of_force(x_c, x_s):
     _, _, k = evaluate(PARAMS, x_c, x_s)
     h = 1e-7
@@ -73,15 +76,68 @@ def test_estimate_gas_recovers_the_amount_from_a_pressure_reading():
         assert estimate_gas(PARAMS, p, 0.031, 0.007) == pytest.approx(gas, rel=1e-9)
 
 
-def test_stiffness_grows_with_chamber_compression_and_with_gas():
-    x = np.linspace(PARAMS.chamber.x_min, PARAMS.chamber.x_max, 40)
-    k = [stiffness(PARAMS, v) for v in x]
-    assert all(b > a for a, b in zip(k, k[1:]))
+def test_stiffness_rises_to_a_buckling_peak_then_falls_and_grows_with_gas():
+    x = np.linspace(PARAMS.chamber.x_min, PARAMS.chamber.x_max, 72)
+    k = np.array([stiffness(PARAMS, v) for v in x])
+    peak = int(np.argmax(k))
+    assert 0 < peak < len(x) - 1
+    assert np.all(np.diff(k[:peak + 1]) > 0) and np.all(np.diff(k[peak:]) < 0)
+    # Without buckling, paper B's (7)-(12) alone rise all the way.
+    plain = np.array([stiffness(without_buckling(PARAMS), v) for v in x])
+    assert np.all(np.diff(plain) > 0)
     assert stiffness(PARAMS, 0.0, 105e3) > stiffness(PARAMS, 0.0, 97e3)
+
+
+def test_model_reproduces_paper_b_figures_at_once():
+    """Section IV-D and Fig. 10 from the default config, one parameter set."""
+    assert stiffness(PARAMS, -0.020) == pytest.approx(1483.0, rel=0.03)
+    assert stiffness(PARAMS, 0.020) == pytest.approx(1975.0, rel=0.03)
+    # "the force curves are nonlinear, and the stiffness is higher at low displacements"
+    for x_c in (-0.020, 0.020):
+        x_s = np.linspace(0.0, 0.012, 121)
+        _, _, k = evaluate_array(PARAMS, x_c, x_s)
+        assert k[x_s <= 0.004].mean() > k[x_s >= 0.008].mean()
+    # the extended range: curves extended to the spring's rest length, end stop to end stop
+    assert stiffness_from_rest(PARAMS, PARAMS.chamber.x_min) == pytest.approx(1332.0, rel=0.05)
+    assert stiffness_from_rest(PARAMS, 0.048) == pytest.approx(1913.0, rel=0.05)
+    assert PARAMS.chamber.x_max == pytest.approx(0.048)
+    # the rest point moves the paper's way: contracted at the elongated end, extended at 48 mm
+    assert rest_compression(PARAMS, PARAMS.chamber.x_min) > 0.0 > rest_compression(PARAMS, 0.048)
+
+
+def test_buckling_force_falls_below_the_unbuckled_force_with_pressure_and_compression():
+    b = PARAMS.buckling
+    loss = [[-buckling_force(b, x_s, p)[0] for x_s in (0.0, 0.006, 0.012, 0.018)]
+            for p in (95e3, 105e3, 115e3, 125e3)]
+    loss = np.array(loss)
+    assert np.all(loss >= 0.0)
+    assert np.all(np.diff(loss, axis=0) > 0) and np.all(np.diff(loss, axis=1) > 0)
+    assert loss[0, 0] < 1e-3 * loss[-1, -1]          # nothing below the onset
+    # smooth onset: the partials are continuous and match central differences
+    for x_s, p in ((0.004, 110e3), (0.012, 120e3), (0.02, 100e3)):
+        f, f_x, f_p = buckling_force(b, x_s, p)
+        h, hp = 1e-7, 1e-2
+        assert f_x == pytest.approx((buckling_force(b, x_s + h, p)[0]
+                                     - buckling_force(b, x_s - h, p)[0]) / (2 * h), rel=1e-5)
+        assert f_p == pytest.approx((buckling_force(b, x_s, p + hp)[0]
+                                     - buckling_force(b, x_s, p - hp)[0]) / (2 * hp), rel=1e-5)
+    # the array path is the same function
+    x_s = np.array([0.0, 0.01, 0.02])
+    assert np.allclose(buckling_force(b, x_s, 120e3, np.exp)[0],
+                       [buckling_force(b, v, 120e3)[0] for v in x_s])
+
+
+def test_buckling_parameters_outside_their_physical_range_are_named(tmp_path):
+    path = tmp_path / 'p.yaml'
+    path.write_text('/**:\n  ros__parameters:\n    actuator:\n      buckling:\n'
+                    '        critical_pressure: 1.0\n')
+    with pytest.raises(ParameterError, match='critical_pressure'):
+        load_actuator_params(path)
 
 
 def test_rest_length_contracts_below_and_extends_above_atmospheric():
     assert rest_length_change(PARAMS, 90e3) < 0.0 < rest_length_change(PARAMS, 112e3)
+    assert rest_length_change(PARAMS, 95e3) < 0.0 < rest_length_change(PARAMS, 105e3)
     assert rest_length_change(PARAMS, 90e3) < rest_length_change(PARAMS, 100e3)
 
 

@@ -27,7 +27,8 @@ def fast_spring_step(t, start=0.5, rise=0.05, amplitude=0.012):
 
 
 def test_effect_names():
-    assert ACTUATOR_EFFECTS == ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash')
+    assert ACTUATOR_EFFECTS == ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash',
+                                'buckling')
 
 
 def test_unknown_effect_or_parameter_is_named():
@@ -167,3 +168,18 @@ def test_experiment_record_is_seeded_and_shaped_like_the_paper():
     counts = a['x_c'] / PARAMS.drive.metres_per_count
     assert np.allclose(counts, np.round(counts), atol=1e-6)
     assert np.ptp(a['x_s']) > 0.005 and np.ptp(a['x_c']) > 0.001
+
+
+def test_buckling_effect_is_the_models_buckling_term():
+    from bellows_ros.models.actuator import without_buckling
+    forces = {}
+    for effects in ((), ('buckling',), {'buckling': {'scale': 0.5}}):
+        plant = ActuatorPlant(PARAMS, effects, noise=False, x_c0=0.045)
+        sample = plant.step(1e-3, 0.0, x_s_imposed=0.012)
+        forces[str(effects)] = sample.f
+        expected = evaluate(model_params(PARAMS, effects), sample.x_c, 0.012)[1]
+        assert sample.f == pytest.approx(expected, abs=1e-9)
+    plain, full, half = forces.values()
+    assert full < half < plain - 1.0          # the buckled spring pushes back less
+    assert plain == pytest.approx(
+        evaluate(without_buckling(model_params(PARAMS)), 0.045 - 0.0, 0.012)[1], rel=1e-3)

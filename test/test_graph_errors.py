@@ -79,3 +79,13 @@ def test_realtime_priority_out_of_range(run):
 def test_cpu_latency_limit_out_of_range(run):
     result = run('model_node', ['-p', 'cpu_latency_limit:=5000.0'])
     check(result, "'cpu_latency_limit'", 'negative value (off) or 0..2000 s', '5000')
+
+
+def test_arm_controller_bad_parameters(run):
+    check(run('arm_controller_node', ['-p', 'feedforward:=paper_b']),
+          "'feedforward'", 'paper_a, previous, none', 'paper_b')
+    check(run('arm_controller_node', ['-p', 'trajectory:=zigzag']),
+          "unknown trajectory 'zigzag'", 'reversals, sweep')
+    check(run('arm_controller_node', ['-p', 'control_every:=100']),
+          'control_every must be 1..25', 'got 100')
+    check(run('arm_controller_node', ['-p', 'pid.kp:=-1.0']), "'kp'", '>= 0')

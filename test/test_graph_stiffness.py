@@ -1,10 +1,11 @@
 """
 Acceptance: stiffness step on the simulated actuator, and holding it against an air leak.
 
-Processes: sim_actuator_node (pty; effects wall_bulging + air_leak), driver_node (serial),
-stiffness_controller_node; the test publishes set-points and listens to /actuator/stiffness (the
-controller's estimate from the measured pressure) and /diagnostics (the plant's true chamber
-compression and gas amount, from which the true stiffness follows with paper B's model).
+Processes: sim_actuator_node (pty; effects wall_bulging + air_leak + buckling), driver_node
+(serial), stiffness_controller_node; the test publishes set-points and listens to
+/actuator/stiffness (the controller's estimate from the measured pressure) and /diagnostics (the
+plant's true chamber compression and gas amount, from which the true stiffness follows with paper
+B's model).
 
 Runs twice: the nodes on rclpy (`[rclpy]`) and on the DDS runtime (`[dds]`).
 
@@ -62,7 +63,7 @@ def test_stiffness_step_and_leak_hold(runtime, tmp_path, monkeypatch):
     processes = [
         launch('sim_actuator_node', override('sim_actuator_node', 'port', port)
                + override('sim_actuator_node', 'x_c0', x_low)
-               + override('sim_actuator_node', 'effects', '[wall_bulging, air_leak]'),
+               + override('sim_actuator_node', 'effects', '[wall_bulging, air_leak, buckling]'),
                env, tmp_path),
         launch('stiffness_controller_node',
                override('stiffness_controller_node', 'initial_stiffness', k_low), env, tmp_path),

@@ -9,7 +9,8 @@ fitted parameters.
 import numpy as np
 import pytest
 
-from bellows_ros.identify.segment import fig10_torques, fit_segment, predict, prediction_errors
+from bellows_ros.identify.segment import (fig10_torques, fit_segment, least_squares, predict,
+                                          prediction_errors)
 from bellows_ros.models.ogden import free_strain
 from bellows_ros.models.segment import load_segment_params
 from bellows_ros.models.segment_experiments import dynamic_record, fig10_record, quasi_static_record
@@ -85,3 +86,25 @@ def test_fit_reproduces_the_fig10_hysteresis(fitted):
     for load in (2e3, 5e3, 1e4, 2e4, 3e4):
         assert free_strain(load, *fit.params.ogden_mu, *fit.params.ogden_gamma) == pytest.approx(
             free_strain(load, *truth.ogden_mu, *truth.ogden_gamma), rel=0.02)
+
+
+def test_least_squares_plain_and_with_the_doctors_ridge():
+    """(32), the one linear solve: ridge 0 is the least-squares θ (checked against the normal
+    equations); ridge > 0 is the minimiser of |Xθ - Y|² + ridge |diag(scale) θ|² (checked against
+    the augmented system [X; √ridge diag(scale)] solved by SVD). An unexcited column gets 0."""
+    rng = np.random.default_rng(41)
+    x = rng.standard_normal((400, 5)) * np.array([1.0, 10.0, 100.0, 1e-2, 3.0])
+    y = x @ rng.standard_normal(5) + 0.01 * rng.standard_normal(400)
+    plain = least_squares(x, y)
+    np.testing.assert_allclose(plain, np.linalg.solve(x.T @ x, x.T @ y), rtol=1e-9)
+    scale = np.sqrt(np.mean(x * x, axis=0))
+    for ridge in (1e-6, 1e-2, 10.0):
+        augmented = np.vstack([x, np.sqrt(ridge) * np.diag(scale)])
+        expected = np.linalg.lstsq(augmented, np.concatenate([y, np.zeros(5)]), rcond=None)[0]
+        np.testing.assert_allclose(least_squares(x, y, ridge, scale), expected, rtol=1e-8)
+    shrunk = least_squares(x, y, 10.0, scale)
+    assert np.linalg.norm(shrunk * scale) < np.linalg.norm(plain * scale)
+    np.testing.assert_allclose(least_squares(x, y, 1e-12, scale), plain, rtol=1e-6)
+    dead = np.column_stack([x, np.zeros(400)])
+    assert least_squares(dead, y)[-1] == 0.0
+    assert least_squares(dead, y, 1e-6, np.ones(6))[-1] == 0.0

@@ -5,12 +5,15 @@ import math
 import numpy as np
 import pytest
 
+from bellows_ros.bench.segment import previous_step
 from bellows_ros.errors import ParameterError
 from bellows_ros.identify.segment import calibrate_fig10, fig10_torques
 from bellows_ros.models.contact import contact_angle
-from bellows_ros.models.segment import (OUTPUTS, SegmentModel, actuator_regressor, friction_regressor,
-                                        load_segment_params, previous_regressor, restoring_regressor,
-                                        scaled_pressure, simulate_model, strain_memory)
+from bellows_ros.models.segment import (OUTPUTS, SegmentModel, SegmentOutput, actuator_regressor,
+                                        contact_lengths, external_torque, friction_regressor,
+                                        load_segment_params, previous_regressor, relative_pressure,
+                                        restoring_regressor, scaled_pressure, simulate_model,
+                                        strain_memory)
 
 
 @pytest.fixture(scope='module')
@@ -66,12 +69,10 @@ def test_same_pressure_and_angle_by_two_paths_gives_two_torques(params):
                                 psi_end + (math.radians(-30) - psi_end) * np.sin(np.linspace(0, np.pi, 3000))])
     excursion[-1] = psi_end  # exactly the same final (p, Ψ)
     via = _run(params, excursion, ramp)
-    s_direct, s_via = direct[OUTPUTS.index('sa1')], via[OUTPUTS.index('sa1')]
-    tau_direct, tau_via = direct[OUTPUTS.index('tau_a')], via[OUTPUTS.index('tau_a')]
-    assert s_via > 1.1 * s_direct  # the stretched material snuggles the rib: more contact
-    assert tau_via > tau_direct + 1.0
-    assert via[OUTPUTS.index('tau_prev')] == direct[OUTPUTS.index('tau_prev')]
-    assert via[OUTPUTS.index('tau_s')] == direct[OUTPUTS.index('tau_s')]
+    assert via.sa1 > 1.1 * direct.sa1  # the stretched material snuggles the rib: more contact
+    assert via.tau_a > direct.tau_a + 1.0
+    assert via.tau_prev == direct.tau_prev
+    assert via.tau_s == direct.tau_s
 
 
 def test_scalar_step_agrees_with_the_regressors(params):
@@ -119,3 +120,136 @@ def test_fig10_calibration_of_the_default_parameters(params):
     calibrated = calibrate_fig10(params)
     np.testing.assert_allclose(calibrated.actuator_theta, params.actuator_theta, rtol=1e-5, atol=1e-5)
     np.testing.assert_allclose(calibrated.previous_theta, params.previous_theta, rtol=1e-5, atol=1e-5)
+
+
+def test_peek_is_the_next_step_without_the_update(params):
+    """`peek` returns what `step` will, through contact growth, release and emptying, and changes
+    nothing (the pressure allocation evaluates its candidates with it)."""
+    model = SegmentModel(params)
+    rng = np.random.default_rng(3)
+    t = np.arange(6000) * 1e-3
+    psi = 1.2 * np.sin(2 * np.pi * 0.4 * t) + 0.02 * rng.standard_normal(t.size)
+    p1 = params.p0 + 3e5 * (0.5 + 0.5 * np.sin(2 * np.pi * 0.3 * t)) ** 2
+    p2 = params.p0 + 2e5 * (0.5 - 0.5 * np.cos(2 * np.pi * 0.7 * t))
+    released = grown = 0
+    for row in zip(psi.tolist(), (0.1 * np.cos(t)).tolist(), p1.tolist(), p2.tolist()):
+        n_before = model.memory1.n
+        first, second = model.peek(*row), model.peek(*row)
+        assert first == second
+        assert model.step(*row) == first
+        released += model.memory1.n < n_before
+        grown += model.memory1.n > n_before
+    assert released > 100 and grown > 100
+
+
+# --- the fast 1 kHz path against the reference functions ---------------------------------------
+
+def _random_params(params, rng):
+    """Parameters with every linear and natural-curvature constant drawn at random (seeded), so a
+    coefficient applied to the wrong term cannot cancel out."""
+    return params.replace(
+        actuator_theta=tuple(rng.normal(0.0, 5.0, 8)),
+        previous_theta=tuple(rng.normal(0.0, 5.0, 4)),
+        restoring_k_s=rng.normal(), restoring_k_sp=rng.normal(),
+        restoring_c_psi0=rng.uniform(0.1, 20.0), restoring_c_psi0_p=rng.uniform(-1.5, 1.5),
+        friction_c_f=rng.normal(), friction_c_fp=rng.normal(),
+        friction_c_vel=rng.uniform(1.0, 20.0))
+
+
+def _random_states(params, rng, n=3000):
+    """Random (Ψ, Ψ̇, p1, p2) rows: angles ±1.5 rad, rates ±3 rad/s, pressures from below
+    ambient to p_max (independent rows, so the strain memories jump between fill and release)."""
+    return (rng.uniform(-1.5, 1.5, n), rng.uniform(-3.0, 3.0, n),
+            rng.uniform(0.5e5, params.p_max, n), rng.uniform(0.5e5, params.p_max, n))
+
+
+def _reference(params, psi, psi_dot, p1, p2, sa1, sa2):
+    """Torques of (3)-(5), (29), (34) from the regressors, and the size of their terms (for a
+    relative tolerance that means something where the terms cancel)."""
+    q1, q2 = scaled_pressure(params, p1), scaled_pressure(params, p2)
+    blocks = [
+        (actuator_regressor(psi, q1, q2, sa1, sa2), params.actuator_theta),
+        (restoring_regressor(psi, q1, q2, params.restoring_c_psi0, params.restoring_c_psi0_p),
+         (params.restoring_k_s, params.restoring_k_sp)),
+        (friction_regressor(psi_dot, q1, q2, params.friction_c_vel),
+         (params.friction_c_f, params.friction_c_fp)),
+        (previous_regressor(psi, q1, q2), params.previous_theta)]
+    values = [x @ np.array(theta) for x, theta in blocks]
+    sizes = [np.abs(x) @ np.abs(np.array(theta)) for x, theta in blocks]
+    tau_a, tau_s, tau_f, prev = values
+    size_a, size_s, size_f, size_prev = sizes
+    return ({'tau_a': tau_a, 'tau_s': tau_s, 'tau_f': tau_f, 'tau_drive': tau_a + tau_s + tau_f,
+             'tau_prev': prev + tau_s + tau_f},
+            {'tau_a': size_a, 'tau_s': size_s, 'tau_f': size_f,
+             'tau_drive': size_a + size_s + size_f, 'tau_prev': size_prev + size_s + size_f})
+
+
+@pytest.mark.parametrize('seed', [11, 12, 13])
+def test_fast_step_equals_the_reference_functions(params, seed):
+    """`SegmentModel.step` (hand-expanded) against `relative_pressure`, `contact_angle` (via
+    `contact_lengths`), `scaled_pressure` and the regressors of (3)-(5), (29), (34): the contact
+    lengths exactly, the torques to 1e-12 of the size of their terms, over random states."""
+    rng = np.random.default_rng(seed)
+    trial = _random_params(params, rng)
+    psi, psi_dot, p1, p2 = _random_states(trial, rng)
+    model = SegmentModel(trial)
+    rows = [model.step(*row)
+            for row in zip(psi.tolist(), psi_dot.tolist(), p1.tolist(), p2.tolist())]
+    fast = {name: np.array([getattr(row, name) for row in rows]) for name in OUTPUTS}
+    sa1, sa2 = contact_lengths(trial, psi, p1, p2)
+    assert np.array_equal(fast['sa1'], sa1) and np.array_equal(fast['sa2'], sa2)
+    assert np.ptp(sa1) > 0.01 and np.ptp(sa2) > 0.01  # the memories really moved
+    reference, size = _reference(trial, psi, psi_dot, p1, p2, sa1, sa2)
+    for name, value in reference.items():
+        assert np.all(np.abs(fast[name] - value) <= 1e-12 * size[name]), name
+
+
+def test_bench_reference_equals_the_previous_model(params):
+    """The bench's reference step (`bench.segment.previous_step`, the cost of (34) alone) computes
+    τ_prev of the reference functions, to 1e-12 of the size of its terms."""
+    rng = np.random.default_rng(21)
+    trial = _random_params(params, rng)
+    psi, psi_dot, p1, p2 = _random_states(trial, rng)
+    step = previous_step(trial)
+    fast = np.array([step(*row) for row in zip(psi.tolist(), psi_dot.tolist(), p1.tolist(),
+                                               p2.tolist())])
+    zero = np.zeros_like(psi)
+    reference, size = _reference(trial, psi, psi_dot, p1, p2, zero, zero)
+    assert np.all(np.abs(fast - reference['tau_prev']) <= 1e-12 * size['tau_prev'])
+
+
+def test_step_returns_named_fields_that_are_still_a_tuple(params):
+    out = SegmentModel(params).step(0.4, 0.2, 4e5, 2e5)
+    assert isinstance(out, SegmentOutput) and isinstance(out, tuple)
+    assert out._fields == OUTPUTS == ('sa1', 'sa2', 'tau_a', 'tau_s', 'tau_f', 'tau_drive',
+                                      'tau_prev')
+    assert out[5] == out.tau_drive == out.tau_a + out.tau_s + out.tau_f
+    assert out[6] == out.tau_prev
+
+
+def test_relative_and_scaled_pressure(params):
+    """p_rel = p - p0 (17) and p_scl = 0 at ambient, 1 at p_max."""
+    assert relative_pressure(params, params.p0 + 1234.5) == pytest.approx(1234.5, rel=1e-12)
+    np.testing.assert_allclose(scaled_pressure(params, [params.p0, params.p_max]), [0.0, 1.0])
+
+
+def test_external_torque_is_the_equation_of_motion(params):
+    """A(2) with non-zero M, C, N on an imposed Ψ(t) = A sin ωt with its exact rates:
+    τ_ext = M Ψ̈ + C Ψ̇ + N sin Ψ - τ_drive; the scalar path (math.sin) gives the same as the
+    array path."""
+    m, c, g = 0.03, 0.4, 2.5
+    p = params.replace(dynamics_inertia=m, dynamics_damping=c, dynamics_gravity=g)
+    t = np.linspace(0.0, 2.0, 401)
+    a, w = 0.8, 3.0
+    psi, psi_dot, psi_ddot = a * np.sin(w * t), a * w * np.cos(w * t), -a * w * w * np.sin(w * t)
+    tau_drive = np.cos(5.0 * t)  # any driving torque: it enters with a minus sign
+    tau_ext = external_torque(p, psi, psi_dot, psi_ddot, tau_drive)
+    by_hand = [m * acc + c * v + g * math.sin(x) - d
+               for x, v, acc, d in zip(psi, psi_dot, psi_ddot, tau_drive)]
+    np.testing.assert_allclose(tau_ext, by_hand, rtol=1e-12, atol=1e-12)
+    scalar = [external_torque(p, float(x), float(v), float(acc), float(d))
+              for x, v, acc, d in zip(psi, psi_dot, psi_ddot, tau_drive)]
+    np.testing.assert_allclose(scalar, tau_ext, rtol=1e-13, atol=1e-13)
+    # quasi-static defaults: τ_ext = -τ_drive whatever the motion
+    np.testing.assert_array_equal(external_torque(params, psi, psi_dot, psi_ddot, tau_drive),
+                                  -tau_drive)

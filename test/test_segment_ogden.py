@@ -106,3 +106,23 @@ def test_any_admissible_input_is_solved_to_1e10(log_load, log_mu1, log_mu2, gamm
     lam = free_strain(load, mu[0], mu[1], gamma1, gamma2)
     assert math.isfinite(lam) and lam >= 1.0
     assert lam == pytest.approx(1.0 + float(reference_strain(load, mu, (gamma1, gamma2))), rel=1e-10)
+
+
+def test_free_strain_solves_the_reference_stress():
+    """A(15) has one home, `stress`; `free_strain` writes T in ln λ1 (for precision and speed in
+    the 1 kHz loop). Held equal: over random materials and loads (seeded), T(free_strain(load)) = load
+    to 1e-12, where λ1 - 1 ≥ 1e-3 (closer to 1, `stress` itself cancels digits)."""
+    import numpy as np
+
+    rng = np.random.default_rng(31)
+    checked = 0
+    for _ in range(2000):
+        mu = tuple(10.0 ** rng.uniform(1.0, 5.0, 2))
+        gamma = tuple(rng.uniform(2.05, 12.0, 2))
+        load = 10.0 ** rng.uniform(0.0, 7.0)
+        lam = free_strain(load, mu[0], mu[1], gamma[0], gamma[1])
+        if lam - 1.0 < 1e-3:
+            continue
+        assert stress(lam, mu, gamma) == pytest.approx(load, rel=1e-12)
+        checked += 1
+    assert checked > 1000

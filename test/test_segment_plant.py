@@ -48,7 +48,7 @@ def test_baseline_plant_is_the_previous_model_without_the_missing_physics(params
     record = _bench(params, {})
     physics = params.replace(friction_c_fp=0.0, restoring_k_sp=0.0, restoring_c_psi0_p=0.0)
     model = SegmentModel(physics)
-    expected = [model.step(a, b, c, d)[6] for a, b, c, d in
+    expected = [model.step(a, b, c, d).tau_prev for a, b, c, d in
                 zip(record['psi'], record['psi_dot'], record['p1'], record['p2'])]
     np.testing.assert_allclose(record['tau_motion'] - record['tau_ext'], expected, atol=1e-9)
 
@@ -60,7 +60,7 @@ def test_each_effect_changes_the_measured_torque_and_full_model_is_paper_a(param
         assert np.max(np.abs(changed['tau_ext'] - base['tau_ext'])) > 0.2, name
     full = _bench(params, FULL_MODEL)
     model = SegmentModel(params)
-    expected = [model.step(a, b, c, d)[5] for a, b, c, d in
+    expected = [model.step(a, b, c, d).tau_drive for a, b, c, d in
                 zip(full['psi'], full['psi_dot'], full['p1'], full['p2'])]
     np.testing.assert_allclose(full['tau_motion'] - full['tau_ext'], expected, atol=1e-9)
 

@@ -14,7 +14,8 @@ import numpy as np
 from bellows_ros import data
 from bellows_ros.errors import DataError
 from bellows_ros.identify.segment import fit_segment, MIN_RATE_PER_CUTOFF
-from bellows_ros.models.segment import load_segment_params, simulate_model, velocity
+from bellows_ros.models.derivatives import rates
+from bellows_ros.models.segment import load_segment_params, OUTPUTS, simulate_model
 from bellows_ros.models.segment_plant import check_effects, SegmentPlant
 
 INPUT_REQUIRED = ('t', 'psi', 'p1', 'p2')  # a simulation input needs no measured torque
@@ -29,7 +30,7 @@ def _read(path, params, required=None):
 
 
 def _psi_dot(table):
-    return table['psi_dot'] if 'psi_dot' in table else velocity(table['t'], table['psi'])
+    return table['psi_dot'] if 'psi_dot' in table else rates(table['t'], table['psi'])
 
 
 def simulate(input_path, output_path, params_path, effects):
@@ -56,12 +57,12 @@ def _run_plant(params, effects, table):
         measured.append((sample.psi, sample.psi_dot, sample.p1, sample.p2, sample.tau_ext,
                          plant.tau_motion))
         # the plant's own τ_drive: paper A's with contact_hysteresis, else the previous model's
-        true.append(plant.outputs[:5] + (plant.tau_drive,) + plant.outputs[6:])
+        true.append(plant.outputs._replace(tau_drive=plant.tau_drive))
     measured, true = np.array(measured), np.array(true)
     outputs = {'p1_cmd': table['p1'], 'p2_cmd': table['p2']}
     for k, name in enumerate(('psi', 'psi_dot', 'p1', 'p2', 'tau_ext', 'tau_motion')):
         outputs[name] = measured[:, k]
-    for k, name in enumerate(('sa1', 'sa2', 'tau_a', 'tau_s', 'tau_f', 'tau_drive', 'tau_prev')):
+    for k, name in enumerate(OUTPUTS):
         outputs[name] = true[:, k]
     return outputs
 

@@ -3,9 +3,15 @@
 Baseline (docs/doctor.md): paper B's gas law (17) with the purely geometric volume (2-4, no
 E_V), isothermal sealed gas; the gas amount (as `p_ref`), `v_tube` and the zero of the motor
 encoder (`x_c_offset`, within ±1 mm: on a rig the encoder's zero is set by homing and is as unknown
-as the tube volume) are refitted to the data. The doctor compares the predicted system pressure
-with the measured one (Pa); the force follows from the pressure (7-12), so every cause below shows
-first in the pressure.
+as the tube volume) are refitted to the data. For the force, paper B's (7)-(12) on the predicted
+(not the measured) pressure: F = (P - P_atm) A(x_s) + F_mat with the material force a cubic
+polynomial of x_s (F_MTS, plus the load cell's zero) and E_F (11) with the YAML's C2, C3 and its
+amplitude C1, all linear and solved by least squares on the training rows; no buckling.
+
+Two measured outputs are compared, the system pressure p (Pa) and the spring force f (N), each
+divided by its own noise floor (`OUTPUTS`, `noise_floors`): the model is fitted to both at once and
+every cause is judged on both (a leak changes the pressure and through it the force; a sensor lag
+only the pressure reading; buckling only the force).
 
 Each cause adds the missing physics with its own parameters (docs/doctor.md, config/actuator.yaml
 `actuator.effects`):
@@ -19,19 +25,29 @@ Each cause adds the missing physics with its own parameters (docs/doctor.md, con
   full cubic that a pressure record can separate: q, d q (both bellows) and d² (both bellows).
 - sensor_lag: the pressure sensor as a first-order lag with time constant τ.
 - backlash: a dead band of width b between the lead screw (the encoder's x_c) and the chamber.
+- buckling: the spring loses force once its load index x_s/x_cr + (P - P_atm)/p_cr passes 1
+  (`models.actuator.buckling_force`): stiffness loss k_b, critical pressure p_cr, critical
+  compression x_cr, within the physical bounds of `actuator.buckling.bounds` (onset width from the
+  YAML).
 """
 import dataclasses
 
 import numpy as np
 
 from bellows_ros.doctor.filters import lag, play, recurrence, relax
-from bellows_ros.doctor.scoring import Model
-from bellows_ros.models.actuator import params_to_flat, pressure, without_bulging
-from bellows_ros.models.actuator_geometry import P_ATM, volume_geo
+from bellows_ros.errors import ParameterError
+from bellows_ros.doctor.scoring import Model, noise_floor, noise_floor_ramps
+from bellows_ros.models.actuator import (Buckling, buckling_force, params_to_flat, pressure,
+                                         without_buckling, without_bulging)
+from bellows_ros.models.actuator_geometry import P_ATM, e_v, frustum_state, volume_geo
 
-CAUSES = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash')
+CAUSES = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash', 'buckling')
 BASELINE = ('paper B (17): geometric volume (no E_V), isothermal sealed gas, '
-            'p_ref and v_tube refitted')
+            'p_ref and v_tube refitted; force (7)-(12) on the predicted pressure, F_MTS a cubic '
+            'in x_s and E_F amplitude refitted, no buckling')
+# Measured outputs: (column, unit, name). The first is the legacy single output.
+OUTPUTS = (('p', 'Pa', 'pressure'), ('f', 'N', 'force'))
+F_MTS_DEGREE = 3
 FIT_RATE = 200.0  # Hz, highest rate the doctor fits at: sensor lag and heating act within tens of ms
 UNIT = 'Pa'
 SIGNAL = 'p'
@@ -50,6 +66,10 @@ SPECS = {
                      ('e_dd_spring_ml', 0.0, -200.0, 200.0)],
     'sensor_lag': [('log10_time_constant', -1.5, -3.5, 0.5)],
     'backlash': [('width_mm', 0.3, 0.0, 3.0)],
+    # Bounds from actuator.buckling.bounds (`buckling_specs`); these are the fallbacks.
+    'buckling': [('stiffness_loss_kn', 2.0, 0.0, 10.0),
+                 ('critical_pressure_kpa', 25.0, 5.0, 300.0),
+                 ('critical_compression_mm', 20.0, 5.0, 80.0)],
 }
 STARTS = {
     'air_leak': [[-9.5], [-12.5]],
@@ -57,11 +77,40 @@ STARTS = {
     'sensor_lag': [[-2.5], [-0.5]],
     'backlash': [[1.0], [0.05]],
     'wall_bulging': [],
+    'buckling': [[4.0, 15.0, 15.0], [1.0, 60.0, 40.0]],
 }
+# SI factor of each scaled buckling variable.
+_BUCKLING_SI = {'stiffness_loss_kn': ('stiffness_loss', 1e3),
+                'critical_pressure_kpa': ('critical_pressure', 1e3),
+                'critical_compression_mm': ('critical_compression', 1e-3)}
 
 
-def measured(record):
-    return record[SIGNAL]
+def buckling_specs(params):
+    """SPECS['buckling'] with the bounds of `actuator.buckling.bounds` where the YAML has them."""
+    specs = []
+    bounds = dict(params.buckling.bounds) if params.buckling is not None else {}
+    for name, start, low, high in SPECS['buckling']:
+        si, factor = _BUCKLING_SI[name]
+        if si in bounds:
+            floor = 0.0 if si == 'stiffness_loss' else 1e-3
+            low, high = (max(v / factor, floor) for v in bounds[si])
+        specs.append((name, min(max(start, low), high), low, high))
+    return specs
+
+
+def _onset_width(params):
+    return params.buckling.onset_width if params.buckling is not None else 0.15
+
+
+def noise_floors(record):
+    """White-noise floor of each output at the record's rate: {column: sigma}. The force is ramped
+    fast by the test machine, so its floor comes from second differences."""
+    return {'p': noise_floor(record['p']), 'f': noise_floor_ramps(record['f'])}
+
+
+def measured(record, scales):
+    """The measured outputs, one row each, divided by their (averaged) noise floors `scales`."""
+    return np.vstack([record[name] / scales[name] for name, *_ in OUTPUTS])
 
 
 def initial_guess(record, params):
@@ -97,7 +146,12 @@ def geometric_volumes(params, x_c, x_s):
 
 
 def predict(params, causes, values, x_c, x_s, dt, geometry=None):
-    """Pressure the extended model predicts at the sensor (Pa) over a record.
+    """Pressure the extended model predicts at the sensor (Pa) over a record (`predict_state`)."""
+    return predict_state(params, causes, values, x_c, x_s, dt, geometry)[0]
+
+
+def predict_state(params, causes, values, x_c, x_s, dt, geometry=None):
+    """Pressure at the sensor and in the gas (Pa) the extended model predicts over a record.
 
     `values`: physical parameters {cause: {name: value}} plus 'baseline': {'p_ref', 'v_tube',
     'x_c_offset' (optional, m)}; `geometry`: `geometric_volumes(params, x_c, x_s)` if already
@@ -136,9 +190,42 @@ def predict(params, causes, values, x_c, x_s, dt, geometry=None):
         p = pressure(model, x_c, x_s, gas=model.p_ref * gas, v_geo=volume)
     else:
         p = n0 * gas / volume
+    p_gas = p
     if 'sensor_lag' in causes:
         p = lag(p, dt, values['sensor_lag']['time_constant'])
-    return p
+    return p, p_gas
+
+
+def force_columns(params, causes, values, x_s, p_gas):
+    """The force the model knows, (7)-(10) (+ buckling), and the columns of the linear material
+    force: 1 (load cell zero), x_s .. x_s^3 (F_MTS), E_F's shape exp(C2 (P - P_atm) + C3 Δh)
+    (11)."""
+    s = params.spring
+    _, _, f = frustum_state(s, x_s)
+    area = s._k * f
+    if 'wall_bulging' in causes:
+        e = values['wall_bulging']
+        model = bulged(params, [e['e_q'], e['e_dq_chamber'], e['e_dq_spring'], e['e_dd_chamber'],
+                                e['e_dd_spring']])
+        area = area - e_v(model.spring, x_s, p_gas)[1]
+    known = (p_gas - P_ATM) * area                                    # (9), (10)
+    if 'buckling' in causes:
+        b = values['buckling']
+        known = known + buckling_force(Buckling(b['stiffness_loss'], b['critical_pressure'],
+                                                b['critical_compression'], _onset_width(params)),
+                                       x_s, p_gas, np.exp)[0]
+    _, c2, c3, _ = params.e_f
+    columns = [np.ones_like(x_s)] + [x_s ** (i + 1) for i in range(F_MTS_DEGREE)]
+    columns.append(np.exp(np.clip(c2 * (p_gas - P_ATM) + c3 * x_s / s.n, -50.0, 50.0)))
+    return known, np.column_stack(columns)
+
+
+def solve_force(known, columns, f, train):
+    """Least-squares coefficients of the material force on the `train` rows (columns scaled)."""
+    scale = np.sqrt(np.mean(columns ** 2, axis=0))
+    scale[scale == 0.0] = 1.0
+    coef, *_ = np.linalg.lstsq(columns[train] / scale, (f - known)[train], rcond=None)
+    return coef / scale
 
 
 def physical(causes, theta):
@@ -146,7 +233,7 @@ def physical(causes, theta):
     values, k = {}, 0
     for part in ('baseline',) + tuple(causes):
         raw = {}
-        for name, *_ in SPECS[part]:
+        for name, *_ in SPECS[part]:  # buckling_specs keep these names and order
             raw[name] = float(theta[k])
             k += 1
         values[part] = _to_si(part, raw)
@@ -166,11 +253,15 @@ def _to_si(part, raw):
         return out
     if part == 'backlash':
         return {'width': raw['width_mm'] * 1e-3}
+    if part == 'buckling':
+        return {_BUCKLING_SI[name][0]: value * _BUCKLING_SI[name][1]
+                for name, value in raw.items()}
     return {name[:-3]: value * ML for name, value in raw.items()}  # wall_bulging, m³
 
 
-def build_model(record, params, causes, warm=None):
-    """The baseline plus `causes` on `record`, as a `scoring.Model` to fit to the measured pressure.
+def build_model(record, params, causes, warm=None, scales=None):
+    """The baseline plus `causes` on `record`, as a `scoring.Model` to fit to the measured outputs
+    (`measured(record, scales)`: pressure and force, each over its noise floor in `scales`).
 
     `warm` ({fit variable: value}) starts the fit from an earlier model's solution.
     """
@@ -178,7 +269,7 @@ def build_model(record, params, causes, warm=None):
     names, x0, lower, upper = [], [], [], []
     guess = initial_guess(record, params)
     for part in ('baseline',) + causes:
-        for name, start, lo, hi in SPECS[part]:
+        for name, start, lo, hi in (buckling_specs(params) if part == 'buckling' else SPECS[part]):
             key = f'{part}.{name}'
             names.append(key)
             if warm and key in warm:
@@ -197,14 +288,32 @@ def build_model(record, params, causes, warm=None):
             # A cold start too: an earlier model may have bent v_tube to mimic the missing effect.
             cold = [guess[name] for name, *_ in SPECS['baseline']]
             starts.append(cold + x0[len(cold):])
-    x_c, x_s, dt = record['x_c'], record['x_s'], record.dt
+    x_c, x_s, dt, f = record['x_c'], record['x_s'], record.dt, record['f']
     geometry = geometric_volumes(params, x_c, x_s)
+    scales = scales or {name: 1.0 for name, *_ in OUTPUTS}
 
     def run(theta, train):
-        return predict(params, causes, physical(causes, theta), x_c, x_s, dt, geometry), {}
+        values = physical(causes, theta)
+        try:
+            p, p_gas = predict_state(params, causes, values, x_c, x_s, dt, geometry)
+        except ParameterError:
+            # E_V so large that (17) has no positive root: a trial step of the fit, far off.
+            return np.full((2, len(x_s)), 1e9), {'force': np.zeros(F_MTS_DEGREE + 2)}
+        known, columns = force_columns(params, causes, values, x_s, p_gas)
+        coef = solve_force(known, columns, f, train)
+        force = known + columns @ coef
+        return np.vstack([p / scales['p'], force / scales['f']]), {'force': coef}
 
-    return Model(causes, names, x0, lower, upper, run, lambda theta, linear: physical(causes, theta),
-                 n_linear=0, starts=starts)
+    def report(theta, linear):
+        values = physical(causes, theta)
+        coef = linear.get('force')
+        if coef is not None:
+            values['baseline'].update(force_zero=float(coef[0]), e_f_c1=float(coef[-1]),
+                                      f_mts=[float(c) for c in coef[1:-1]])
+        return values
+
+    return Model(causes, names, x0, lower, upper, run, report,
+                 n_linear=F_MTS_DEGREE + 2, starts=starts)
 
 
 def extended_flat(params, causes, values):
@@ -213,15 +322,25 @@ def extended_flat(params, causes, values):
     (read by `bellows simulate actuator --effect NAME` and the plant)."""
     base = values['baseline']
     model = dataclasses.replace(params, p_ref=base['p_ref'], v_tube=base['v_tube'])
-    model = without_bulging(model)
+    model = without_buckling(without_bulging(model))
+    if 'f_mts' in base:
+        model = dataclasses.replace(model, f_mts=tuple(base['f_mts']),
+                                    e_f=(base['e_f_c1'], params.e_f[1], params.e_f[2],
+                                         -params.e_f[1] * P_ATM))
+    if 'buckling' in causes and params.buckling is not None:
+        b = values['buckling']
+        model = dataclasses.replace(model, buckling=dataclasses.replace(
+            params.buckling, stiffness_loss=b['stiffness_loss'],
+            critical_pressure=b['critical_pressure'],
+            critical_compression=b['critical_compression']))
     if 'wall_bulging' in causes:
         e = values['wall_bulging']
         model = bulged(model, [e['e_q'], e['e_dq_chamber'], e['e_dq_spring'], e['e_dd_chamber'],
                                e['e_dd_spring']])
     flat = params_to_flat(model)
     for cause in causes:
-        if cause == 'wall_bulging':
-            flat['actuator.effects.wall_bulging.scale'] = 1.0
+        if cause in ('wall_bulging', 'buckling'):
+            flat[f'actuator.effects.{cause}.scale'] = 1.0
             continue
         for name, value in values[cause].items():
             key = f'actuator.effects.{cause}.{name}'

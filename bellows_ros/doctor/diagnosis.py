@@ -9,6 +9,11 @@
    (`scoring.pays`), refit, repeat with the remaining causes.
 5. Look at what is left: if the final held-out residual is still well above the noise floor and
    correlated in time, the record holds structure that no candidate explains (`unexplained`).
+
+A system with several measured outputs (the actuator: pressure p and force f, `module.OUTPUTS`) is
+fitted and scored on all of them at once, each divided by its own noise floor; the decision rule
+then works on that combined residual (in noise floors), and `outputs` holds the figures of each
+output in its own unit.
 """
 import sys
 import time
@@ -39,6 +44,33 @@ class Candidate:
 
 
 @dataclass
+class OutputView:
+    """One measured output of a diagnosis in its own unit: held-out residuals, RMSEs, evidence."""
+    name: str
+    unit: str
+    label: str
+    scale: float                   # noise floor on the fitted copy: the output's unit of the fit
+    noise: float                   # noise floor at full rate
+    signal: np.ndarray
+    baseline_heldout: np.ndarray
+    final_heldout: np.ndarray
+    candidate_rmse: dict
+    evidence: dict
+
+    @property
+    def baseline_rmse(self):
+        return float(np.sqrt(np.mean(self.baseline_heldout ** 2)))
+
+    @property
+    def final_rmse(self):
+        return float(np.sqrt(np.mean(self.final_heldout ** 2)))
+
+    @property
+    def gain(self):
+        return scoring.gain(self.final_rmse, self.baseline_rmse)
+
+
+@dataclass
 class Diagnosis:
     system: str
     path: str
@@ -57,10 +89,30 @@ class Diagnosis:
     extended_flat: dict            # ROS 2 parameters of the extended model
     timings: dict = field(default_factory=dict)
     failure: str = None            # why the baseline's held-out score is broken (then no cause is tried)
+    outputs: list = field(default_factory=list)   # OutputView per measured output (multi-output)
+    primary: int = 0               # the output where the first cause pays most
+
+    @property
+    def baseline_rmse(self):
+        """Held-out RMSE of the baseline, in `unit` (the primary output's for several outputs)."""
+        return self.outputs[self.primary].baseline_rmse if self.outputs else self.baseline.rmse
+
+    @property
+    def final_rmse(self):
+        return self.outputs[self.primary].final_rmse if self.outputs else self.final.rmse
 
     @property
     def gain(self):
-        return scoring.gain(self.final.rmse, self.baseline.rmse)
+        return scoring.gain(self.final_rmse, self.baseline_rmse)
+
+    def candidate_rmse(self, cause):
+        """Held-out RMSE of `cause`'s scored model in `unit`, or None if it was not scored."""
+        candidate = self.candidates[cause]
+        if candidate.score is None:
+            return None
+        if self.outputs:
+            return self.outputs[self.primary].candidate_rmse[cause]
+        return candidate.score.rmse
 
     @property
     def cause(self):
@@ -102,13 +154,22 @@ def diagnose(system, path, params_path=None, progress=False, causes=None):
     full = checks.load(path, system)
     if system == 'segment':
         module.add_columns(full, params)
-    noise = scoring.noise_floor(module.measured(full))
     record = full.decimated(decimation_factor(full, module.FIT_RATE))
-    y = module.measured(record)
-    reasons = checks.identifiability(record, noise / np.sqrt(record.factor))
+    extra = {}
+    outputs = getattr(module, 'OUTPUTS', None)
+    if outputs:
+        floors = module.noise_floors(full)
+        scales = {name: floors[name] / np.sqrt(record.factor) for name, *_ in outputs}
+        extra['scales'] = scales
+        y = module.measured(record, scales)
+        noise = floors[outputs[0][0]]
+        reasons = checks.identifiability(record, scales[outputs[0][0]])
+    else:
+        noise = scoring.noise_floor(module.measured(full))
+        y = module.measured(record)
+        reasons = checks.identifiability(record, noise / np.sqrt(record.factor))
     timings = {'load': time.perf_counter() - started}
     bar = _progress(progress, total=1 + len(module.CAUSES if causes is None else causes))
-    extra = {}
     if system == 'segment':
         # Algorithm 1 over the record does not depend on any fitted parameter: run it once, at
         # the record's full rate (see `segment_causes.ContactLengths`).
@@ -123,7 +184,7 @@ def diagnose(system, path, params_path=None, progress=False, causes=None):
 
     baseline = score(())
     timings['baseline'] = time.perf_counter() - started
-    floor = noise / np.sqrt(record.factor)
+    floor = 1.0 if outputs else noise / np.sqrt(record.factor)   # outputs are in noise floors
     # A baseline whose held-out score is broken leaves nothing to compare causes against.
     failure = scoring.heldout_failure(baseline, floor)
     candidates = {cause: Candidate(cause, reason is None, reason)
@@ -141,7 +202,8 @@ def diagnose(system, path, params_path=None, progress=False, causes=None):
             candidate.score, candidate.extends = result, tuple(chosen)
             candidate.gain = scoring.gain(result.rmse, current.rmse)
         for cause, result in round_scores.items():
-            candidates[cause].note = _doubt(result, cause, floor)
+            candidates[cause].note = (_doubt(result, cause, floor)
+                                      or _worsens(result, current, outputs))
         credible = [c for c in round_scores if candidates[c].note is None]
         if not credible:
             break
@@ -156,12 +218,38 @@ def diagnose(system, path, params_path=None, progress=False, causes=None):
         bar.refresh()
     bar.close()
     timings['fit'] = time.perf_counter() - started
-    evidence = residual_evidence(record, current.heldout, floor, system)
-    unexplained = evidence['rmse_over_noise'] > UNEXPLAINED_RATIO and evidence['ljung_box_p'] < LB_P
     values = current.params()
-    return Diagnosis(system, str(path), record, y, module.UNIT, module.BASELINE, baseline, current,
-                     chosen, candidates, noise, evidence, bool(unexplained), values,
-                     module.extended_flat(params, chosen, values), timings, failure)
+    if not outputs:
+        evidence = residual_evidence(record, current.heldout, floor, system)
+        unexplained = _structured(evidence)
+        return Diagnosis(system, str(path), record, y, module.UNIT, module.BASELINE, baseline,
+                         current, chosen, candidates, noise, evidence, bool(unexplained), values,
+                         module.extended_flat(params, chosen, values), timings, failure)
+    views = []
+    for i, (name, unit, label) in enumerate(outputs):
+        scale = scales[name]
+        final_heldout = current.heldout[i] * scale
+        views.append(OutputView(
+            name, unit, label, scale, floors[name], record[name], baseline.heldout[i] * scale,
+            final_heldout, {c: cand.score.output_rmse(i) * scale
+                            for c, cand in candidates.items() if cand.score is not None},
+            residual_evidence(record, final_heldout, scale, system)))
+    primary = 0
+    if chosen:
+        first = candidates[chosen[0]].score
+        primary = max(range(len(views)), key=lambda i: scoring.gain(
+            first.output_rmse(i), baseline.output_rmse(i)))
+    unexplained = any(_structured(v.evidence) for v in views)
+    worst = max(views, key=lambda v: v.evidence['rmse_over_noise'])
+    view = views[primary]
+    return Diagnosis(system, str(path), record, view.signal, view.unit, module.BASELINE, baseline,
+                     current, chosen, candidates, view.noise, worst.evidence, bool(unexplained),
+                     values, module.extended_flat(params, chosen, values), timings, failure, views,
+                     primary)
+
+
+def _structured(evidence):
+    return evidence['rmse_over_noise'] > UNEXPLAINED_RATIO and evidence['ljung_box_p'] < LB_P
 
 
 def _doubt(result, cause, floor):
@@ -171,6 +259,17 @@ def _doubt(result, cause, floor):
     if edge:
         return f'fitted {", ".join(edge)} at the edge of its physical range'
     return scoring.heldout_failure(result, floor)
+
+
+def _worsens(result, current, outputs):
+    """None, or which output `result` makes worse than `current` by more than `scoring.MIN_GAIN`:
+    a cause must not buy a better fit of one output with a worse one of another (the combined
+    residual is dominated by whichever output is furthest above its noise floor)."""
+    for i, (name, unit, label) in enumerate(outputs or ()):
+        loss = -scoring.gain(result.output_rmse(i), current.output_rmse(i))
+        if loss > scoring.MIN_GAIN:
+            return f'makes the {label} ({name}) held-out RMSE {100 * loss:.0f} % worse'
+    return None
 
 
 def residual_evidence(record, residual, noise, system):

@@ -2,7 +2,11 @@
 
 All residuals plotted are held-out residuals: what the model got wrong on blocks of time it was not
 fitted on. "baseline" is the simulation before the doctor, "extended" the model with the causes found.
+A diagnosis of several outputs (the actuator's pressure and force) gets every plot for each: the
+first output under the plain names, the others with `_<label>` appended (fit_force.png ...).
 """
+from pathlib import Path  # noqa: E402
+from types import SimpleNamespace  # noqa: E402
 import matplotlib
 
 matplotlib.use('Agg')
@@ -26,15 +30,32 @@ def _inputs(diagnosis):
 
 
 def write_plots(diagnosis, directory):
-    """Write residuals.png, fit.png, hysteresis.png, autocorrelation.png; returns the file names."""
+    """Write residuals.png, fit.png, hysteresis.png, autocorrelation.png (and the same per further
+    output); returns the file names."""
     names = []
-    for name, draw in (('residuals.png', _residuals), ('fit.png', _fit),
-                       ('hysteresis.png', _hysteresis), ('autocorrelation.png', _autocorrelation)):
-        figure = draw(diagnosis)
-        figure.savefig(directory / name, dpi=90)
-        plt.close(figure)
-        names.append(name)
+    for suffix, view in _views(diagnosis):
+        for name, draw in (('residuals', _residuals), ('fit', _fit),
+                           ('hysteresis', _hysteresis), ('autocorrelation', _autocorrelation)):
+            figure = draw(view)
+            file = f'{name}{suffix}.png'
+            figure.savefig(Path(directory) / file, dpi=90)
+            plt.close(figure)
+            names.append(file)
     return names
+
+
+def _views(d):
+    """(file suffix, object with the attributes the plots read) per output."""
+    if not d.outputs:
+        return [('', d)]
+    views = []
+    for index, o in enumerate(d.outputs):
+        views.append(('' if index == 0 else f'_{o.label}', SimpleNamespace(
+            record=d.record, system=d.system, causes=d.causes, signal=o.signal, unit=o.unit,
+            what=o.label,
+            baseline=SimpleNamespace(heldout=o.baseline_heldout, rmse=o.baseline_rmse),
+            final=SimpleNamespace(heldout=o.final_heldout, rmse=o.final_rmse))))
+    return views
 
 
 def _label(diagnosis):
@@ -66,7 +87,7 @@ def _residuals(d):
     axes[1, 0].set(title='against direction of motion')
     axes[1, 1].set(xlabel=pressure_label, title='against pressure')
     for axis in axes.flat:
-        axis.set_ylabel(f'residual ({d.unit})')
+        axis.set_ylabel(f'{getattr(d, "what", "")} residual ({d.unit})')
         axis.grid(alpha=0.3)
     axes[0, 0].legend(loc='upper right', fontsize=8)
     figure.tight_layout()
@@ -82,7 +103,7 @@ def _fit(d):
               label=f'baseline (held-out RMSE {d.baseline.rmse:.4g} {d.unit})')
     axis.plot(t[thin], (d.signal + d.final.heldout)[thin], color='tab:blue', lw=0.8,
               label=f'{_label(d)} (held-out RMSE {d.final.rmse:.4g} {d.unit})')
-    what = 'pressure' if d.system == 'actuator' else 'driving torque τ_motion - τ_ext'
+    what = getattr(d, 'what', 'driving torque τ_motion - τ_ext')
     axis.set(xlabel='time (s)', ylabel=f'{what} ({d.unit})', title='before and after, on held-out blocks')
     axis.legend(fontsize=8)
     axis.grid(alpha=0.3)
@@ -114,7 +135,8 @@ def _autocorrelation(d):
     axis.plot(seconds, autocorrelation(d.final.heldout, lags), color='tab:blue', label=_label(d))
     band = 2.0 / np.sqrt(len(d.signal))
     axis.axhspan(-band, band, color='0.85', label='white noise ±2/√n')
-    axis.set(xlabel='lag (s)', ylabel='autocorrelation', title='held-out residual autocorrelation')
+    axis.set(xlabel='lag (s)', ylabel='autocorrelation',
+             title=f'held-out {getattr(d, "what", "")} residual autocorrelation')
     axis.legend(fontsize=8)
     axis.grid(alpha=0.3)
     figure.tight_layout()

@@ -1,8 +1,11 @@
 """`bellows diagnose`: run the doctor and write DIR/report.json, report.md, extended.yaml, details.json
 and the PNG plots.
 
-report.json has just the keys of docs/interfaces.md; all else (per-candidate gains, the decision,
-the residual evidence, timings) goes to details.json.
+report.json has the keys of docs/interfaces.md; for a system with several measured outputs (the actuator's
+pressure p and force f) its baseline/extended/gain and the candidates' held-out RMSE are those of
+the output where the first cause pays most (`baseline.unit` says which), and `outputs` adds the
+figures of every output. Everything else (per-candidate gains, the decision, the residual evidence,
+timings) goes to details.json.
 """
 import json
 import math
@@ -24,8 +27,8 @@ def diagnose_command(args):
                              progress=not getattr(args, 'quiet', False))
     write_report(result, args.report)
     causes = ', '.join(result.causes) or 'none'
-    print(f'{args.system}: cause {causes}; held-out RMSE {result.baseline.rmse:.4g} -> '
-          f'{result.final.rmse:.4g} {result.unit} (gain {100 * result.gain:.1f} %)'
+    print(f'{args.system}: cause {causes}; held-out RMSE {result.baseline_rmse:.4g} -> '
+          f'{result.final_rmse:.4g} {result.unit} (gain {100 * result.gain:.1f} %)'
           f'{"; unexplained structure left" if result.unexplained else ""}; report in {args.report}')
     return 0
 
@@ -41,19 +44,28 @@ def report_dict(d):
         params = {}
         if candidate.score is not None:
             params = candidate.score.params().get(cause, {})
-        candidates.append({'cause': cause,
-                           'heldout_rmse': _number(candidate.score.rmse) if candidate.score else None,
+        rmse = d.candidate_rmse(cause)
+        candidates.append({'cause': cause, 'heldout_rmse': None if rmse is None else _number(rmse),
                            'params': params})
-    return {
+    report = {
         'system': d.system,
-        'baseline': {'model': d.baseline_name, 'rmse': d.baseline.rmse, 'unit': d.unit},
+        'baseline': {'model': d.baseline_name, 'rmse': d.baseline_rmse, 'unit': d.unit},
         'cause': d.cause,
-        'extended': {'model': extended_name(d), 'rmse': d.final.rmse},
+        'extended': {'model': extended_name(d), 'rmse': d.final_rmse},
         'gain': d.gain,
         'causes': list(d.causes),
         'unexplained': d.unexplained,
         'candidates': candidates,
     }
+    if d.outputs:
+        report['outputs'] = {o.name: {
+            'quantity': o.label, 'unit': o.unit, 'noise_floor': o.noise,
+            'noise_floor_fitted': o.scale, 'baseline_rmse': o.baseline_rmse,
+            'extended_rmse': o.final_rmse, 'gain': o.gain,
+            'candidates_heldout_rmse': {c: _number(v) for c, v in o.candidate_rmse.items()}}
+            for o in d.outputs}
+        report['output'] = d.outputs[d.primary].name
+    return report
 
 
 def extended_name(d):
@@ -77,6 +89,8 @@ def details_dict(d):
         'noise_floor_full_rate': d.noise,
         'baseline': {'heldout_rmse': d.baseline.rmse, 'insample_rmse': d.baseline.insample_rmse,
                      'heldout_rmse_per_fold': fold_rmse(d.baseline.heldout)},
+        'heldout_units': ('noise floors of each output (combined)' if d.outputs else d.unit),
+        'evidence_per_output': {o.name: o.evidence for o in d.outputs},
         'heldout_failure': d.failure,
         'rule': {'min_gain': scoring.MIN_GAIN, 'blocks': scoring.BLOCKS, 'penalty': 'BIC on held-out',
                  'unexplained_ratio': engine.UNEXPLAINED_RATIO, 'ljung_box_p': engine.LB_P,
@@ -92,7 +106,8 @@ def details_dict(d):
 def fold_rmse(heldout):
     """Held-out RMSE of each fold (`scoring.block_masks`): a fold far above the others is one whose
     refit extrapolates."""
-    return [float(np.sqrt(np.mean(heldout[test] ** 2))) for _, test in scoring.block_masks(len(heldout))]
+    return [float(np.sqrt(np.mean(heldout[..., test] ** 2)))
+            for _, test in scoring.block_masks(np.shape(heldout)[-1])]
 
 
 def write_report(d, directory):
@@ -124,7 +139,7 @@ def markdown(d, plots):
     if d.causes:
         lines.append(f'**Cause: {", ".join(f"`{c}`" for c in d.causes)}.** Extending the baseline with '
                      f'{"it" if len(d.causes) == 1 else "them"} cuts the held-out RMSE from '
-                     f'{d.baseline.rmse:.4g} to {d.final.rmse:.4g} {d.unit} '
+                     f'{d.baseline_rmse:.4g} to {d.final_rmse:.4g} {d.unit} '
                      f'(gain {100 * d.gain:.1f} %).')
     elif d.failure:
         lines.append(f'**Cause: `none` — the baseline could not be scored.** Its {d.failure} '
@@ -133,16 +148,34 @@ def markdown(d, plots):
                      'finding about the system.')
     else:
         lines.append(f'**Cause: `none`.** No candidate cause improves the held-out RMSE '
-                     f'({d.baseline.rmse:.4g} {d.unit}) by at least {100 * scoring.MIN_GAIN:.0f} %.')
-    ev = d.evidence
-    lines += ['', '## What is left', '',
-              f'Held-out residual RMSE {ev["rmse"]:.4g} {d.unit} = {ev["rmse_over_noise"]:.2f} × the '
-              f'noise floor ({ev["noise_floor"]:.3g} {d.unit} after averaging); Ljung-Box Q = '
-              f'{ev["ljung_box_q"]:.4g} over {ev["ljung_box_lags"]} lags (p = {ev["ljung_box_p"]:.2g}); '
-              f'lag-1 autocorrelation {ev["autocorrelation_lag1"]:.2f}; correlation with rate '
-              f'{ev["correlation_with_rate"]:.2f}, position {ev["correlation_with_position"]:.2f}, '
-              f'pressure {ev["correlation_with_pressure"]:.2f}, '
-              f'direction {ev["correlation_with_direction"]:.2f}.', '']
+                     f'({d.baseline_rmse:.4g} {d.unit}) by at least '
+                     f'{100 * scoring.MIN_GAIN:.0f} %.')
+    if d.outputs:
+        lines += ['', '## Both measured outputs', '',
+                  'Fitted and scored together, each over its own noise floor; the decision rule '
+                  'works on the combined residual in noise floors.', '',
+                  '| output | noise floor (full rate) | baseline held-out RMSE | extended '
+                  '| gain |',
+                  '|---|---|---|---|---|']
+        for o in d.outputs:
+            lines.append(f'| {o.label} `{o.name}` ({o.unit}) | {o.noise:.3g} | '
+                         f'{o.baseline_rmse:.4g} ({o.baseline_rmse / o.scale:.1f} × floor) | '
+                         f'{o.final_rmse:.4g} ({o.final_rmse / o.scale:.1f} × floor) | '
+                         f'{100 * o.gain:.1f} % |')
+        lines.append(f'\nThe headline figures above are the {d.outputs[d.primary].label}\'s, '
+                     'where the first cause pays most.')
+    lines += ['', '## What is left', '']
+    for label, unit, ev in ([(o.label + ': ', o.unit, o.evidence) for o in d.outputs]
+                            or [('', d.unit, d.evidence)]):
+        lines += [f'{label}Held-out residual RMSE {ev["rmse"]:.4g} {unit} = '
+                  f'{ev["rmse_over_noise"]:.2f} × the noise floor ({ev["noise_floor"]:.3g} {unit} '
+                  f'after averaging); Ljung-Box Q = {ev["ljung_box_q"]:.4g} over '
+                  f'{ev["ljung_box_lags"]} lags (p = {ev["ljung_box_p"]:.2g}); lag-1 '
+                  f'autocorrelation {ev["autocorrelation_lag1"]:.2f}; correlation with rate '
+                  f'{ev["correlation_with_rate"]:.2f}, '
+                  f'position {ev["correlation_with_position"]:.2f}, '
+                  f'pressure {ev["correlation_with_pressure"]:.2f}, '
+                  f'direction {ev["correlation_with_direction"]:.2f}.', '']
     if d.unexplained:
         lines.append('**Unexplained structure remains**: the residual is more than '
                      f'{engine.UNEXPLAINED_RATIO:g} × the noise floor and correlated in time, and no '
@@ -162,7 +195,11 @@ def markdown(d, plots):
             continue
         extends = ' + '.join(('baseline',) + c.extends)
         verdict = 'yes' if c.pays else ('no: ' + c.note if c.note else 'no')
-        lines.append(f'| `{cause}` | yes | {extends} | {c.score.rmse:.4g} {d.unit} | '
+        if d.outputs:
+            rmse = ', '.join(f'{o.candidate_rmse[cause]:.4g} {o.unit}' for o in d.outputs)
+        else:
+            rmse = f'{c.score.rmse:.4g} {d.unit}'
+        lines.append(f'| `{cause}` | yes | {extends} | {rmse} | '
                      f'{100 * c.gain:.1f} % | {verdict} |')
     lines += ['', '## Fitted parameters of the extended model (SI)', '']
     for part, values in d.values.items():
@@ -197,6 +234,6 @@ def markdown(d, plots):
 
 
 # Causes that are plant effects switched on by `--effect` (the rest change the model's own parameters).
-_PLANT_ONLY = {'actuator': ('air_leak', 'heat_exchange', 'sensor_lag', 'backlash'),
+_PLANT_ONLY = {'actuator': ('air_leak', 'heat_exchange', 'sensor_lag', 'backlash', 'buckling'),
                'segment': ('sensor_lag',)}
 

@@ -6,6 +6,10 @@ its nonlinear physical parameters (time constants, conductances, widths ...) wit
 (dynamic effects need the whole history) after solving any linear coefficients by least squares on
 the `train` rows only. The doctor never sees more than this interface.
 
+A system with several measured outputs (the actuator: pressure and force) passes `y` as a 2-D
+array, one row per output, each divided by its own noise floor; predictions have the same shape,
+masks select columns (samples in time), and every RMSE is then in units of the noise floors.
+
 Held-out scoring (docs/doctor.md): the record is cut into `BLOCKS` contiguous blocks of time, dealt
 into `FOLDS` folds. For each fold the model is refitted on the other folds' blocks and its residual
 is taken on the blocks it did not see; every sample is held out exactly once, and the held-out RMSE
@@ -79,7 +83,7 @@ def fit(model, y, train, x0=None, max_nfev=60):
     """
     def residual(theta):
         prediction, _ = model.predict(theta, train)
-        return (prediction - y)[train]
+        return (prediction - y)[..., train].ravel()
 
     if not model.names:
         prediction, linear = model.predict(np.empty(0), train)
@@ -102,7 +106,7 @@ def fit(model, y, train, x0=None, max_nfev=60):
 
 
 def _cost(prediction, y, mask):
-    return float(np.mean((prediction - y)[mask] ** 2))
+    return float(np.mean((prediction - y)[..., mask] ** 2))
 
 
 def block_masks(n, blocks=BLOCKS, folds=FOLDS, guard=GUARD):
@@ -139,6 +143,10 @@ class Score:
     def rmse(self):
         return float(np.sqrt(np.mean(self.heldout ** 2)))
 
+    def output_rmse(self, index):
+        """Held-out RMSE of output `index` of a multi-output model (in its scaled units)."""
+        return float(np.sqrt(np.mean(self.heldout[index] ** 2)))
+
     @property
     def insample_rmse(self):
         """RMSE of the fit on all data, over all data."""
@@ -151,12 +159,13 @@ class Score:
 def score(model, y, warm=None):
     """Fit `model` to all of `y`, then refit per held-out block (warm-started) and collect the
     held-out residuals. `warm` optionally gives a start for the full fit."""
-    everything = np.ones(len(y), bool)
+    n = np.shape(y)[-1]
+    everything = np.ones(n, bool)
     full = fit(model, y, everything, x0=warm)
-    heldout = np.empty(len(y))
-    for train, test in block_masks(len(y)):
+    heldout = np.empty(np.shape(y))
+    for train, test in block_masks(n):
         fold = fit(model, y, train, x0=full.theta if model.names else None, max_nfev=FOLD_NFEV)
-        heldout[test] = (fold.prediction - y)[test]
+        heldout[..., test] = (fold.prediction - y)[..., test]
     return Score(model, full, heldout)
 
 
@@ -187,7 +196,7 @@ def bic_delta(candidate, current):
     Negative means the candidate is worth its added parameters. With thousands of samples this
     penalty is small; the minimum gain is then the binding part of the rule.
     """
-    n = len(candidate.heldout)
+    n = candidate.heldout.size
     added = max(candidate.model.n_params - current.model.n_params, 0)
     ratio = np.mean(candidate.heldout ** 2) / np.mean(current.heldout ** 2)
     return float(n * np.log(ratio) + added * np.log(n))
@@ -243,3 +252,13 @@ def noise_floor(signal):
     d = np.diff(np.asarray(signal, float))
     d = d - np.median(d)
     return float(1.4826 * np.median(np.abs(d)) / np.sqrt(2))
+
+
+def noise_floor_ramps(signal):
+    """`noise_floor` from second differences: for a signal that is ramped fast for much of the
+    record (the spring force under test-machine ramps changes by more than its noise per sample),
+    the first differences carry the ramp's slope; the second differences only its kinks.
+    For white noise var(second difference) = 6 sigma^2."""
+    d = np.diff(np.asarray(signal, float), 2)
+    d = d - np.median(d)
+    return float(1.4826 * np.median(np.abs(d)) / np.sqrt(6))

@@ -19,14 +19,13 @@ Each cause adds the missing piece (paper A; docs/equations.md):
   pressures the sensors lag behind, p + τ dp/dt (the inverse of the first-order lag).
 """
 import numpy as np
-from scipy.linalg import cho_factor, cho_solve
 from scipy.signal import savgol_filter
 
 from bellows_ros.doctor.scoring import Model, noise_floor
-from bellows_ros.identify.segment import filter_inputs, target
+from bellows_ros.identify.segment import filter_inputs, least_squares, target
+from bellows_ros.models.derivatives import rates
 from bellows_ros.models.segment import (actuator_regressor, contact_lengths, friction_regressor,
-                                        previous_regressor, restoring_regressor, scaled_pressure,
-                                        velocity)
+                                        previous_regressor, restoring_regressor, scaled_pressure)
 
 CAUSES = ('contact_hysteresis', 'pressure_friction', 'natural_curvature', 'sensor_lag')
 BASELINE = ('paper A previous model (34), constant friction c_f, no natural curvature '
@@ -62,7 +61,7 @@ def add_columns(record, params):
     """
     columns = record.columns
     if 'psi_dot' not in columns:
-        columns['psi_dot'] = velocity(columns['t'], columns['psi'])
+        columns['psi_dot'] = rates(columns['t'], columns['psi'])
     columns['y'] = target(params, columns)  # Y = τ_motion - τ_ext (30), from the raw record
     filtered, _, _ = filter_inputs(columns, params.identify_input_cutoff)
     columns.update(filtered)
@@ -96,41 +95,33 @@ class ContactLengths:
         return self.value
 
 
-def least_squares_solution(x, y, scale, ridge):
-    """θ minimising |X θ - Y|² + ridge |diag(scale) θ|² (32, with a prior), by the normal equations.
+def build_model(record, params, causes, warm=None, contact=None, noise=None):
+    """The baseline plus `causes` on `record` (with `add_columns` applied), as a `scoring.Model`.
+
+    `noise`: white-noise standard deviation of Y on `record` (N·m), for the prior of the linear
+    solve; default: the noise floor of Y estimated on `record` itself.
+
+    The linear coefficients are `identify.segment.least_squares` (32) with a ridge and a scale:
 
     `scale` (one per column) is each column's RMS over the whole record — the rows the model will
-    predict — not over the training rows `x` holds: a column the training rows hardly excite (a
-    chain that is pressurised only in the held-out blocks: the pressure columns there are filtered
-    sensor noise around p0) must look small, not be blown up to unit norm and fitted to the noise.
-    It was, with a ridge of 1e-10 relative to the training Gram: on a record pressurised only in its
+    predict — not over the training rows: a column the training rows hardly excite (a chain that
+    is pressurised only in the held-out blocks: the pressure columns there are filtered sensor
+    noise around p0) must look small, not be blown up to unit norm and fitted to the noise. It
+    was, with a ridge of 1e-10 relative to the training Gram: on a record pressurised only in its
     last 2 s, the baseline's held-out RMSE was 3981 N·m (in-sample 0.0183; docs/doctor.md).
 
     `ridge` = (σ/s)², σ the noise of Y, s the spread of Y over the record: the MAP estimate for the
     prior that no single column contributes more than the measured signal varies (each scaled
     coefficient ~ N(0, s²)). A direction the training rows excite so little that the noise cannot
-    resolve it (scaled Gram eigenvalue < ridge) goes to zero instead of to ±∞; a well-excited one is
-    untouched (its Gram entry is ~ the number of rows, ~1e7 × ridge). Cholesky of the scaled XᵀX:
-    a dozen unknowns, called hundreds of times per diagnosis.
-    """
-    xs = x / scale
-    gram = xs.T @ xs
-    gram[np.diag_indices_from(gram)] += ridge
-    return cho_solve(cho_factor(gram), xs.T @ y) / scale
-
-
-def build_model(record, params, causes, warm=None, contact=None, noise=None):
-    """The baseline plus `causes` on `record` (with `add_columns` applied), as a `scoring.Model`.
-
-    `noise`: white-noise standard deviation of Y on `record` (N·m), for the prior of
-    `least_squares_solution`; default: the noise floor of Y estimated on `record` itself.
+    resolve it (scaled Gram eigenvalue < ridge) goes to zero instead of to ±∞; a well-excited one
+    is untouched (its Gram entry is ~ the number of rows, ~1e7 × ridge).
     """
     causes = tuple(causes)
     contact = contact or ContactLengths(params, record)
     psi, psi_dot, dt = record['psi'], record['psi_dot'], record.dt
     y = record['y']
     noise = noise_floor(y) if noise is None else noise
-    # Prior of `least_squares_solution`; the floor keeps an all-zero column (a chain never
+    # Prior of the linear solve; the floor keeps an all-zero column (a chain never
     # pressurised) from making a noise-free record's system singular.
     ridge = max((noise / max(np.std(y), noise, 1e-12)) ** 2, 1e-10)
     nonlinear = [c for c in causes if c in SPECS]
@@ -190,7 +181,7 @@ def build_model(record, params, causes, warm=None, contact=None, noise=None):
             scale[scale == 0] = 1.0
             cache[key] = x, labels, scale
         x, labels, scale = cache[key]
-        coefficients = least_squares_solution(x[train], y[train], scale, ridge)
+        coefficients = least_squares(x[train], y[train], ridge, scale)
         return x @ coefficients, dict(zip(labels, coefficients))
 
     n_linear = (8 if 'contact_hysteresis' in causes else 4) + 1 + ('natural_curvature' in causes) \

@@ -13,8 +13,10 @@ Two stages, as in the paper:
 2. Force (7-12). With P measured, f - (P - P_atm) A(Δh_s, P) = F_MTS(x_s) + E_F(Δh_s, P): the
    polynomial F_MTS and C1 are linear, (C2, C3) enter E_F nonlinearly — variable projection with
    SciPy `least_squares` over (C2, C3) from several starting points. C4 is fixed at -C2 P_atm (it
-   is redundant with C1). The force error is the full model's (pressure predicted from x_c, x_s)
-   against the measured force, in N.
+   is redundant with C1). The buckling term (`actuator.buckling_force`) is kept from the starting
+   parameters and subtracted first: it acts only where pressure and compression are high, and
+   finding it in a record is the doctor's business (`bellows diagnose actuator`). The force error
+   is the full model's (pressure predicted from x_c, x_s) against the measured force, in N.
 
 `calibrate_stiffness` is how `config/actuator.yaml` was made to reproduce the measured stiffness.
 """
@@ -26,8 +28,8 @@ import numpy as np
 from scipy.optimize import fsolve, least_squares
 
 from bellows_ros.errors import BellowsError
-from bellows_ros.models.actuator import (evaluate_array, p_ref_of_amount, stiffness,
-                                         total_volume)
+from bellows_ros.models.actuator import (buckling_force, evaluate_array, p_ref_of_amount,
+                                         stiffness, total_volume)
 from bellows_ros.models.actuator_geometry import (E_V_TERMS, P_ATM, e_v, e_v_regressors, frustum_state,
                                                   volume_geo)
 
@@ -116,7 +118,10 @@ def _force_regressors(params, x_s, p):
     if s.bulging:
         area = area - e_v(s, x_s, p)[1]
     poly = np.column_stack([x_s ** (i + 1) for i in range(len(params.f_mts))])
-    return (p - P_ATM) * area, poly
+    known = (p - P_ATM) * area
+    if params.buckling is not None and params.buckling.stiffness_loss:
+        known = known + buckling_force(params.buckling, x_s, p, np.exp)[0]
+    return known, poly
 
 
 def fit_force(params, x_s, p, f, force_error=True, seed=0, progress=False):

@@ -2,7 +2,7 @@
 
 Inner problem (32): for fixed nonlinear parameters, θ = [θ_a (8), k_s, k_s,p, c_f, c_f,p] is the linear
 least-squares solution of Y = X θ, X = [X_a X_s X_f] (31), Y = τ_motion - τ_ext (30); solved with
-`numpy.linalg.lstsq` (no explicit inverse). Outer problem (33): minimise the inner residual over
+`least_squares` (no explicit inverse). Outer problem (33): minimise the inner residual over
 (μ1, μ2, γ1, γ2) — which move s̃_a through the strain memory — and the natural-curvature constants
 (c_Ψ0, c_Ψ0,p), within bounds (γ_k > 2): Sobol screening, then bounded Nelder-Mead from several
 starts (the problem has local minima; see `fit_segment`). The previous model (34) is refitted on the same rows:
@@ -25,10 +25,12 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import optimize, signal, stats
+from scipy.linalg import cho_factor, cho_solve
 
+from bellows_ros.models.derivatives import rates
 from bellows_ros.models.segment import (actuator_regressor, contact_lengths, external_torque,
                                         friction_regressor, previous_regressor, restoring_regressor,
-                                        scaled_pressure, velocity)
+                                        scaled_pressure)
 
 # Outer (nonlinear) parameters: name, SegmentParams field, bounds; μ searched in log space.
 NONLINEAR = (('mu1', (100.0, 1e5)), ('mu2', (10.0, 1e5)), ('gamma1', (2.05, 12.0)),
@@ -102,9 +104,9 @@ def target(params, record):
         motion = np.asarray(record['tau_motion'], float)
     else:
         t, psi = np.asarray(record['t'], float), np.asarray(record['psi'], float)
-        psi_dot = np.asarray(record['psi_dot'], float) if 'psi_dot' in record else velocity(t, psi)
+        psi_dot = np.asarray(record['psi_dot'], float) if 'psi_dot' in record else rates(t, psi)
         # M Ψ̈ + C Ψ̇ + N(Ψ) of (2): the external torque with no driving torque, negated.
-        motion = -external_torque(params, psi, psi_dot, velocity(t, psi_dot), 0.0)
+        motion = -external_torque(params, psi, psi_dot, rates(t, psi_dot), 0.0)
     return motion - np.asarray(record['tau_ext'], float)
 
 
@@ -114,7 +116,7 @@ def regressors(params, record, rows=slice(None)):
     psi = np.asarray(record['psi'], float)[rows]
     t = np.asarray(record['t'], float)
     psi_dot = (np.asarray(record['psi_dot'], float) if 'psi_dot' in record
-               else velocity(t, np.asarray(record['psi'], float)))[rows]
+               else rates(t, np.asarray(record['psi'], float)))[rows]
     p1, p2 = np.asarray(record['p1'], float)[rows], np.asarray(record['p2'], float)[rows]
     q1, q2 = scaled_pressure(params, p1), scaled_pressure(params, p2)
     sa1, sa2 = contact_lengths(params, psi, p1, p2)
@@ -124,10 +126,29 @@ def regressors(params, record, rows=slice(None)):
             'X_prev': previous_regressor(psi, q1, q2)}
 
 
+def least_squares(x, y, ridge=0.0, scale=None):
+    """θ minimising |X θ - Y|² + ridge |diag(scale) θ|² (32), the one linear solve of the project.
+
+    ridge = 0 (identification): plain least squares by `numpy.linalg.lstsq` (SVD, no explicit
+    inverse; the minimum-norm θ if X is rank deficient). ridge > 0 (the doctor): the MAP estimate
+    for a Gaussian prior on the scaled coefficients, by Cholesky of the scaled normal equations
+    (a dozen unknowns, called hundreds of times per diagnosis). `scale` (one per column, default 1)
+    is the size each column is measured in; the doctor passes each column's RMS over the rows the
+    model will predict (see `bellows_ros.doctor.segment_causes.build_model` for why).
+    """
+    if not ridge > 0.0:
+        return np.linalg.lstsq(x, y, rcond=None)[0]
+    scale = np.ones(x.shape[1]) if scale is None else scale
+    xs = x / scale
+    gram = xs.T @ xs
+    gram[np.diag_indices_from(gram)] += ridge
+    return cho_solve(cho_factor(gram), xs.T @ y) / scale
+
+
 def solve_linear(blocks, y):
-    """θ = argmin |Y - X θ| (32) with X = [X_a X_s X_f] (31), by lstsq; returns (θ, residual)."""
+    """θ = argmin |Y - X θ| (32) with X = [X_a X_s X_f] (31); returns (θ, residual)."""
     x = np.hstack([blocks['X_a'], blocks['X_s'], blocks['X_f']])
-    theta = np.linalg.lstsq(x, y, rcond=None)[0]
+    theta = least_squares(x, y)
     return theta, y - x @ theta
 
 
@@ -152,7 +173,7 @@ def restoring_and_friction(params, blocks, rows=slice(None)):
 def fit_previous(params, blocks, y):
     """θ_prev of (34) by lstsq on Y - τ_s - τ_f, with τ_s, τ_f of `params`."""
     rest = y - restoring_and_friction(params, blocks)
-    return np.linalg.lstsq(blocks['X_prev'], rest, rcond=None)[0]
+    return least_squares(blocks['X_prev'], rest)
 
 
 def errors(residual):
@@ -198,7 +219,8 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=1
        which only enter X_s, by least squares for the best material — no forward runs — and a
        shorter Nelder-Mead polish of the material with them, twice;
     4. on every training row (full rate: any stride shifts the optimum, docs/segment.md): a bounded
-       trust-region Gauss-Newton (`least_squares`) on all six, θ re-solved by (32) in each residual, of
+       trust-region Gauss-Newton (`scipy.optimize.least_squares`) on all six, θ re-solved by (32)
+       in each residual, of
        at most ~`polish_evaluations` forward runs (0: skip the step).
     The two Ogden terms are interchangeable, so (μ1, γ1) and (μ2, γ2) may come out swapped.
     Before all of it the inputs are low-pass filtered (`filter_inputs`) at `input_cutoff` Hz

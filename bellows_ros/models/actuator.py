@@ -10,9 +10,11 @@ where N (Pa·m³) is the amount of gas. The amount is given as `p_ref`: the pres
 would have at the design point (x_c = x_c_ref = 20 mm, x_s = 0); nominally atmospheric, as in the
 paper's design. A leak or a temperature change shows up as a different `p_ref` (see `estimate_gas`).
 
-The spring force is F = F_air + F_mat (7) with F_air = (P - P_atm) A (9, 10) and
-F_mat = F_MTS(x_s) + E_F(Δh_s, P) (11, 12); the stiffness K = dF/dx_s (13) is the exact total
-derivative (P moves with x_s), not a finite difference.
+The spring force is F = F_air + F_mat + F_buckle (7) with F_air = (P - P_atm) A (9, 10),
+F_mat = F_MTS(x_s) + E_F(Δh_s, P) (11, 12) and F_buckle <= 0 the force the spring loses when it
+buckles under pressure and compression (`buckling_force`; paper B names buckling as where (7)-(12)
+fail, sections III-C and IV-D, but gives it no equation); the stiffness K = dF/dx_s (13) is the
+exact total derivative (P moves with x_s), not a finite difference.
 
 `evaluate` is the fast scalar path (floats, `math`); `evaluate_array` runs the same equations on
 NumPy arrays (a vectorised Newton on P).
@@ -74,6 +76,44 @@ class Sensors:
 
 
 @dataclass(frozen=True)
+class Buckling:
+    """The spring's buckling under pressure and compression (`buckling_force`), SI units.
+
+    stiffness_loss: k_b, N/m, stiffness lost once buckled; critical_pressure: p_cr, Pa gauge, the
+    pressure at which the free spring would buckle; critical_compression: x_cr, m, the compression
+    at which the unpressurised spring would buckle; onset_width: δ, the smoothness of the onset
+    (fraction of the critical load); bounds: ((name, (low, high)), ...) the physical range of each.
+    """
+    stiffness_loss: float
+    critical_pressure: float
+    critical_compression: float
+    onset_width: float
+    bounds: tuple = ()
+
+    NAMES = ('stiffness_loss', 'critical_pressure', 'critical_compression', 'onset_width')
+
+    def __post_init__(self):
+        bounds = dict(self.bounds)
+        for name in self.NAMES:
+            value = float(getattr(self, name))
+            object.__setattr__(self, name, value)
+            low, high = bounds.get(name, (-math.inf, math.inf))
+            if not (math.isfinite(value) and low <= value <= high):
+                raise ParameterError(f'actuator.buckling.{name}: {value:g} is outside its '
+                                     f'physical range [{low:g}, {high:g}]')
+        if min(self.critical_pressure, self.critical_compression, self.onset_width) <= 0.0:
+            raise ParameterError('actuator.buckling: critical_pressure, critical_compression and '
+                                 'onset_width must be > 0')
+
+    def bound(self, name):
+        """(low, high) of parameter `name`."""
+        return dict(self.bounds)[name]
+
+
+NO_BUCKLING = None  # `ActuatorParams.buckling` of an actuator whose spring does not buckle
+
+
+@dataclass(frozen=True)
 class ActuatorParams:
     """All parameters of `config/actuator.yaml` (section `actuator.`), SI units.
 
@@ -81,7 +121,8 @@ class ActuatorParams:
     x_c_ref: design-point chamber compression, m; v_tube: tube volume, m³ (17);
     f_mts: F_MTS(x) = Σ f_mts[i] x^(i+1), N (unpressurised spring curve); e_f: C1..C4 of (11);
     x_s_low, x_s_high: spring range of the paper's average-slope stiffness (0-12 mm);
-    drive, sensors: the hardware; effects: default parameters of the plant's physical effects.
+    drive, sensors: the hardware; effects: default parameters of the plant's physical effects;
+    buckling: `Buckling` of the spring (None, or stiffness_loss 0: the spring does not buckle).
     """
     chamber: Bellows
     spring: Bellows
@@ -95,6 +136,7 @@ class ActuatorParams:
     drive: Drive
     sensors: Sensors
     effects: tuple = ()
+    buckling: Buckling = NO_BUCKLING
 
     def __post_init__(self):
         if len(self.e_f) != 4:
@@ -122,7 +164,8 @@ def params_from_flat(flat, source='parameters'):
     values = param_files.section(flat, 'actuator')
     build = param_files.build
     parts = {}
-    for prefix in ('air_chamber', 'spring', 'gas', 'force', 'stiffness', 'drive', 'sensors', 'effects'):
+    for prefix in ('air_chamber', 'spring', 'gas', 'force', 'stiffness', 'drive', 'sensors',
+                   'effects', 'buckling'):
         parts[prefix] = param_files.section(values, prefix)
     known = {name.split('.')[0] for name in values}
     unknown = sorted(known - set(parts))
@@ -147,6 +190,7 @@ def params_from_flat(flat, source='parameters'):
             drive=build(Drive, parts['drive'], f'{source}: actuator.drive'),
             sensors=build(Sensors, parts['sensors'], f'{source}: actuator.sensors'),
             effects=tuple(sorted((k, tuple(sorted(v.items()))) for k, v in effects.items())),
+            buckling=_buckling(parts['buckling'], source),
         )
     except TypeError as exc:  # a list where a number belongs, or the reverse
         raise ParameterError(f'{source}: {exc}') from None
@@ -207,6 +251,20 @@ def _check_admissible(parts, source):
             fail(f'sensors.{name}', 'must be >= 0')
 
 
+def _buckling(values, source):
+    if not values:
+        return NO_BUCKLING
+    bounds = {}
+    for name, value in param_files.section(values, 'bounds').items():
+        if not (isinstance(value, (list, tuple)) and len(value) == 2):
+            raise ParameterError(f'{source}: actuator.buckling.bounds.{name}: '
+                                 'expected [low, high]')
+        bounds[name] = (float(value[0]), float(value[1]))
+    plain = {k: v for k, v in values.items() if not k.startswith('bounds.')}
+    plain['bounds'] = tuple(sorted(bounds.items()))
+    return param_files.build(Buckling, plain, f'{source}: actuator.buckling')
+
+
 def _need(mapping, name, source, group):
     if name not in mapping:
         raise ParameterError(f"{source}: missing parameter 'actuator.{group}.{name}'")
@@ -233,12 +291,30 @@ def params_to_flat(params):
     for effect, items in params.effects:
         for key, value in items:
             flat[f'actuator.effects.{effect}.{key}'] = value
+    if params.buckling is not NO_BUCKLING:
+        for name in Buckling.NAMES:
+            flat[f'actuator.buckling.{name}'] = getattr(params.buckling, name)
+        for name, (low, high) in params.buckling.bounds:
+            flat[f'actuator.buckling.bounds.{name}'] = [low, high]
     return flat
 
 
 def without_bulging(params):
     """The same actuator with the purely geometric volume (E_V = 0): the doctor's baseline."""
     return scaled_bulging(params, 0.0)
+
+
+def without_buckling(params):
+    """The same actuator with a spring that does not buckle: (7)-(12) only, as in the paper."""
+    return scaled_buckling(params, 0.0)
+
+
+def scaled_buckling(params, scale):
+    """The same actuator with the buckling's stiffness loss multiplied by `scale`."""
+    if params.buckling is NO_BUCKLING:
+        return params
+    return dataclasses.replace(params, buckling=dataclasses.replace(
+        params.buckling, stiffness_loss=scale * params.buckling.stiffness_loss, bounds=()))
 
 
 def scaled_bulging(params, scale):
@@ -370,6 +446,23 @@ def _forward(params, x_c, x_s, amount, exp):
         d_area_dp = -e_xp
         dv_dx = dv_dx + e_x
     dp_dx = -p * dv_dx / g_slope                        # implicit differentiation of (17)
+    force, stiffness = _spring_force(params, x_s, p, dp_dx, exp, (area, d_area_dx, d_area_dp))
+    return p, force, stiffness
+
+
+def _spring_force(params, x_s, p, dp_dx, exp, area=None):
+    """Spring force F (7) at (x_s, P) and its total derivative along x_s when P moves at dP/dx_s.
+
+    `area`: (A, ∂A/∂x_s, ∂A/∂P) of (10) if the caller already has them.
+    """
+    s = params.spring
+    if area is None:
+        radius, d_radius, f = frustum_state(s, x_s)
+        area = (s._k * f, s._k * (2.0 * radius + s.r_small) * d_radius / s.n, 0.0)
+        if s.bulging:
+            _, e_x, _, e_xx, e_xp = e_v(s, x_s, p)
+            area = (area[0] - e_x, area[1] - e_xx, -e_xp)
+    area, d_area_dx, d_area_dp = area
     gauge = p - P_ATM
     force = gauge * area                                # (9)
     stiffness = dp_dx * area + gauge * (d_area_dx + d_area_dp * dp_dx)
@@ -383,7 +476,40 @@ def _forward(params, x_c, x_s, amount, exp):
     e_f = c1 * exp(c2 * p + c3 * x_s / s.n + c4)        # (11)
     force = force + f_mts + e_f                         # (7), (12)
     stiffness = stiffness + k_mts + e_f * (c2 * dp_dx + c3 / s.n)
-    return p, force, stiffness
+    if params.buckling is not NO_BUCKLING and params.buckling.stiffness_loss:
+        f_b, f_b_x, f_b_p = buckling_force(params.buckling, x_s, p, exp)
+        force = force + f_b
+        stiffness = stiffness + f_b_x + f_b_p * dp_dx
+    return force, stiffness
+
+
+def buckling_force(b, x_s, p, exp=math.exp):
+    """Force the buckled spring loses, F_b <= 0 (N), and ∂F_b/∂x_s (N/m), ∂F_b/∂P (N/Pa).
+
+    [choice: paper B sees buckling "under high pressure and compression" but gives no model.]
+    A pressurised bellows column buckles when its load index λ = x_s/x_cr + (P - P_atm)/p_cr
+    reaches 1: compression and internal pressure both load the walls, so the onset compression
+    x_cr (1 - (P - P_atm)/p_cr) falls as the pressure rises. Past the onset the spring loses the
+    stiffness k_b; the onset is smoothed over a fraction δ of the critical load:
+
+        F_b = -k_b x_cr δ softplus((λ - 1)/δ),   softplus(z) = ln(1 + e^z).
+
+    Below the onset F_b vanishes (relative size e^(-1/δ)); far above it
+    F_b = -k_b (x_s - x_onset(P)).
+    Floats or arrays (`exp` is `math.exp` or `np.exp`).
+    """
+    k_b, p_cr = b.stiffness_loss, b.critical_pressure
+    x_cr, width = b.critical_compression, b.onset_width
+    z = ((x_s / x_cr + (p - P_ATM) / p_cr) - 1.0) / width
+    if exp is math.exp:
+        tail = math.exp(-abs(z))
+        soft = max(z, 0.0) + math.log1p(tail)
+        onset = (1.0 if z >= 0.0 else tail) / (1.0 + tail)
+    else:
+        tail = np.exp(-np.abs(z))
+        soft = np.maximum(z, 0.0) + np.log1p(tail)
+        onset = np.where(z >= 0.0, 1.0, tail) / (1.0 + tail)
+    return -k_b * x_cr * width * soft, -k_b * onset, -k_b * x_cr / p_cr * onset
 
 
 def stiffness(params, x_c, gas=None):
@@ -395,6 +521,43 @@ def stiffness(params, x_c, gas=None):
     return (f_high - f_low) / (high - low)
 
 
+def stiffness_from_rest(params, x_c, gas=None):
+    """Average slope of F from the spring's rest point (F = 0) to x_s_high, N/m (section IV-D).
+
+    Paper B's extended range, "extending the curves out to the spring bellows' rest length": the
+    window starts where the force curve at this chamber compression crosses zero (the spring
+    contracted below atmospheric, extended above) instead of at x_s = 0.
+    """
+    amount = _gas(params, gas)
+    rest = rest_compression(params, x_c, gas)
+    f_high = _forward(params, float(x_c), params.x_s_high, amount, math.exp)[1]
+    return f_high / (params.x_s_high - rest)
+
+
+def rest_compression(params, x_c, gas=None, step=5e-4):
+    """Spring compression (m) at which the spring force vanishes, chamber at x_c (sealed gas).
+
+    The zero nearest to x_s = 0 along the force curve, searched in `step`s towards the spring's
+    end stop (extended) or x_s_high (contracted): the polynomial F_MTS is only valid near its data.
+    """
+    from scipy.optimize import brentq
+    amount = _gas(params, gas)
+
+    def force(x):
+        return _forward(params, float(x_c), x, amount, math.exp)[1]
+    x, f = 0.0, force(0.0)
+    direction = -1.0 if f > 0.0 else 1.0
+    end = params.spring.x_min if f > 0.0 else params.x_s_high
+    while (x - end) * direction < 0.0:
+        x_next = max(x - step, end) if direction < 0 else min(x + step, end)
+        f_next = force(x_next)
+        if f_next * f <= 0.0:
+            return brentq(force, min(x, x_next), max(x, x_next), xtol=1e-12)
+        x, f = x_next, f_next
+    raise ParameterError(f'actuator: the spring force has no zero between 0 and {end} m at '
+                         f'x_c = {x_c} m')
+
+
 def rest_length_change(params, p, x_low=-0.03, x_high=0.03):
     """Elongation (m, positive = longer) of the spring's rest length at pressure P (Fig. 10).
 
@@ -402,16 +565,10 @@ def rest_length_change(params, p, x_low=-0.03, x_high=0.03):
     is -x_s there. Below atmospheric it contracts, above it extends.
     """
     from scipy.optimize import brentq
-    s = params.spring
-    c1, c2, c3, c4 = params.e_f
 
     def force(x):
-        radius, _, f = frustum_state(s, x)
-        area = s._k * f - (e_v(s, x, p)[1] if s.bulging else 0.0)
-        f_mts = sum(a * x ** (i + 1) for i, a in enumerate(params.f_mts))
-        return (p - P_ATM) * area + f_mts + c1 * math.exp(c2 * p + c3 * x / s.n + c4)
+        return _spring_force(params, x, p, 0.0, math.exp)[0]
     try:
         return -brentq(force, x_low, x_high, xtol=1e-9)
     except ValueError:
         raise ParameterError(f'actuator: no rest length within [{x_low}, {x_high}] m at {p:.0f} Pa') from None
-

@@ -67,27 +67,30 @@ def _monotone_programme(rng, n, dt, x0, high, max_speed):
     return ref
 
 
-def spring_programme(rng, n, dt):
-    """Spring compression (m), n samples: triangle cycles, holds and fast compressions."""
+def spring_programme(rng, n, dt, amplitude=(0.008, 0.020)):
+    """Spring compression (m), n samples: triangle cycles, holds and fast compressions.
+
+    `amplitude`: (low, high) m, the range the cycles' peak compressions are drawn from.
+    """
     x_s = np.zeros(n)
     i = 0
     while i < n:
         kind = rng.choice(('cycle', 'cycle', 'hold', 'fast'))
         if kind == 'cycle':
-            amplitude = rng.uniform(0.008, 0.020)
+            peak = rng.uniform(*amplitude)
             period = rng.uniform(1.0, 6.0)
             cycles = int(rng.integers(1, 4))
             t = np.arange(int(cycles * period / dt)) * dt
             phase = (t / period) % 1.0
-            segment = amplitude * (1.0 - np.abs(2.0 * phase - 1.0))
+            segment = peak * (1.0 - np.abs(2.0 * phase - 1.0))
         elif kind == 'hold':
             segment = np.zeros(int(rng.uniform(0.5, 2.5) / dt))
         else:
-            amplitude = rng.uniform(0.008, 0.015)
+            peak = rng.uniform(amplitude[0], min(0.015, amplitude[1]))
             rise = int(0.05 / dt)
             hold = int(rng.uniform(2.0, 4.0) / dt)
-            segment = np.concatenate([np.linspace(0.0, amplitude, rise), np.full(hold, amplitude),
-                                      np.linspace(amplitude, 0.0, rise), np.zeros(hold // 2)])
+            segment = np.concatenate([np.linspace(0.0, peak, rise), np.full(hold, peak),
+                                      np.linspace(peak, 0.0, rise), np.zeros(hold // 2)])
         take = min(len(segment), n - i)
         x_s[i:i + take] = segment[:take]
         i += take
@@ -95,13 +98,15 @@ def spring_programme(rng, n, dt):
 
 
 def actuator_record(params, effects=None, noise=None, seed=None, duration=60.0, dt=1e-3,
-                    x_c_range=(-0.020, 0.040), gas=None, x_c0=None, monotone=False):
+                    x_c_range=(-0.020, 0.040), gas=None, x_c0=None, monotone=False,
+                    spring_range=(0.008, 0.020)):
     """Simulated measurement: dict of arrays `t, x_c, x_s, p, f` (docs/interfaces.md).
 
     params: ActuatorParams; effects/noise: as `ActuatorPlant`; seed: for the programme and noise;
     duration s; dt s; x_c_range: the span of chamber targets, m; gas: the sealed gas amount as p_ref,
     Pa (default the YAML's); x_c0: initial chamber compression, m (default the design point);
-    monotone: the chamber only compresses (ramps and holds, `chamber_programme`).
+    monotone: the chamber only compresses (ramps and holds, `chamber_programme`);
+    spring_range: (low, high) m of the spring's peak compressions (`spring_programme`).
     60 s at 1 kHz takes a second or two.
     """
     if not (duration > 0.0 and dt > 0.0):
@@ -114,7 +119,7 @@ def actuator_record(params, effects=None, noise=None, seed=None, duration=60.0, 
     low = max(x_c_range[0], plant.x_c_min)
     high = min(x_c_range[1], plant.x_c_max)
     ref = chamber_programme(rng, n, dt, x_c0, low, high, plant.max_speed, monotone)
-    x_s = spring_programme(rng, n, dt)
+    x_s = spring_programme(rng, n, dt, spring_range)
     out = {name: np.empty(n) for name in ('t', 'x_c', 'x_s', 'p', 'f')}
     t_col, xc_col, xs_col, p_col, f_col = (out[k] for k in ('t', 'x_c', 'x_s', 'p', 'f'))
     step, to_x = plant.step, plant.x_from_counts
@@ -129,7 +134,8 @@ def actuator_record(params, effects=None, noise=None, seed=None, duration=60.0, 
     return out
 
 
-def volume_test_series(params, gases=(0.92, 0.96, 1.0, 1.04, 1.08), effects=('wall_bulging',),
+def volume_test_series(params, gases=(0.92, 0.96, 1.0, 1.04, 1.08),
+                       effects=('wall_bulging', 'buckling'),
                        noise=None, seed=0, duration=12.0, dt=1e-3):
     """Paper B's volume test (Fig. 4, 8): sealed runs at several gas amounts, concatenated.
 

@@ -18,21 +18,25 @@ What the simulated hardware and the tests run. Underneath is paper B's model (`a
   `wall_bulging` (scale): the volume error E_V (5, 6) of the YAML times `scale`; without it the
       plant's volumes are purely geometric (4), the doctor's baseline;
   `sensor_lag` (time_constant s): first-order lag of the pressure sensor;
-  `backlash` (width m): dead band between the lead-screw nut (what the encoder sees) and the plate.
+  `backlash` (width m): dead band between the lead-screw nut (what the encoder sees) and the plate;
+  `buckling` (scale): the spring buckles under pressure and compression, `actuator.buckling_force`
+      with the YAML's `actuator.buckling` parameters and the stiffness loss times `scale`; without
+      it the force is paper B's (7)-(12) alone, the doctor's force baseline.
 
-With no effect the plant is exactly `actuator.evaluate(without_bulging(params), ...)` plus sensor
-noise; `model_params(params, effects)` returns the parameters the model needs for the same physics.
+With no effect the plant is exactly `actuator.evaluate(without_buckling(without_bulging(params)), ...)`
+plus sensor noise; `model_params(params, effects)` returns the parameters the model needs for the same physics.
 """
 import math
 import random
 from typing import NamedTuple
 
 from bellows_ros.errors import ParameterError
-from bellows_ros.models.actuator import (_forward, gas_amount, p_ref_of_amount, scaled_bulging,
-                                         without_bulging)
+from bellows_ros.models.actuator import (_forward, gas_amount, p_ref_of_amount, scaled_buckling,
+                                         scaled_bulging, without_buckling, without_bulging)
 from bellows_ros.models.actuator_geometry import P_ATM, frustum_state, volume
 
-ACTUATOR_EFFECTS = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash')
+ACTUATOR_EFFECTS = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash',
+                    'buckling')
 NOISE_KEYS = ('pressure_noise', 'pressure_quantum', 'force_noise', 'force_quantum')
 
 
@@ -87,11 +91,19 @@ def effect_parameters(params, effects):
 
 
 def model_params(params, effects=None):
-    """Parameters for which `actuator.evaluate` has the plant's static physics (E_V on or off)."""
+    """Parameters for which `actuator.evaluate` has the plant's static physics (E_V and buckling
+    on or off)."""
     chosen = effect_parameters(params, effects)
     if 'wall_bulging' in chosen:
-        return scaled_bulging(params, chosen['wall_bulging']['scale'])
-    return without_bulging(params)
+        params = scaled_bulging(params, chosen['wall_bulging']['scale'])
+    else:
+        params = without_bulging(params)
+    if 'buckling' in chosen:
+        if params.buckling is None:
+            raise ParameterError("effect 'buckling': the parameters have no actuator.buckling "
+                                 'section')
+        return scaled_buckling(params, chosen['buckling']['scale'])
+    return without_buckling(params)
 
 
 class ActuatorPlant:

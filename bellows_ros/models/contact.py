@@ -15,11 +15,14 @@ import math
 from bellows_ros.models.ogden import free_strain
 
 HALF_PI = 0.5 * math.pi
+# dα_1/dΨ of (13): α_j = -½ σ_j ψ_4 with ψ_4 = Ψ/4 ([choice]: equal joints, sign from Fig. 10).
+# A constant so that the 1 kHz `SegmentModel.step` can use it without a call.
+ALPHA_PER_PSI = -0.125
 
 
 def contact_angle(psi, sign):
     """α_j = -½ σ_j ψ_4 with ψ_4 = Ψ/4 (13; [choice]: equal joints, sign from Fig. 10), rad."""
-    return -0.125 * sign * psi
+    return ALPHA_PER_PSI * sign * psi
 
 
 class StrainMemory:
@@ -54,6 +57,16 @@ class StrainMemory:
         self.s_a = 0.0
         self._steps = 0
 
+    def _touchdown(self, p_rel, alpha):
+        """Steps 1-4 of Algorithm 1 from the stored state: (λ1, a, n), nothing changed."""
+        s_a = self.sample_length * self.total
+        s_a = 0.0 if s_a < 0.0 else (self.sa_max if s_a > self.sa_max else s_a)
+        radius = self.l0 + (self.s0 + s_a) * math.tan(alpha)
+        lam1 = free_strain(p_rel * radius, self.mu1, self.mu2, self.gamma1, self.gamma2, self.lam1)
+        a = 1.0 - radius * (HALF_PI + alpha) / (lam1 * self.length0)
+        a = 0.0 if a < 0.0 else (a if a < 1.0 else 1.0 - 1e-12)
+        return lam1, a, math.ceil(a * self.n_lambda)
+
     def step(self, p_rel, alpha):
         """One iteration of Algorithm 1 at relative pressure `p_rel` (Pa) and contact angle `alpha`
         (rad); returns the contact length s̃_a (m) after the update.
@@ -63,13 +76,7 @@ class StrainMemory:
         5. release samples beyond n, give λ1 to empty samples ≤ n and to sample n (continuity, 26);
         then s̃_a again from the updated profile (28). One iteration per time step (Appendix A/B).
         """
-        s_a = self.sample_length * self.total
-        s_a = 0.0 if s_a < 0.0 else (self.sa_max if s_a > self.sa_max else s_a)
-        radius = self.l0 + (self.s0 + s_a) * math.tan(alpha)
-        lam1 = free_strain(p_rel * radius, self.mu1, self.mu2, self.gamma1, self.gamma2, self.lam1)
-        a = 1.0 - radius * (HALF_PI + alpha) / (lam1 * self.length0)
-        a = 0.0 if a < 0.0 else (a if a < 1.0 else 1.0 - 1e-12)
-        n = math.ceil(a * self.n_lambda)
+        lam1, a, n = self._touchdown(p_rel, alpha)
         profile, old = self.profile, self.n
         if n < old:
             if n == 0:
@@ -95,3 +102,19 @@ class StrainMemory:
         self.s_a = s_a
         return s_a
 
+    def peek(self, p_rel, alpha):
+        """The s̃_a (m) that `step(p_rel, alpha)` would return, leaving the state untouched.
+
+        For evaluating candidate pressures (the pressure allocation): the same update as `step`,
+        summed instead of stored, O(samples released) like `step`.
+        """
+        lam1, _, n = self._touchdown(p_rel, alpha)
+        profile, old = self.profile, self.n
+        if n < old:
+            total = 0.0 if n == 0 else self.total - math.fsum(profile[n:old])
+        else:
+            total = self.total + (n - old) * lam1
+        if 0 < n <= old:  # the transition point carries the free strain (26)
+            total += lam1 - profile[n - 1]
+        s_a = self.sample_length * total
+        return 0.0 if s_a < 0.0 else (self.sa_max if s_a > self.sa_max else s_a)

@@ -11,21 +11,37 @@ Here p_j is the scaled pressure p_scl,j = (p_j - p0)/(p_max - p0), Ψ_j = σ_j �
 (mirrored chains, [choice]). τ_prev is, like τ_drive, a driving torque: on a quasi-static
 bench both predict -τ_ext.
 
-Two implementations of the same formulas exist on purpose: NumPy regressors (identification, batch)
-and the scalar `SegmentModel.step` (1 kHz loop, where NumPy's per-call overhead is larger than the
-whole step). `test_segment_model.py` checks that they agree.
+The NumPy regressors are the reference (one home per equation: identification, the doctor and the
+tests use them). `SegmentModel.step` is the 1 kHz fast path, hand-expanded because NumPy's per-call
+overhead is larger than the whole step; `test/test_segment_model.py` holds it equal to the
+regressors over random states to 1e-12 relative.
 """
 import math
 from dataclasses import dataclass, fields
+from typing import NamedTuple
 
 import numpy as np
 
 from bellows_ros import params as parameters
 from bellows_ros.errors import ParameterError
-from bellows_ros.models.contact import StrainMemory, contact_angle
+from bellows_ros.models.contact import ALPHA_PER_PSI, StrainMemory, contact_angle
 
 SIGNS = (1.0, -1.0)  # σ_j of chains 1 and 2 ([choice], docs/equations.md)
-OUTPUTS = ('sa1', 'sa2', 'tau_a', 'tau_s', 'tau_f', 'tau_drive', 'tau_prev')
+
+
+class SegmentOutput(NamedTuple):
+    """What `SegmentModel.step` returns: contact lengths s̃_a (m), torques (N·m) of one sample."""
+
+    sa1: float
+    sa2: float
+    tau_a: float
+    tau_s: float
+    tau_f: float
+    tau_drive: float
+    tau_prev: float
+
+
+OUTPUTS = SegmentOutput._fields
 
 
 @dataclass(frozen=True)
@@ -148,9 +164,14 @@ def strain_memory(p):
 
 # --- regressors (NumPy, one row per sample) -------------------------------------------------------
 
+def relative_pressure(p, pressure):
+    """p_rel = p - p0, Pa (17): the pressure the membrane of Algorithm 1 carries."""
+    return np.asarray(pressure, float) - p.p0
+
+
 def scaled_pressure(p, pressure):
     """p_scl = (p - p0)/(p_max - p0), 1 ([choice] p_max)."""
-    return (np.asarray(pressure, float) - p.p0) / (p.p_max - p.p0)
+    return relative_pressure(p, pressure) / (p.p_max - p.p0)
 
 
 def actuator_regressor(psi, ps1, ps2, sa1, sa2):
@@ -199,20 +220,29 @@ def contact_lengths(p, psi, pressure1, pressure2):
     for sign, pressure in zip(SIGNS, (pressure1, pressure2)):
         memory = strain_memory(p)
         step = memory.step
-        p_rel = (np.asarray(pressure, float) - p.p0).tolist()
+        p_rel = relative_pressure(p, pressure).tolist()
         alpha = [contact_angle(x, sign) for x in np.asarray(psi, float).tolist()]
         out.append(np.array([step(pr, al) for pr, al in zip(p_rel, alpha)]))
     return out[0], out[1]
 
 
+def motion_torque(inertia, damping, gravity, psi, psi_dot, psi_ddot):
+    """τ_motion = M Ψ̈ + C Ψ̇ + N(Ψ), N(Ψ) = gravity·sin Ψ: the left-hand side of (2), N·m.
+
+    M (kg·m²), C (N·m·s/rad) and the gravity amplitude (N·m) are constants [ours]: the model's
+    `segment.dynamics.*` or the plant's `segment.plant.*`. Works on scalars and arrays.
+    """
+    # math.sin for a plain float: the model node and the plant call this per sample, where
+    # NumPy's scalar overhead is most of the cost.
+    sin = math.sin if isinstance(psi, float) else np.sin
+    return inertia * psi_ddot + damping * psi_dot + gravity * sin(psi)
+
+
 def external_torque(p, psi, psi_dot, psi_ddot, tau_drive):
     """τ_ext = M Ψ̈ + C Ψ̇ + N(Ψ) - τ_drive from (2), N·m; M, C, N of `segment.dynamics`
     (quasi-static by default: M = C = N = 0, so τ_ext = -τ_drive). Works on scalars and arrays."""
-    # math.sin for a plain float: the model node calls this per segment per sample, where
-    # NumPy's scalar overhead is most of the cost.
-    sin = math.sin if isinstance(psi, float) else np.sin
-    return (p.dynamics_inertia * psi_ddot + p.dynamics_damping * psi_dot
-            + p.dynamics_gravity * sin(psi) - tau_drive)
+    return (motion_torque(p.dynamics_inertia, p.dynamics_damping, p.dynamics_gravity,
+                          psi, psi_dot, psi_ddot) - tau_drive)
 
 
 # --- the 1 kHz evaluator ---------------------------------------------------------------------------
@@ -220,7 +250,7 @@ def external_torque(p, psi, psi_dot, psi_ddot, tau_drive):
 class SegmentModel:
     """Stateful driving-torque model of one segment: one `step` per sample, both chains.
 
-    `step(psi, psi_dot, p1, p2)` (rad, rad/s, Pa abs, Pa abs) returns the floats
+    `step(psi, psi_dot, p1, p2)` (rad, rad/s, Pa abs, Pa abs) returns a `SegmentOutput`
     (sa1, sa2, tau_a, tau_s, tau_f, tau_drive, tau_prev) in m and N·m. It validates nothing: the
     caller (the model node, `simulate`) checks finiteness and ranges first — a per-call check would
     cost a noticeable part of the 20 µs budget. Everything that depends only on the parameters is
@@ -230,8 +260,9 @@ class SegmentModel:
     def __init__(self, params):
         p = self.params = params
         self.memory1, self.memory2 = strain_memory(p), strain_memory(p)
-        self._p0 = p.p0
-        self._inv_span = 1.0 / (p.p_max - p.p0)
+        # Bound once: attribute look-ups are a measurable part of the step.
+        self._contact = (self.memory1.step, self.memory2.step)
+        self._pressure = (p.p0, 1.0 / (p.p_max - p.p0))
         self._theta_a = tuple(float(v) for v in p.actuator_theta)
         self._theta_prev = tuple(float(v) for v in p.previous_theta)
         self._spring = (p.restoring_k_s, p.restoring_k_sp, p.restoring_c_psi0, p.restoring_c_psi0_p)
@@ -242,12 +273,36 @@ class SegmentModel:
         self.memory2.reset()
 
     def step(self, psi, psi_dot, p1, p2):
-        p0, tanh = self._p0, math.tanh
-        # contact state of both chains, α_j = -σ_j Ψ/8 (13)
-        s1 = self.memory1.step(p1 - p0, -0.125 * psi)
-        s2 = self.memory2.step(p2 - p0, 0.125 * psi)
-        q1 = (p1 - p0) * self._inv_span
-        q2 = (p2 - p0) * self._inv_span
+        """One sample of both chains: the strain memories advance (Algorithm 1), then `torques`.
+
+        Contact state of chain j from p_rel (17) and α_j = ALPHA_PER_PSI σ_j Ψ (13).
+        `test_fast_step_equals_the_reference_functions` in test/test_segment_model.py holds the
+        result equal to `relative_pressure`, `scaled_pressure`, `contact_angle` and the regressors.
+        """
+        p0 = self._pressure[0]
+        alpha = ALPHA_PER_PSI * psi
+        step1, step2 = self._contact
+        s1 = step1(p1 - p0, alpha)
+        s2 = step2(p2 - p0, -alpha)
+        return _output(_SegmentOutput, (s1, s2) + self.torques(psi, psi_dot, p1, p2, s1, s2))
+
+    def peek(self, psi, psi_dot, p1, p2):
+        """What `step` would return, the strain memories left untouched (candidate pressures)."""
+        p0 = self._pressure[0]
+        alpha = ALPHA_PER_PSI * psi
+        s1 = self.memory1.peek(p1 - p0, alpha)
+        s2 = self.memory2.peek(p2 - p0, -alpha)
+        return _output(_SegmentOutput, (s1, s2) + self.torques(psi, psi_dot, p1, p2, s1, s2))
+
+    def torques(self, psi, psi_dot, p1, p2, s1, s2):
+        """(τ_a, τ_s, τ_f, τ_drive, τ_prev), N·m, at given contact lengths s1, s2 (m); no state.
+
+        The fast form of (3)-(5), (17), (29), (34), hand-expanded for speed (see `step`).
+        """
+        tanh = math.tanh
+        p0, inv_span = self._pressure
+        q1 = (p1 - p0) * inv_span
+        q2 = (p2 - p0) * inv_span
         # actuator torque (29): chain 2 sees Ψ_2 = -Ψ and acts with σ_2 = -1
         t0, t1, t2, t3, t4, t5, t6, t7 = self._theta_a
         psi_sq = psi * psi
@@ -267,7 +322,12 @@ class SegmentModel:
         u0, u1, u2, u3 = self._theta_prev
         tau_prev = (tau_f + tau_s + q1 * (u0 + q1 * (u1 + u3 * q1) + u2 * psi)
                     - q2 * (u0 + q2 * (u1 + u3 * q2) - u2 * psi))
-        return s1, s2, tau_a, tau_s, tau_f, tau_a + tau_s + tau_f, tau_prev
+        return tau_a, tau_s, tau_f, tau_a + tau_s + tau_f, tau_prev
+
+
+# tuple.__new__ on the tuple of values: a NamedTuple without the keyword-argument call of its
+# generated __new__ (several times dearer; the fast step pays for one call only).
+_output, _SegmentOutput = tuple.__new__, SegmentOutput
 
 
 def simulate_model(params, psi, p1, p2, psi_dot):
@@ -282,12 +342,3 @@ def simulate_model(params, psi, p1, p2, psi_dot):
         np.asarray(p1, float).tolist(), np.asarray(p2, float).tolist())]
     table = np.array(rows, float).reshape(-1, len(OUTPUTS))
     return {name: table[:, k] for k, name in enumerate(OUTPUTS)}
-
-
-def velocity(t, psi):
-    """Ψ̇ from samples when the record has no `psi_dot` column: central differences, rad/s."""
-    t = np.asarray(t, float)
-    psi = np.asarray(psi, float)
-    if len(t) < 2:
-        return np.zeros_like(psi)
-    return np.gradient(psi, t)

@@ -24,7 +24,8 @@ from collections import namedtuple
 import numpy as np
 
 from bellows_ros.errors import ParameterError
-from bellows_ros.models.segment import SegmentModel
+from bellows_ros.models.derivatives import rate
+from bellows_ros.models.segment import SegmentModel, SegmentOutput, motion_torque
 
 SEGMENT_EFFECTS = ('contact_hysteresis', 'pressure_friction', 'natural_curvature', 'sensor_lag')
 FULL_MODEL = ('contact_hysteresis', 'pressure_friction', 'natural_curvature')
@@ -90,7 +91,8 @@ class SegmentPlant:
     """The simulated segment. `step(...)` advances it by `dt` and returns the measured SegmentSample.
 
     True state: `t`, `psi`, `psi_dot`, `psi_ddot`, `p1`, `p2` (chamber pressures), `tau_ext`,
-    `tau_drive`, `tau_motion` (= M Ψ̈ + C Ψ̇ + N, true) and `outputs` (the model tuple of the last step).
+    `tau_drive`, `tau_motion` (= M Ψ̈ + C Ψ̇ + N, true) and `outputs` (the model's
+    `SegmentOutput` of the last step).
     """
 
     def __init__(self, params, effects=None, noise=None, seed=None, psi0=0.0):
@@ -119,7 +121,7 @@ class SegmentPlant:
         self.t, self.psi, self.psi_dot, self.psi_ddot = 0.0, float(psi0), 0.0, 0.0
         self.p1 = self.p2 = self.sensed1 = self.sensed2 = p0
         self.tau_ext = self.tau_drive = self.tau_motion = 0.0
-        self.outputs = (0.0,) * 7
+        self.outputs = SegmentOutput(*(0.0,) * len(SegmentOutput._fields))
         self.model.reset()
         self._noise, self._next = np.zeros((0, 5)), 0
 
@@ -134,7 +136,7 @@ class SegmentPlant:
     def _drive(self):
         self.outputs = self.model.step(self.psi, self.psi_dot, self.p1, self.p2)
         # with contact_hysteresis: τ_drive of paper A; without: the previous model's torque (34)
-        return self.outputs[5] if self.hysteresis else self.outputs[6]
+        return self.outputs.tau_drive if self.hysteresis else self.outputs.tau_prev
 
     def _end_stop(self):
         """Torque of the end stops beyond |Ψ| = psi_limit: stiff spring, damping ratio 0.8, N·m.
@@ -167,23 +169,26 @@ class SegmentPlant:
         blend = 1.0 - math.exp(-dt / p.plant_valve_tau)
         self.p1 += blend * (p_cmd1 - self.p1)
         self.p2 += blend * (p_cmd2 - self.p2)
+        dynamics = (p.plant_inertia, p.plant_damping, p.plant_gravity)
         if psi_imposed is not None:
-            velocity = (psi_imposed - self.psi) / dt
-            self.psi_ddot = (velocity - self.psi_dot) / dt
+            # The imposed path is piecewise linear in Ψ: its rates are the backward differences.
+            velocity = rate(psi_imposed, self.psi, dt, self.psi_dot)
+            self.psi_ddot = rate(velocity, self.psi_dot, dt, self.psi_ddot)
             self.psi, self.psi_dot = float(psi_imposed), velocity
             self.tau_drive = self._drive()
-            self.tau_motion = (p.plant_inertia * self.psi_ddot + p.plant_damping * self.psi_dot
-                               + p.plant_gravity * math.sin(self.psi))
+            self.tau_motion = motion_torque(*dynamics, self.psi, self.psi_dot, self.psi_ddot)
             self.tau_ext = self.tau_motion - self.tau_drive
         else:
             self.tau_drive = self._drive()
             self.tau_ext = 0.0 if tau_load is None else float(tau_load)
-            gravity = p.plant_gravity * math.sin(self.psi)
+            # (2) solved for Ψ̈: M Ψ̈ = τ_ext + τ_drive + τ_stop - (C Ψ̇ + N(Ψ))
+            psi = self.psi
             self.psi_ddot = (self.tau_ext + self.tau_drive + self._end_stop()
-                             - p.plant_damping * self.psi_dot - gravity) / p.plant_inertia
+                             - motion_torque(*dynamics, psi, self.psi_dot, 0.0)) / p.plant_inertia
             self.psi_dot += dt * self.psi_ddot
             self.psi += dt * self.psi_dot
-            self.tau_motion = p.plant_inertia * self.psi_ddot + p.plant_damping * self.psi_dot + gravity
+            # Semi-implicit Euler: damping acts with the updated rate, gravity at the old angle.
+            self.tau_motion = motion_torque(*dynamics, psi, self.psi_dot, self.psi_ddot)
         if self.lag > 0.0:
             follow = 1.0 - math.exp(-dt / self.lag)
             self.sensed1 += follow * (self.p1 - self.sensed1)

@@ -31,6 +31,7 @@ import time
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware import actuator_board, arm_bus
 from bellows_ros.hardware.loop_timing import LoopStats
+from bellows_ros.models.derivatives import rate
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime, run
 from bellows_ros.runtime.topics import ACTUATOR_FRAME, SAMPLE_DEPTH
@@ -204,10 +205,11 @@ class DriverNode(Node):
         start = time.monotonic()
         stamp = self.get_clock().now().to_msg()
         previous = self._last_arm
-        if previous is not None and sample.t_device > previous.t_device:
-            # Backward difference of the measured angle; the encoder-less arm has no Ψ̇ sensor.
+        if previous is not None:
+            # The encoder-less arm has no Ψ̇ sensor: the project's rate estimator (derivatives).
             dt = sample.t_device - previous.t_device
-            self._psi_dot = [(a - b) / dt for a, b in zip(sample.psi, previous.psi)]
+            self._psi_dot = [rate(a, b, dt, held)
+                             for a, b, held in zip(sample.psi, previous.psi, self._psi_dot)]
         self._last_arm = sample
         state = self._header(self.msg.JointState(name=list(self.arm_names),
                                                position=[float(v) for v in sample.psi],

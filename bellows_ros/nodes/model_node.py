@@ -20,13 +20,14 @@ A sample with a non-finite value or a pressure outside [0, 2 p_max] is rejected 
 """
 import math
 import time
-from collections import OrderedDict
 
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.loop_timing import LoopStats
+from bellows_ros.models.derivatives import rate
 from bellows_ros.models.segment import SegmentModel, external_torque, load_segment_params
 from bellows_ros.nodes import diagnostics
-from bellows_ros.runtime import Node, realtime, run, stamp_ns
+from bellows_ros.nodes.sample_pairing import CHAMBERS, JOINTS, SamplePairs
+from bellows_ros.runtime import Node, realtime, run
 from bellows_ros.runtime.topics import SAMPLE_DEPTH
 
 
@@ -36,7 +37,7 @@ class ModelNode(Node):
         super().__init__('model_node', runtime)
         segments = self.declare_parameter('segments', [1, 2, 3, 4]).value
         params_file = self.declare_parameter('params_file', '').value or None
-        self.max_pending = self.declare_parameter('max_pending', 100).value
+        max_pending = self.declare_parameter('max_pending', 100).value
         latency_budget = self.declare_parameter('latency_budget', 0.002).value
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
@@ -48,8 +49,9 @@ class ModelNode(Node):
         self.chains = [(f'{n}/chain_1', f'{n}/chain_2') for n in self.names]
         self.models = [SegmentModel(self.params) for _ in segments]
         self.previous_psi_dot = [None] * len(segments)
-        self.pending = OrderedDict()  # stamp (ns) -> [joint_state or None, chambers or None]
-        self.counts = dict.fromkeys(['evaluated', 'rejected', 'unmatched_dropped', 'late'], 0)
+        self.psi_ddot = [0.0] * len(segments)
+        self.pairs = SamplePairs(max_pending)
+        self.counts = dict.fromkeys(['evaluated', 'rejected', 'late'], 0)
         self.stats = LoopStats()
         self.report = diagnostics.LoopReport(self.stats)
         self.latency = []
@@ -73,24 +75,16 @@ class ModelNode(Node):
     # --- pairing the two halves of a sample ------------------------------------------------------
     def on_joint_states(self, msg):
         if self.names[0] in msg.name:
-            self._half(msg, 0)
+            self._half(msg, JOINTS)
 
     def on_chambers(self, msg):
         if self.chains[0][0] in msg.name:
-            self._half(msg, 1)
+            self._half(msg, CHAMBERS)
 
     def _half(self, msg, slot):
-        stamp = stamp_ns(msg.header.stamp)
-        entry = self.pending.get(stamp)
-        if entry is None:
-            entry = self.pending[stamp] = [None, None]
-            while len(self.pending) > self.max_pending:
-                self.pending.popitem(last=False)
-                self.counts['unmatched_dropped'] += 1
-        entry[slot] = msg
-        if entry[0] is not None and entry[1] is not None:
-            del self.pending[stamp]
-            self.evaluate(stamp, *entry)
+        sample = self.pairs.add(msg, slot)
+        if sample is not None:
+            self.evaluate(*sample)
 
     # --- the model ---------------------------------------------------------------------------------
     def evaluate(self, stamp, joints, chambers):
@@ -112,9 +106,9 @@ class ModelNode(Node):
         self._last_stamp = stamp
         drive, external = [], []
         for i, (model, (psi, psi_dot, p1, p2)) in enumerate(zip(self.models, inputs)):
-            tau_drive = model.step(psi, psi_dot, p1, p2)[5]
-            previous = self.previous_psi_dot[i]
-            psi_ddot = (psi_dot - previous) / dt if previous is not None and dt else 0.0
+            tau_drive = model.step(psi, psi_dot, p1, p2).tau_drive
+            psi_ddot = self.psi_ddot[i] = rate(psi_dot, self.previous_psi_dot[i], dt or 0.0,
+                                               self.psi_ddot[i])
             self.previous_psi_dot[i] = psi_dot
             drive.append(tau_drive)
             external.append(float(external_torque(self.params, psi, psi_dot, psi_ddot, tau_drive)))
@@ -136,7 +130,8 @@ class ModelNode(Node):
     def publish_diagnostics(self):
         values, rate, _ = self.report.values()
         values.update({k: str(v) for k, v in self.counts.items()})
-        values['pending'] = str(len(self.pending))
+        values['unmatched_dropped'] = str(self.pairs.dropped)
+        values['pending'] = str(len(self.pairs.pending))
         if self.latency:
             ordered = sorted(self.latency)
             values['latency_p50_us'] = f'{ordered[len(ordered) // 2] * 1e-3:.1f}'

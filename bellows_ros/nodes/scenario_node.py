@@ -2,30 +2,31 @@
 
 1. Stiffness step: set-point `stiffness_low` (1400 N/m; raised to 1 % above the bottom of the
    actuator model's range when that is higher), then at `step_time` `stiffness_high` (1900 N/m).
-2. Segment excursion: chain 1 of `segment_1` ramps from ambient to `pressure_peak` (4 bar abs, paper
-   A's Fig. 10 pressure) and back, chain 2 stays vented; the angle follows the driving torque.
+2. Angle tracking: from `trajectory_start` on, `segment_1` follows the built-in angle
+   `trajectory` (`sweep`: ±0.7 rad with holds) through the arm controller (arm_controller_node,
+   paper A's model as feedforward), the set-points published on /arm/psi_setpoint at 50 Hz.
 
-Commands are published at 50 Hz (the driver vents the arm without set-points for 0.1 s). What
-comes back is recorded: /actuator/stiffness, /joint_states (segment_1 Ψ, air_chamber x_c),
+What comes back is recorded: /actuator/stiffness, /joint_states (segment_1 Ψ, air_chamber x_c),
 /bellows/chambers (segment_1 pressures), /bellows/driving_torque (segment_1 τ_drive). At the end it
-prints a summary (step settling time and overshoot, excursion extremes) and writes
-`output_dir/scenario.csv` and `output_dir/scenario.png`.
+prints a summary (step settling time and overshoot, tracking error) and writes
+`output_dir/scenario.csv` and `output_dir/scenario.png`. For comparison the plot also shows the
+angle of a feedback-only controller (same gains, no model) on the same trajectory, run in process
+on the simulated segment (`control.closed_loop`, as `bellows bench --only arm_control`).
 
-Parameters: duration (s), step_time (s), stiffness_low, stiffness_high (N/m), pressure_peak (Pa),
-excursion_start, excursion_length (s), output_dir (str), actuator_params (str), realtime_priority
-(SCHED_FIFO priority, 0 = normal scheduling; when the 1 kHz nodes run SCHED_FIFO give it one too,
-below theirs: it stands in for the arm controller, and when its 50 Hz set-points starve the
-driver's watchdog vents the arm), cpu_latency_limit (s: CPU wake-up latency held while the node
-runs, 0 = idle CPUs poll, negative = off; runtime/realtime.py).
+Parameters: duration (s), step_time (s), stiffness_low, stiffness_high (N/m), trajectory (str),
+trajectory_start (s), output_dir (str), actuator_params (str), realtime_priority (SCHED_FIFO
+priority, 0 = normal scheduling; when the 1 kHz nodes run SCHED_FIFO give it one too, below
+theirs), cpu_latency_limit (s: CPU wake-up latency held while the node runs, 0 = idle CPUs poll,
+negative = off; runtime/realtime.py).
 """
 import csv
 import math
 import time
 from pathlib import Path
 
+from bellows_ros.control import angle_trajectory, closed_loop
 from bellows_ros.errors import BellowsError
 from bellows_ros.models.actuator import load_actuator_params
-from bellows_ros.models.segment import load_segment_params
 from bellows_ros.models.stiffness_map import stiffness_range
 from bellows_ros.runtime import Node, realtime, run
 
@@ -39,13 +40,12 @@ class ScenarioNode(Node):
         self.step_time = self.declare_parameter('step_time', 5.0).value
         k_low = self.declare_parameter('stiffness_low', 1400.0).value
         self.k_high = self.declare_parameter('stiffness_high', 1900.0).value
-        self.p_peak = self.declare_parameter('pressure_peak', 4.0e5).value
-        self.excursion_start = self.declare_parameter('excursion_start', 2.0).value
-        self.excursion_length = self.declare_parameter('excursion_length', 20.0).value
+        self.trajectory = angle_trajectory.by_name(
+            self.declare_parameter('trajectory', 'sweep').value)
+        self.trajectory_start = self.declare_parameter('trajectory_start', 2.0).value
         self.output_dir = Path(self.declare_parameter('output_dir', 'scenario_out').value)
         actuator_params = self.declare_parameter('actuator_params', '').value or None
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
-        self.p0 = load_segment_params().p0  # ambient: the vented chain's pressure, Pa abs
         self.check_parameters()
         k_min, k_max = stiffness_range(load_actuator_params(actuator_params))
         self.k_low = max(k_low, 1.01 * k_min)
@@ -57,8 +57,9 @@ class ScenarioNode(Node):
                                f'the actuator range [{k_min:.0f}, {k_max:.0f}] N/m')
         self.output_dir.mkdir(parents=True, exist_ok=True)
         self.setpoint_pub = self.create_publisher(self.msg.Float64, '/actuator/stiffness_setpoint', 10)
-        self.pressure_pub = self.create_publisher(self.msg.JointState, '/bellows/pressure_command', 10)
-        self.series = {name: [] for name in ('stiffness', 'x_c', 'psi', 'p1', 'p2', 'tau_drive')}
+        self.angle_pub = self.create_publisher(self.msg.JointState, '/arm/psi_setpoint', 10)
+        self.series = {name: [] for name in ('stiffness', 'x_c', 'psi', 'psi_setpoint', 'p1', 'p2',
+                                             'tau_drive')}
         self.create_subscription(self.msg.Float64, '/actuator/stiffness',
                                  lambda m: self._add('stiffness', m.data), 10)
         self.create_subscription(self.msg.JointState, '/joint_states', self.on_joint_states, 200)
@@ -93,12 +94,6 @@ class ScenarioNode(Node):
     def stiffness_setpoint(self, t):
         return self.k_low if t < self.step_time else self.k_high
 
-    def chain_1_pressure(self, t):
-        """Raised-cosine excursion ambient -> p_peak -> ambient."""
-        phase = (t - self.excursion_start) / self.excursion_length
-        if not 0.0 <= phase <= 1.0:
-            return self.p0
-        return self.p0 + (self.p_peak - self.p0) * 0.5 * (1 - math.cos(2 * math.pi * phase))
 
     def command(self):
         t = self.elapsed()
@@ -110,10 +105,14 @@ class ScenarioNode(Node):
             self.setpoint_pub.publish(self.msg.Float64(data=k))
             self._last_setpoint = k
         self._ticks += 1
-        command = self.msg.JointState(name=['segment_1/chain_1', 'segment_1/chain_2'],
-                                    effort=[self.chain_1_pressure(t), self.p0])
-        command.header.stamp = self.get_clock().now().to_msg()
-        self.pressure_pub.publish(command)
+        if t >= self.trajectory_start:
+            psi_d, psi_dot_d, _ = angle_trajectory.setpoint(self.trajectory,
+                                                            t - self.trajectory_start)
+            setpoint = self.msg.JointState(name=['segment_1'], position=[psi_d],
+                                         velocity=[psi_dot_d])
+            setpoint.header.stamp = self.get_clock().now().to_msg()
+            self.angle_pub.publish(setpoint)
+            self._add('psi_setpoint', psi_d)
 
     # --- results -----------------------------------------------------------------------------------
     def finish(self):
@@ -139,11 +138,33 @@ class ScenarioNode(Node):
                          f'overshoot {max(0.0, overshoot):.1f} N/m, final {after[-1][1]:.1f} N/m')
         else:
             lines.append('stiffness step: no /actuator/stiffness received')
+        errors = self.tracking_errors()
+        if errors:
+            graph = math.sqrt(sum(e * e for e in errors) / len(errors))
+            run = self.feedback_only()
+            alone = closed_loop.rms(run.psi_d - run.psi)
+            lines.append(f'segment_1 tracking ({len(errors)} samples): RMS error {graph:.4f} rad '
+                         f'with paper A feedforward on the graph; feedback only (in process, same '
+                         f'trajectory and gains): {alone:.4f} rad')
+        else:
+            lines.append('segment_1 tracking: no /joint_states during the trajectory')
         for name, unit in (('p1', 'Pa'), ('psi', 'rad'), ('tau_drive', 'N·m'), ('x_c', 'm')):
             values = [v for _, v in self.series[name]]
             lines.append(f'{name}: {len(values)} samples' + (
                 f', min {min(values):.4g} {unit}, max {max(values):.4g} {unit}' if values else ''))
         return lines
+
+    def tracking_errors(self):
+        """Set-point minus measured Ψ of segment_1 over the trajectory, rad."""
+        end = self.trajectory_start + angle_trajectory.duration(self.trajectory)
+        return [angle_trajectory.setpoint(self.trajectory, t - self.trajectory_start)[0] - psi
+                for t, psi in self.series['psi'] if self.trajectory_start <= t <= end]
+
+    def feedback_only(self):
+        """The feedback-only controller on the same trajectory, in process (cached)."""
+        if not hasattr(self, '_feedback_only'):
+            self._feedback_only = closed_loop.track('none', self.trajectory)
+        return self._feedback_only
 
     def write(self):
         with open(self.output_dir / 'scenario.csv', 'w', newline='') as stream:
@@ -166,8 +187,12 @@ class ScenarioNode(Node):
         plot(axes[1], 'p1', 1e-5, label='segment_1 chain 1')
         plot(axes[1], 'p2', 1e-5, label='segment_1 chain 2')
         axes[1].set_ylabel('pressure (bar abs)')
-        plot(axes[2], 'psi', 180 / math.pi, label='Ψ segment_1 (deg)')
-        plot(axes[2], 'tau_drive', 1.0, label='τ_drive segment_1 (N·m)')
+        plot(axes[2], 'psi_setpoint', 180 / math.pi, color='k', ls='--', label='Ψ set-point')
+        plot(axes[2], 'psi', 180 / math.pi, label='Ψ, paper A feedforward (graph)')
+        alone = self.feedback_only()
+        axes[2].plot(alone.t + self.trajectory_start, alone.psi * 180 / math.pi, lw=0.8,
+                     label='Ψ, feedback only (in process)')
+        axes[2].set_ylabel('segment_1 angle (deg)')
         axes[2].set_xlabel('time (s)')
         for ax in axes:
             ax.grid(True)

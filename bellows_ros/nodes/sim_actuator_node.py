@@ -10,7 +10,7 @@ Parameters:
       effects' parameters (actuator.effects.*).
   hardware_params (str): YAML laid over config/hardware.yaml (encoder, end stops).
   effects (string array): plant effects to switch on (air_leak, heat_exchange, wall_bulging,
-      sensor_lag, backlash); [''] = none.
+      sensor_lag, backlash, buckling); [''] = none.
   seed (int): sensor noise seed.
   x_c0 (m): initial chamber compression (design point when NaN).
   spring.amplitude (m), spring.period (s): the spring is moved sinusoidally between 0 and

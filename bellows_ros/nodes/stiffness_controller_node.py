@@ -10,6 +10,11 @@ measured pressure) and `control.pd` (PD on the encoder position).
       PD(x_c*, x_c) -> /actuator/motor_command (Float64, duty -1..1)
   /actuator/stiffness (Float64, N/m): present stiffness from the measured state, every
       `publish_every`-th control step.
+The model is config/actuator.yaml with `actuator_params` laid over it (e.g. the doctor's
+extended.yaml, buckling included). Where the spring buckles K(x_c) is not monotone: the node uses
+the rising branch (`models.stiffness_map`), logs it and its range at start, refuses set-points
+outside the range (error, previous target kept) and warns when a leak pushes the held set-point
+out of it; /diagnostics carries branch, range and warning.
 
 Parameters: actuator_params (str: YAML over config/actuator.yaml), pd.kp (1/m), pd.kd (s/m),
 pd.velocity_cutoff (Hz), pd.duty_max, pd.deadband (m), gas_time_constant (s),
@@ -53,6 +58,11 @@ class StiffnessControllerNode(Node):
                                'pd.kp >= 0, pd.kd >= 0')
         self.setpoint = StiffnessSetpoint(load_actuator_params(actuator_params), gas_time_constant)
         self.pd = PDController(gains)
+        k_low, k_high = self.setpoint.range()
+        x_low, x_high = self.setpoint.branch()
+        self.get_logger().info(f'stiffness range [{k_low:.1f}, {k_high:.1f}] N/m on the rising '
+                               f'branch x_c {x_low * 1e3:.2f}-{x_high * 1e3:.2f} mm')
+        self._warned = None
         if initial:
             self.setpoint.set_stiffness(initial)
         self.target = None
@@ -113,6 +123,10 @@ class StiffnessControllerNode(Node):
         if self.setpoint.k_target is not None and (self.target is None
                                                    or step % self.target_every == 0):
             self.target = self.setpoint.target()
+            if self.setpoint.warning != self._warned:
+                self._warned = self.setpoint.warning
+                if self._warned:
+                    self.get_logger().warn(self._warned)
         duty = 0.0 if self.target is None else self.pd.update(self.target, x_c, dt)
         self.motor_pub.publish(self.msg.Float64(data=duty))
         if step % self.publish_every == 0:
@@ -125,11 +139,17 @@ class StiffnessControllerNode(Node):
         values['gas_p_ref'] = f'{self.setpoint.gas:.1f}'
         values['target_x_c'] = 'none' if self.target is None else f'{self.target:.6f}'
         values['stiffness_setpoint'] = str(self.setpoint.k_target)
+        k_low, k_high = self.setpoint.range()
+        x_low, x_high = self.setpoint.branch()
+        values['stiffness_range'] = f'{k_low:.1f}-{k_high:.1f}'
+        values['branch_x_c'] = f'rising {x_low:.6f}-{x_high:.6f}'
+        values['warning'] = self.setpoint.warning or 'none'
         stale = rate == 0.0
-        level = diagnostics.WARN if stale else diagnostics.OK
+        level = diagnostics.WARN if stale or self.setpoint.warning else diagnostics.OK
+        message = ('no samples (stale)' if stale else
+                   'set-point out of reach' if self.setpoint.warning else 'OK')
         diagnostics.publish(self, self.diag_pub, [diagnostics.status(self,
-            'stiffness_controller_node: control', values, level,
-            'no samples (stale)' if stale else 'OK')])
+            'stiffness_controller_node: control', values, level, message)])
 
 
 def main(args=None):

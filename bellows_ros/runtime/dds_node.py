@@ -331,7 +331,6 @@ class Node:
             raise RuntimeError('call init() before creating a node')
         args = _context.args
         namespace = namespace if namespace.startswith('/') else '/' + namespace
-        self._original_name = node_name
         self._name, self._namespace = ros_args.node_identity(args, node_name, namespace)
         self._logger = Logger(self._name, args.log_level)
         fqn = self._namespace.rstrip('/') + '/' + self._name
@@ -360,8 +359,7 @@ class Node:
         return self._namespace
 
     def resolve_topic_name(self, topic):
-        return ros_args.resolve_topic(_context.args, topic, self._name, self._namespace,
-                                      self._original_name)
+        return ros_args.resolve_topic(_context.args, topic, self._name, self._namespace)
 
     # parameters
     def declare_parameter(self, name, value=None, descriptor=None):

@@ -4,7 +4,8 @@
          -r __node:=name -r __ns:=/ns --log-level LEVEL [--]
 
 Everything outside `--ros-args ... [--]` is handed back untouched, as rclpy does. Values after `-p`
-are YAML (`-p gain:=2.5`, `-p names:="[a, b]"`). Mistakes raise `ParameterError` with one line
+are YAML (`-p gain:=2.5`, `-p names:="[a, b]"`), scalars typed as rcl types them
+(`params.parse_yaml`: `yes` is a bool, `012` an integer, `1e-3` a double). Mistakes raise `ParameterError` with one line
 naming the argument.
 
 What rcl does, and this module does the same (test_runtime_parameters.py runs the same cases on
@@ -18,7 +19,14 @@ rclpy and on the DDS runtime):
   a file wins over `-p name:=v` given after it (that lands in the earlier `/**` entry); to override
   a node's own section from the command line, name the node: `-p node:name:=v`.
 - Remapping. `from` and `to` are expanded in the node's namespace (`joint_states` in `/` is
-  `/joint_states`); the first matching rule wins; `node:from:=to` applies to that node only.
+  `/joint_states`, `~` is the node's own name); the first matching rule wins; `node:from:=to`
+  applies to that node only, named as it is after `__node`.
+- `__node` and `__ns`: the first matching rule of each wins; `node:__ns:=/ns` names the node as it
+  is after `__node`; a namespace must be fully qualified (`/arm`, not `arm`).
+- Values. An array's elements have one type (`[1, 2.0]` is an error) and an empty array has none
+  (rcl leaves it unset): both are errors here, in a file or after `-p`. A later array of another
+  element type for the same node and name replaces the earlier one here (rcl silently keeps the
+  earlier one: a quirk not copied), so the declared type reports it.
 """
 from dataclasses import dataclass, field
 
@@ -53,6 +61,15 @@ def parse(argv, strict=True):
     arguments this way first, so both runtimes word the same mistakes the same way, then lets rcl
     judge the arguments only it knows).
     """
+    try:
+        return _parse(argv, strict)
+    except ParameterError as exc:
+        # Messages quote the argument: keep them one line whatever it holds (a newline, ESC).
+        raise ParameterError(''.join(c if c.isprintable() else repr(c)[1:-1]
+                                     for c in str(exc))) from None
+
+
+def _parse(argv, strict):
     ros, rest = RosArgs(), []
     inside = False
     items = iter(argv)
@@ -69,9 +86,16 @@ def parse(argv, strict=True):
             continue
         elif arg == '--params-file':
             path = _value(items, arg)
-            ros.parameter_rules.append(('file', path, params_module.read_sections(path)))
+            sections = params_module.read_sections(path)
+            for values in sections.values():
+                for name, value in values.items():
+                    _check_array(path, name, value)
+            ros.parameter_rules.append(('file', path, sections))
         elif arg in ('-p', '--param'):
-            ros.parameter_rules.append(('param', *_parameter(_value(items, arg))))
+            text = _value(items, arg)
+            rule = _parameter(text)
+            _check_array(f"--ros-args -p '{text}'", rule[1], rule[2])
+            ros.parameter_rules.append(('param', *rule))
         elif arg in ('-r', '--remap'):
             _remap(ros, _value(items, arg))
         elif arg == '--log-level':
@@ -84,6 +108,18 @@ def parse(argv, strict=True):
             raise ParameterError(f"--ros-args: unknown argument '{arg}' (the DDS runtime "
                                  'takes --params-file, -p, -r and --log-level)')
     return ros, rest
+
+
+def _check_array(where, name, value):
+    """rcl's arrays: not empty (it could not tell the type), all elements of one type."""
+    if not isinstance(value, list):
+        return
+    if not value:
+        raise ParameterError(f"{where}: parameter '{name}' is an empty array (rcl cannot tell "
+                             'its type)')
+    if len({type(item) for item in value}) > 1:
+        raise ParameterError(f"{where}: parameter '{name}': array elements must all have one "
+                             f'type, got {value!r}')
 
 
 def _value(items, flag):
@@ -100,7 +136,7 @@ def _is_name_token(text):
 
 
 def _node_prefix(text, flag):
-    """'node:rest' -> ('node', 'rest'); 'rest' -> (None, 'rest'). rcl takes a bare node name only."""
+    """'node:rest' -> ('node', 'rest'); 'rest' -> (None, 'rest'). rcl takes a bare node name."""
     node, sep, rest = text.partition(':')
     if not sep or rest.startswith('='):
         return None, text
@@ -117,9 +153,10 @@ def _parameter(text):
         raise ParameterError(f"--ros-args -p '{text}': expected [node:]name:=value")
     try:
         value = params_module.parse_yaml(value_text) if value_text.strip() else ''
-    except yaml.YAMLError:
+    except (yaml.YAMLError, ValueError):  # ValueError: a tag that does not fit (`!!int a`)
         raise ParameterError(f"--ros-args -p '{text}': value is not valid YAML") from None
-    if isinstance(value, dict) or value is None:
+    items = value if isinstance(value, list) else [value]
+    if not all(isinstance(item, (bool, int, float, str)) for item in items):
         raise ParameterError(f"--ros-args -p '{text}': value must be a scalar or a list")
     return node, name, value
 
@@ -134,7 +171,10 @@ def _remap(ros, text):
             raise ParameterError(f"--ros-args -r '{text}': '{target}' is not a valid node name")
         ros.renames.append((node, '__node', target))
     elif source == '__ns':
-        namespace = target if target.startswith('/') else '/' + target
+        if not target.startswith('/'):
+            raise ParameterError(f"--ros-args -r '{text}': the namespace must be fully "
+                                 f"qualified ('/{target}')")
+        namespace = target
         if namespace != '/' and not all(_is_name_token(t) for t in namespace[1:].split('/')):
             raise ParameterError(f"--ros-args -r '{text}': '{target}' is not a valid namespace")
         ros.renames.append((node, '__ns', namespace))
@@ -143,15 +183,17 @@ def _remap(ros, text):
 
 
 def node_identity(ros, name, namespace='/'):
-    """(name, namespace) of a node created as `name` in `namespace`, after `__node` / `__ns`."""
-    original = name
-    for node, kind, value in ros.renames:
-        if node is None or node == original:
-            if kind == '__node':
-                name = value
-            else:
-                namespace = value
-    return name, namespace
+    """(name, namespace) of a node created as `name` in `namespace`, after `__node` / `__ns`.
+
+    As rcl: the first matching rule of each kind wins, and `__ns` rules see the new name.
+    """
+    name = _first_rename(ros, '__node', name) or name
+    return name, _first_rename(ros, '__ns', name) or namespace
+
+
+def _first_rename(ros, kind, name):
+    return next((value for node, rule_kind, value in ros.renames
+                 if rule_kind == kind and node in (None, name)), None)
 
 
 def expand(topic, node_name, namespace):
@@ -162,11 +204,11 @@ def expand(topic, node_name, namespace):
     return topic if topic.startswith('/') else f'{base}/{topic}'
 
 
-def resolve_topic(ros, topic, node_name, namespace, original_name=None):
-    """The fully qualified topic a node publishes or subscribes to, after remapping."""
+def resolve_topic(ros, topic, node_name, namespace):
+    """The fully qualified topic a node (named as after `__node`) uses, after remapping."""
     resolved = expand(topic, node_name, namespace)
     for node, source, target in ros.remaps:
-        if node is not None and node not in (node_name, original_name):
+        if node is not None and node != node_name:
             continue
         if expand(source, node_name, namespace) == resolved:
             return expand(target, node_name, namespace)

@@ -1,0 +1,248 @@
+"""arm_controller_node: angle tracking of the arm's segments, PID plus model-based feedforward.
+
+Wiring only; the logic is in `control.angle_tracking` (PID, feedforward through the pressure
+allocation of `control.pressure_allocation`) and `control.angle_trajectory` (built-in set-points).
+
+  /joint_states + /bellows/chambers (the two halves of each 1 kHz sample, paired by stamp as the
+      model node pairs them): every sample steps each segment's own paper-A model (its contact
+      memory, Algorithm 1); every `control_every`-th sample a command goes out:
+  /bellows/pressure_command (JointState, effort = chain pressures, Pa abs, names
+      `segment_i/chain_j`), inside the driver's limits [p0, p_max] of config/segment.yaml, at
+      1 kHz / control_every — well inside the driver's command watchdog (`hardware.arm_bus.
+      command_timeout`): with no samples there is no command, and the driver vents the arm.
+  /arm/psi_setpoint (JointState by segment name: position = Ψ_d rad, velocity = Ψ̇_d rad/s if
+      given): from its first message on, a segment follows the topic instead of its trajectory.
+  /diagnostics: per segment the tracking error (RMS and largest since the last report), the
+      set-point, saturated commands, plus the loop timing.
+
+Before any set-point a segment holds the angle it had at the first sample (or follows the
+built-in `trajectory`, started `trajectory_delay` s after the first sample, on sample stamps).
+
+Parameters: segments (int array), feedforward ('paper_a' | 'previous' | 'none' = feedback only),
+trajectory ('' | 'reversals' | 'sweep'), trajectory_delay (s), pid.kp (N·m/rad), pid.ki
+(N·m/(rad·s)), pid.kd (N·m·s/rad), pid.velocity_cutoff (Hz), pid.integral_limit (N·m),
+feedforward_lead (s: the valves' lag the feedforward anticipates, 0 = none), co_contraction (Pa
+above ambient on both chains), control_every (samples per command), params_file (str: YAML over
+config/segment.yaml, e.g. identified parameters and the arm's segment.dynamics), max_pending
+(unmatched half-samples kept), max_sample_age (s: no command from a sample older than this),
+realtime_priority, cpu_latency_limit (runtime/realtime.py).
+"""
+import math
+import time
+
+from bellows_ros.control import angle_trajectory
+from bellows_ros.control.angle_tracking import AngleTracker, TrackingGains, check_feedforward
+from bellows_ros.errors import BellowsError
+from bellows_ros.hardware import arm_bus
+from bellows_ros.hardware.loop_timing import LoopStats
+from bellows_ros.models.segment import load_segment_params
+from bellows_ros.nodes import diagnostics
+from bellows_ros.nodes.sample_pairing import CHAMBERS, JOINTS, SamplePairs
+from bellows_ros.runtime import Node, realtime, run
+from bellows_ros.runtime.topics import SAMPLE_DEPTH
+
+SAMPLE_PERIOD = 1e-3  # s, the arm's sampling (the devices' 1 kHz clock)
+
+
+class SegmentLoop:
+    """One segment's tracker, its set-point source and its error statistics."""
+
+    def __init__(self, name, tracker, trajectory):
+        self.name = name
+        self.chains = (f'{name}/chain_1', f'{name}/chain_2')
+        self.tracker = tracker
+        self.trajectory = trajectory
+        self.topic_setpoint = None  # (Ψ_d, Ψ̇_d) from /arm/psi_setpoint
+        self.hold = None            # Ψ at the first sample
+        self.setpoint = (math.nan, 0.0, 0.0)
+        self.squares, self.count, self.largest, self.saturated = 0.0, 0, 0.0, 0
+
+    def desired(self, t, later=0.0):
+        """(Ψ_d, Ψ̇_d, Ψ̈_d) at `t` s on the trajectory clock, or `later` s after it (a topic
+        set-point is extrapolated with its velocity)."""
+        t += later
+        if self.topic_setpoint is not None:
+            psi, psi_dot = self.topic_setpoint
+            return psi + later * psi_dot, psi_dot, 0.0
+        if self.trajectory is not None and t >= 0.0:
+            return angle_trajectory.setpoint(self.trajectory, t)
+        return self.hold, 0.0, 0.0
+
+
+class ArmControllerNode(Node):
+
+    def __init__(self, runtime):
+        super().__init__('arm_controller_node', runtime)
+        segments = self.declare_parameter('segments', [1]).value
+        feedforward = self.declare_parameter('feedforward', 'paper_a').value
+        trajectory = self.declare_parameter('trajectory', '').value
+        self.delay = self.declare_parameter('trajectory_delay', 1.0).value
+        kp = self.declare_parameter('pid.kp', 40.0).value
+        ki = self.declare_parameter('pid.ki', 640.0).value
+        kd = self.declare_parameter('pid.kd', 2.0).value
+        cutoff = self.declare_parameter('pid.velocity_cutoff', 20.0).value
+        integral_limit = self.declare_parameter('pid.integral_limit', 20.0).value
+        lead = self.declare_parameter('feedforward_lead', 0.05).value
+        co_contraction = self.declare_parameter('co_contraction', 0.0).value
+        self.control_every = self.declare_parameter('control_every', 5).value
+        params_file = self.declare_parameter('params_file', '').value or None
+        max_pending = self.declare_parameter('max_pending', 100).value
+        max_age = self.declare_parameter('max_sample_age', 0.02).value
+        realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
+        self.check_parameters()
+        if not segments or any(s < 1 for s in segments):
+            raise BellowsError(f'arm_controller_node: parameter segments must list segment '
+                               f'numbers >= 1, got {list(segments)}')
+        check_feedforward(feedforward, 'arm_controller_node')
+        path = angle_trajectory.by_name(trajectory) if trajectory else None
+        watchdog = arm_bus.load_config().command_timeout
+        most = int(watchdog / 4 / SAMPLE_PERIOD)  # a command at least every quarter watchdog
+        if not 1 <= self.control_every <= most:
+            raise BellowsError(f'arm_controller_node: parameter control_every must be 1..{most} '
+                               f'samples (the driver vents after {watchdog:g} s without a '
+                               f'command), got {self.control_every}')
+        self.watchdog_ns = round(watchdog * 1e9)
+        params = load_segment_params(params_file)
+        gains = TrackingGains(kp, ki, kd, cutoff, integral_limit, params.p0 + co_contraction,
+                              lead)
+        self.lead = lead
+        self.loops = [SegmentLoop(f'segment_{i}', AngleTracker(params, gains, feedforward), path)
+                      for i in segments]
+        self.feedforward = feedforward
+        self.pairs = SamplePairs(max_pending)
+        self.max_age_ns = round(max_age * 1e9)
+        self.samples = 0
+        self.first_stamp = self.last_stamp = None
+        self.counts = dict.fromkeys(['commands', 'stale_skipped', 'restarts', 'rejected_samples',
+                                     'rejected_setpoints'], 0)
+        self.last_command = None
+        self.stats = LoopStats()
+        self.report = diagnostics.LoopReport(self.stats)
+        self._p_limit = 2.0 * params.p_max
+
+        self.command_pub = self.create_publisher(self.msg.JointState, '/bellows/pressure_command',
+                                                 10)
+        self.diag_pub = self.create_publisher(self.msg.DiagnosticArray, '/diagnostics', 10)
+        self.create_subscription(self.msg.JointState, '/joint_states', self.on_joint_states,
+                                 SAMPLE_DEPTH)
+        self.create_subscription(self.msg.JointState, '/bellows/chambers', self.on_chambers,
+                                 SAMPLE_DEPTH)
+        self.create_subscription(self.msg.JointState, '/arm/psi_setpoint', self.on_setpoint, 10)
+        self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
+        self.get_logger().info(
+            f"tracking {', '.join(loop.name for loop in self.loops)}, feedforward {feedforward}"
+            + (f', trajectory {trajectory}' if trajectory else ''))
+
+    # --- inputs ---------------------------------------------------------------------------------
+    def on_setpoint(self, msg):
+        for loop in self.loops:
+            if loop.name not in msg.name:
+                continue
+            i = msg.name.index(loop.name)
+            psi = msg.position[i] if i < len(msg.position) else math.nan
+            psi_dot = msg.velocity[i] if i < len(msg.velocity) else 0.0
+            if not (math.isfinite(psi) and math.isfinite(psi_dot)):
+                self.counts['rejected_setpoints'] += 1
+                continue
+            loop.topic_setpoint = (psi, psi_dot)
+
+    def on_joint_states(self, msg):
+        if self.loops[0].name in msg.name:
+            self._half(msg, JOINTS)
+
+    def on_chambers(self, msg):
+        if self.loops[0].chains[0] in msg.name:
+            self._half(msg, CHAMBERS)
+
+    def _half(self, msg, slot):
+        sample = self.pairs.add(msg, slot)
+        if sample is not None:
+            self.control(*sample)
+
+    # --- the loop -------------------------------------------------------------------------------
+    def control(self, stamp, joints, chambers):
+        start = time.perf_counter()
+        position = dict(zip(joints.name, joints.position))
+        velocity = dict(zip(joints.name, joints.velocity))
+        pressure = dict(zip(chambers.name, chambers.effort))
+        try:
+            inputs = [(position[loop.name], velocity.get(loop.name, 0.0),
+                       pressure[loop.chains[0]], pressure[loop.chains[1]]) for loop in self.loops]
+        except KeyError:
+            self.counts['rejected_samples'] += 1
+            return
+        if not all(math.isfinite(v) for row in inputs for v in row) or \
+                not all(0.0 <= p <= self._p_limit for row in inputs for p in row[2:]):
+            self.counts['rejected_samples'] += 1
+            return
+        if self.first_stamp is None:
+            self.first_stamp = stamp
+            for loop, row in zip(self.loops, inputs):
+                loop.hold = row[0]
+        dt = SAMPLE_PERIOD if self.last_stamp is None else (stamp - self.last_stamp) * 1e-9
+        self.last_stamp = stamp
+        for loop, (psi, psi_dot, p1, p2) in zip(self.loops, inputs):
+            loop.tracker.observe(psi, psi_dot, p1, p2, dt)
+        self.samples += 1
+        if (self.samples - 1) % self.control_every:
+            return
+        # A command from an old sample (a backlog after a stall) would act on a state long gone,
+        # which destabilises the loop; none is sent, and if that persists the driver vents.
+        now = self.get_clock().now().nanoseconds
+        if now - stamp > self.max_age_ns:
+            self.counts['stale_skipped'] += 1
+            return
+        if self.last_command is not None and now - self.last_command > self.watchdog_ns:
+            self.counts['restarts'] += 1  # the driver has vented meanwhile
+            for loop in self.loops:
+                loop.tracker.restart()
+        self.last_command = now
+        t = (stamp - self.first_stamp) * 1e-9 - self.delay
+        names, efforts = [], []
+        for loop, row in zip(self.loops, inputs):
+            psi_d, psi_dot_d, psi_ddot_d = loop.setpoint = loop.desired(t)
+            out = loop.tracker.command(psi_d, psi_dot_d, psi_ddot_d, row[0],
+                                       self.control_every * SAMPLE_PERIOD,
+                                       loop.desired(t, self.lead))
+            names.extend(loop.chains)
+            efforts.extend((out.p1, out.p2))
+            error = psi_d - row[0]
+            loop.squares += error * error
+            loop.count += 1
+            loop.largest = max(loop.largest, abs(error))
+            loop.saturated += out.saturated
+        command = self.msg.JointState(name=names, effort=efforts)
+        command.header.stamp = joints.header.stamp
+        self.command_pub.publish(command)
+        self.counts['commands'] += 1
+        self.stats.record(dt * self.control_every, 0.0, time.perf_counter() - start)
+
+    def publish_diagnostics(self):
+        values, rate, _ = self.report.values()
+        values.update({k: str(v) for k, v in self.counts.items()})
+        values['unmatched_dropped'] = str(self.pairs.dropped)
+        values['feedforward'] = self.feedforward
+        statuses = []
+        stale = rate == 0.0
+        for loop in self.loops:
+            mine = dict(values)
+            rms = math.sqrt(loop.squares / loop.count) if loop.count else math.nan
+            mine.update(error_rms=f'{rms:.5f}', error_max=f'{loop.largest:.5f}',
+                        setpoint=f'{loop.setpoint[0]:.5f}', saturated=str(loop.saturated),
+                        source='topic' if loop.topic_setpoint is not None else (
+                            'trajectory' if loop.trajectory is not None else 'hold'))
+            loop.squares, loop.count, loop.largest, loop.saturated = 0.0, 0, 0.0, 0
+            level = diagnostics.WARN if stale or mine['saturated'] != '0' else diagnostics.OK
+            message = ('no samples (stale)' if stale else
+                       'saturated' if level != diagnostics.OK else 'OK')
+            statuses.append(diagnostics.status(self, f'arm_controller_node: {loop.name}', mine, level,
+                                               message))
+        diagnostics.publish(self, self.diag_pub, statuses)
+
+
+def main(args=None):
+    return run(ArmControllerNode, args)
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

@@ -1,0 +1,36 @@
+"""Pairs the two halves of an arm sample: `/joint_states` and `/bellows/chambers` with one stamp.
+
+The driver publishes each 1 kHz sample as two messages with the same header stamp (docs/interfaces.md
+topic contract); a node that needs Ψ and the chain pressures of the same instant (the model node,
+the arm controller) waits until both have arrived. Halves that never find their partner are kept up
+to `max_pending` stamps, then the oldest is dropped and counted.
+"""
+from collections import OrderedDict
+
+from bellows_ros.runtime import stamp_ns
+
+JOINTS, CHAMBERS = 0, 1
+
+
+class SamplePairs:
+    """`add(msg, slot)` -> (stamp_ns, joint_states, chambers) when `msg` completes a sample, else
+    None; slot is JOINTS or CHAMBERS. `dropped` counts halves given up on."""
+
+    def __init__(self, max_pending):
+        self.max_pending = max_pending
+        self.pending = OrderedDict()  # stamp (ns) -> [joint_states or None, chambers or None]
+        self.dropped = 0
+
+    def add(self, msg, slot):
+        stamp = stamp_ns(msg.header.stamp)
+        entry = self.pending.get(stamp)
+        if entry is None:
+            entry = self.pending[stamp] = [None, None]
+            while len(self.pending) > self.max_pending:
+                self.pending.popitem(last=False)
+                self.dropped += 1
+        entry[slot] = msg
+        if entry[0] is None or entry[1] is None:
+            return None
+        del self.pending[stamp]
+        return stamp, entry[0], entry[1]

@@ -1,0 +1,39 @@
+"""A node that reports what its runtime made of its `--ros-args`: name, parameters, topics.
+
+    BELLOWS_RUNTIME=rclpy|dds PROBE_SPEC='{"parameters": {...}, "topics": [...]}' \\
+        python parameter_probe.py --ros-args ...
+
+Declares the spec's parameters with their defaults (the default's type is the parameter's type),
+creates a Float64 publisher on each topic, and prints one JSON line: the node's name and namespace,
+every declared parameter's value (and `use_sim_time`), and each topic as the publisher resolved it.
+Mistakes end as any node's do: one line on stderr, exit status 2 (`run`).
+"""
+import json
+import os
+import sys
+
+from bellows_ros.runtime import Node, run
+
+
+class Probe(Node):
+    """Declares, publishes, prints, and is done."""
+
+    done = True
+
+    def __init__(self, runtime):
+        spec = json.loads(os.environ['PROBE_SPEC'])
+        super().__init__(spec.get('node', 'probe'), runtime)
+        self.values = {name: self.declare_parameter(name, default).value
+                       for name, default in spec['parameters'].items()}
+        self.topics = {topic: self.create_publisher(self.msg.Float64, topic, 10).topic_name
+                       for topic in spec.get('topics', [])}
+
+    def finish(self):
+        self.values['use_sim_time'] = self.get_parameter('use_sim_time').value
+        print(json.dumps({'runtime': self.runtime.NAME, 'name': self.get_name(),
+                          'namespace': self.get_namespace(), 'parameters': self.values,
+                          'topics': self.topics}), flush=True)
+
+
+if __name__ == '__main__':
+    sys.exit(run(Probe))

@@ -1,0 +1,129 @@
+"""The package's import graph (from the source, with ast): no cycles, and every import goes down
+the layers models -> identify/doctor -> hardware -> control -> nodes/runtime -> bench/demos/cli.
+
+Every import counts, also one inside a function: a deferred import still ties the two modules
+together, it only hides the cycle until run time.
+"""
+import ast
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parents[1] / 'bellows_ros'
+
+# Rank of each top-level part of the package; a module may import only its own rank or lower.
+LAYERS = {
+    'errors': 0, 'params': 0, 'table': 0, 'data': 0, 'bag': 0,
+    'models': 1,
+    'identify': 2, 'doctor': 2,
+    'hardware': 3,
+    'control': 4,
+    'nodes': 5, 'runtime': 5,
+    'bench': 6, 'demos': 6, 'cli': 6,
+}
+
+
+def _modules():
+    modules = {}
+    for path in PACKAGE.rglob('*.py'):
+        parts = list(path.relative_to(PACKAGE.parent).with_suffix('').parts)
+        if parts[-1] == '__init__':
+            parts.pop()
+        modules['.'.join(parts)] = path
+    return modules
+
+
+def import_graph():
+    """{module: set of bellows_ros modules it imports} for every module of the package."""
+    modules = _modules()
+
+    def resolve(name):
+        while name and name not in modules:
+            name = name.rpartition('.')[0]
+        return name
+
+    graph = {}
+    for name, path in modules.items():
+        package = name if path.name == '__init__.py' else name.rpartition('.')[0]
+        targets = set()
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.Import):
+                targets.update(resolve(a.name) for a in node.names
+                               if a.name.split('.')[0] == 'bellows_ros')
+            elif isinstance(node, ast.ImportFrom):
+                base = node.module or ''
+                if node.level:
+                    parts = package.split('.')[:len(package.split('.')) - node.level + 1]
+                    base = '.'.join(parts + ([node.module] if node.module else []))
+                if base.split('.')[0] != 'bellows_ros':
+                    continue
+                for alias in node.names:
+                    full = f'{base}.{alias.name}'
+                    targets.add(full if full in modules else resolve(base))
+        targets.discard(name)
+        targets.discard('')
+        graph[name] = targets
+    return graph
+
+
+def cycles(graph):
+    """Strongly connected components with more than one module (Tarjan), each sorted."""
+    index, low, stack, on_stack, found = {}, {}, [], set(), []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in graph.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def _layer(module):
+    parts = module.split('.')
+    return LAYERS.get(parts[1]) if len(parts) > 1 else None
+
+
+def test_the_graph_sees_the_package():
+    graph = import_graph()
+    assert 'bellows_ros.models.segment' in graph['bellows_ros.identify.segment']
+    assert 'bellows_ros.runtime' in graph['bellows_ros.nodes.model_node']
+    assert 'bellows_ros.bag' in graph['bellows_ros.data']  # a deferred import counts
+
+
+def test_the_cycle_finder_finds_a_cycle():
+    assert cycles({'a': {'b'}, 'b': {'c'}, 'c': {'a'}, 'd': {'a'}}) == [['a', 'b', 'c']]
+    assert cycles({'a': {'b'}, 'b': set()}) == []
+
+
+def test_no_import_cycle_in_the_package():
+    assert cycles(import_graph()) == []
+
+
+def test_every_part_of_the_package_has_a_layer():
+    unplaced = {m.split('.')[1] for m in import_graph() if m.count('.') >= 1} - set(LAYERS)
+    assert not unplaced, f'add {sorted(unplaced)} to LAYERS'
+
+
+def test_layers_import_only_downward():
+    upward = sorted(f'{source} -> {target}' for source, targets in import_graph().items()
+                    for target in targets
+                    if _layer(source) is not None and _layer(target) is not None
+                    and _layer(target) > _layer(source))
+    assert upward == []
