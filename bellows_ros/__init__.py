@@ -1,4 +1,5 @@
-"""bellows_ros: pneumatic bellows models, identification, model doctor, drivers and ROS 2 nodes.
+"""
+bellows_ros: pneumatic bellows models, identification, model doctor, drivers and ROS 2 nodes.
 
 Layers (each imports only from the ones above it in this list):
 models -> identify, doctor -> hardware -> control -> nodes (+ runtime) -> cli.

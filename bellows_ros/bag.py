@@ -1,9 +1,10 @@
-"""rosbag2 recordings (sqlite3 or MCAP) as data tables (docs/interfaces.md "Data files").
+"""
+rosbag2 recordings (sqlite3 or MCAP) as data tables (docs/interfaces.md "Data files").
 
-The rows are the `/joint_states` samples of the wanted device group; pressures (`/bellows/chambers`)
-and the force/torque sensor (`/bellows/wrench`) are aligned onto them by stamp, zero-order hold:
-each row takes the latest message stamped at or before it (the first message for rows before any).
-`t` is the sample stamp in seconds from the first row.
+The rows are the `/joint_states` samples of the wanted device group; pressures
+(`/bellows/chambers`) and the force/torque sensor (`/bellows/wrench`) are aligned onto them by
+stamp, zero-order hold: each row takes the latest message stamped at or before it (the first
+message for rows before any). `t` is the sample stamp in seconds from the first row.
 
 Columns (see `bellows_ros.runtime.topics` for the wrench axes):
 - segment (`segment_1`): psi, psi_dot = position, velocity of joint `segment_1`;
@@ -15,12 +16,12 @@ Columns (see `bellows_ros.runtime.topics` for the wrench axes):
 from pathlib import Path
 
 import numpy as np
-import yaml
 from rosbags.rosbag2 import Reader
-from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys import get_typestore, Stores
+import yaml
 
-from bellows_ros.table import COLUMNS, Table, check_increasing
 from bellows_ros.errors import DataError
+from bellows_ros.table import check_increasing, COLUMNS, Table
 
 SEGMENT = 'segment_1'
 TYPES = {'/joint_states': 'sensor_msgs/msg/JointState',
@@ -38,7 +39,7 @@ def _stamp(msg):
 
 
 def _messages(path, reader, typestore, topic):
-    """The deserialised messages on `topic`; a corrupt or mistyped recording raises DataError."""
+    """Return the deserialised messages on `topic`; a corrupt or mistyped bag raises DataError."""
     connections = [c for c in reader.connections if c.topic == topic]
     if not connections:
         return  # rosbags reads every topic when given no connection
@@ -96,7 +97,7 @@ def _wrench_rows(path, reader, typestore, frame, axis):
 
 
 def _hold(sample_stamps, stamps, values):
-    """Zero-order hold of (stamps, values) onto sample_stamps (first value before the first stamp)."""
+    """Zero-order hold of (stamps, values) onto sample_stamps; the first value fills the start."""
     order = np.argsort(stamps, kind='stable')
     stamps, values = stamps[order], values[order]
     index = np.searchsorted(stamps, sample_stamps, side='right') - 1
@@ -123,7 +124,7 @@ def _check_metadata(path):
 
 
 def _open(path):
-    """An open rosbags Reader of `path`, or DataError naming what is wrong."""
+    """Open a rosbags Reader of `path`, or raise DataError naming what is wrong."""
     _check_metadata(path)
     try:
         reader = Reader(path)
@@ -134,7 +135,7 @@ def _open(path):
 
 
 def read_bag_table(path, system):
-    """A rosbag2 directory as a `Table` with the columns of `system` (docs/interfaces.md)."""
+    """Read a rosbag2 directory as a `Table` with the columns of `system` (docs/interfaces.md)."""
     path = Path(path)
     typestore = get_typestore(Stores.ROS2_JAZZY)
     reader = _open(path)

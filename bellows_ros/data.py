@@ -1,4 +1,5 @@
-"""Measured and simulated data files (docs/interfaces.md "Data files").
+"""
+Measured and simulated data files (docs/interfaces.md "Data files").
 
 CSV with a header row, SI units, one row per sample. Every problem is reported as a `DataError`
 naming the file, the line (header = line 1) and the column. Extra columns are carried along
@@ -15,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from bellows_ros.errors import DataError
-from bellows_ros.table import COLUMNS, Table, check_increasing
+from bellows_ros.table import check_increasing, COLUMNS, Table
 
 # Pressure columns of each system: absolute, in Pa.
 PRESSURES = {'segment': ('p1', 'p2'), 'actuator': ('p',)}
@@ -27,7 +28,8 @@ MAX_ANGLE = math.pi
 
 
 def read_csv(path, required, optional=()):
-    """Read a CSV file, checking that `required` columns exist and hold finite numbers.
+    """
+    Read a CSV file, checking that `required` columns exist and hold finite numbers.
 
     Returns a `Table`. Raises `DataError` on a missing file, a missing column, a short row, a
     non-number, NaN or infinity.
@@ -85,7 +87,8 @@ def _split_rows(path, reader, required):
 
 
 def _read_numeric(path, raw, required, optional):
-    """Fast path for the common file: every column wanted, all finite numbers, no blank lines.
+    """
+    Fast path for the common file: every column wanted, all finite numbers, no blank lines.
 
     NumPy's C parser reads a 600 000-row record several times faster than the csv module. Anything
     unusual returns None, and the careful reader in `read_csv` finds and names the problem.
@@ -136,12 +139,14 @@ def check_range(table, name, low, high, unit=''):
     if bad.size:
         i = int(bad[0])
         raise DataError(table.path,
-                        f'{column[i]:g} {unit} is outside [{low:g}, {high:g}] {unit}'.replace('  ', ' '),
+                        f'{column[i]:g} {unit} is outside [{low:g}, {high:g}] {unit}'
+                        .replace('  ', ' '),
                         table.line(i), name)
 
 
 def read_table(path, system, required=None):
-    """Read a `system` ('segment' or 'actuator') file: CSV, or a rosbag2 directory.
+    """
+    Read a `system` ('segment' or 'actuator') file: CSV, or a rosbag2 directory.
 
     `required` narrows the required columns of a CSV (e.g. a simulation input has no measured
     torque); the system's other columns are then optional. A bag always yields the full set.
@@ -161,7 +166,8 @@ def read_table(path, system, required=None):
 
 
 def check_units(table, system, names=None):
-    """Refuse columns whose values can only mean another unit: kPa or bar, degrees.
+    """
+    Refuse columns whose values can only mean another unit: kPa or bar, degrees.
 
     Only the columns in `names` (default: all of the system's) are checked; a simulation input may
     carry old output columns that are replaced anyway.
@@ -185,7 +191,7 @@ def check_units(table, system, names=None):
 
 
 def write_csv(path, table, outputs):
-    """Write the input `table` (all its columns, in order) followed by `outputs` (name -> array)."""
+    """Write the input `table` (all its columns, in order), then `outputs` (name -> array)."""
     names = list(table.names) + [name for name in outputs if name not in table.names]
     columns = []
     for name in names:

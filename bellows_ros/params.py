@@ -1,4 +1,5 @@
-"""Parameters: the YAML files in `config/` are the one source of truth.
+"""
+Parameters: the YAML files in `config/` are the one source of truth.
 
 Files use the ROS 2 parameter format, so the very same file feeds `--ros-args --params-file`::
 
@@ -7,16 +8,16 @@ Files use the ROS 2 parameter format, so the very same file feeds `--ros-args --
         segment:
           ogden: {mu: [.., ..], gamma: [.., ..]}
 
-Nested maps flatten to dotted names (`segment.ogden.mu`), exactly as ROS 2 does. A file given by the
-user (`--params P.yaml`, the output of `bellows identify`) is laid over the defaults; a name that the
-defaults do not have is an error, never silently ignored.
+Nested maps flatten to dotted names (`segment.ogden.mu`), exactly as ROS 2 does. A file given by
+the user (`--params P.yaml`, the output of `bellows identify`) is laid over the defaults; a name
+that the defaults do not have is an error, never silently ignored.
 """
 import dataclasses
 import math
 import os
+from pathlib import Path
 import re
 import sys
-from pathlib import Path
 
 import yaml
 
@@ -26,7 +27,8 @@ WILDCARD = '/**'
 
 
 def config_dir():
-    """Directory holding the default YAML files.
+    """
+    Directory holding the default YAML files.
 
     Looked up in order: ``$BELLOWS_CONFIG_DIR``; the source tree (editable installs, a checkout);
     ``<prefix>/share/bellows_ros/config`` (pip install); the ament index (colcon install).
@@ -103,10 +105,13 @@ _HEX_DOUBLE = re.compile(r'[+-]?0[xX](?:[0-9a-fA-F]+\.?[0-9a-fA-F]*|\.[0-9a-fA-F
 
 
 def _rcl_scalar(text):
-    """A plain (unquoted) scalar as rcl's YAML parser types it: its bool words, then C's strtol
-    (base 0: `0x1F`, `012` octal), then strtod (`1e-3`, `.5`, `inf`, hex), else a string.
-    `1_000`, `1:20` and `2026-01-01` stay strings, as on rcl (YAML 1.1 would make numbers and a
-    date of them)."""
+    """
+    Type a plain (unquoted) scalar as rcl's YAML parser does.
+
+    Its bool words, then C's strtol (base 0: `0x1F`, `012` octal), then strtod (`1e-3`, `.5`,
+    `inf`, hex), else a string. `1_000`, `1:20` and `2026-01-01` stay strings, as on rcl (YAML 1.1
+    would make numbers and a date of them).
+    """
     if text in _TRUE or text in _FALSE:
         return text in _TRUE
     if _INTEGER.fullmatch(text):
@@ -135,7 +140,8 @@ def parse_yaml(text):
 
 
 def read_sections(path):
-    """Read a ROS 2 parameter file: {section name: flat parameters}, in the file's order.
+    """
+    Read a ROS 2 parameter file: {section name: flat parameters}, in the file's order.
 
     Section names are normalised as rcl does (a leading slash added: `model_node` is
     `/model_node`). A malformed file raises ParameterError naming the file and line.
@@ -177,7 +183,8 @@ def read_sections(path):
 
 
 def section_matches(section, node_fqn):
-    """Does parameter-file section `section` apply to the node `node_fqn` (e.g. `/ns/name`)?
+    """
+    Tell whether parameter-file section `section` applies to the node `node_fqn` (`/ns/name`).
 
     rcl's rule: a section is the node's fully qualified name, where `*` stands for one name token
     and `**` for any number of them (`/**` = every node, `/*` = every node in `/`).
@@ -193,7 +200,8 @@ def section_matches(section, node_fqn):
 
 
 def read_file(path, node_name=None):
-    """Read a ROS 2 parameter file into a flat dict of dotted names.
+    """
+    Read a ROS 2 parameter file into a flat dict of dotted names.
 
     Without `node_name`: the ``/**`` section. With it: every section that applies to that node
     (`section_matches`; a bare name is a node in `/`), later sections over earlier ones, as rcl
@@ -237,7 +245,8 @@ def _kind(value):
 
 
 def _check_kind(source, name, default, value):
-    """`value` must be of the default's kind, a list's items of the kind of the default's items.
+    """
+    `value` must be of the default's kind, a list's items of the kind of the default's items.
 
     A string where a number belongs would otherwise reach the model as a TypeError deep inside.
     """
@@ -254,8 +263,12 @@ def _check_kind(source, name, default, value):
 
 
 def overlay(defaults, overrides, source):
-    """Lay `overrides` over `defaults`; a name the defaults lack, or a value of another kind (a
-    string for a number, a scalar for a list), raises ParameterError."""
+    """
+    Lay `overrides` over `defaults`.
+
+    A name the defaults lack, or a value of another kind (a string for a number, a scalar for a
+    list), raises ParameterError.
+    """
     unknown = sorted(set(overrides) - set(defaults))
     if unknown:
         raise ParameterError(f"{source}: unknown parameter '{unknown[0]}'"
@@ -276,13 +289,14 @@ def load(name, params_path=None):
 
 
 def section(flat, prefix):
-    """The parameters under `prefix.`, with the prefix stripped."""
+    """Return the parameters under `prefix.`, with the prefix stripped."""
     start = prefix + '.'
     return {name[len(start):]: value for name, value in flat.items() if name.startswith(start)}
 
 
 def build(cls, values, source):
-    """Construct dataclass `cls` from a flat mapping; unknown or missing names raise ParameterError.
+    """
+    Construct dataclass `cls` from a flat mapping; unknown or missing names raise ParameterError.
 
     Lists become tuples of float so the dataclass stays hashable and immutable.
     """

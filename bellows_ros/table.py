@@ -1,5 +1,8 @@
-"""The in-memory data table both file readers return (CSV: `bellows_ros.data`, rosbag2:
-`bellows_ros.bag`), the columns of each system's files, and the checks made on any table.
+"""
+The in-memory data table both file readers return, and the checks made on any table.
+
+The readers: CSV (`bellows_ros.data`) and rosbag2 (`bellows_ros.bag`); also the columns of
+each system's files.
 
 It imports neither reader, so the readers depend on it and not on each other
 (docs/interfaces.md "Data files").
@@ -20,12 +23,15 @@ COLUMNS = {
 
 @dataclass
 class Table:
-    """Columns of one data file.
+    """
+    Columns of one data file.
 
     `values` holds float arrays for the columns the caller asked for (required, and optional ones
-    present); `extras` holds every other column as text, in file order, so it can be written back unchanged.
-    `lines` gives the file line of each row, for error messages (None for non-CSV sources).
+    present); `extras` holds every other column as text, in file order, so it can be written back
+    unchanged. `lines` gives the file line of each row, for error messages (None for non-CSV
+    sources).
     """
+
     path: str
     names: list
     values: dict

@@ -1,5 +1,7 @@
-"""One side of a mixed graph: publishes every topic of the contract with its own values, and
-reports when it received the other side's values on every topic.
+"""
+One side of a mixed graph: publishes every topic of the contract with its own values.
+
+It reports when it received the other side's values on every topic.
 
     BELLOWS_RUNTIME=rclpy|dds python mixed_peer.py SIDE    # SIDE: rclpy or dds (whose values)
 
@@ -18,7 +20,7 @@ SIDES = {'rclpy': ('from_rclpy', 1.25, 11), 'dds': ('from_dds', 2.5, 22)}
 
 
 def build(msg, ros_type, side):
-    """The message `side` publishes on a topic of `ros_type`."""
+    """Build the message `side` publishes on a topic of `ros_type`."""
     tag, number, seconds = SIDES[side]
     kind = ros_type.rsplit('/', 1)[1]
     if kind == 'JointState':
@@ -38,7 +40,7 @@ def build(msg, ros_type, side):
 
 
 def signature(message):
-    """What distinguishes one side's message from the other's, as plain values."""
+    """Return what distinguishes one side's message from the other's, as plain values."""
     fields = []
     for path in ('header.frame_id', 'name', 'position', 'effort', 'wrench.force.z',
                  'wrench.torque.z', 'data', 'clock.sec', 'clock.nanosec'):

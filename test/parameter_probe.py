@@ -1,6 +1,7 @@
-"""A node that reports what its runtime made of its `--ros-args`: name, parameters, topics.
+r"""
+A node that reports what its runtime made of its `--ros-args`: name, parameters, topics.
 
-    BELLOWS_RUNTIME=rclpy|dds PROBE_SPEC='{"parameters": {...}, "topics": [...]}' \\
+    BELLOWS_RUNTIME=rclpy|dds PROBE_SPEC='{"parameters": {...}, "topics": [...]}' \
         python parameter_probe.py --ros-args ...
 
 Declares the spec's parameters with their defaults (the default's type is the parameter's type),

@@ -92,13 +92,15 @@ def test_exit_status_of_the_real_command(tmp_path):
     path = write(tmp_path / 'in.csv', {'t': [0.0, 0.001], 'x_c': [0.0, 0.0]})
     command = 'import sys; from bellows_ros.cli import main; sys.exit(main())'
     done = subprocess.run([sys.executable, '-c', command, 'simulate', 'actuator', '--input', path,
-                           '--output', str(tmp_path / 'o.csv')], capture_output=True, text=True, timeout=60)
+                           '--output', str(tmp_path / 'o.csv')], capture_output=True, text=True,
+                          timeout=60)
     assert done.returncode == 2
     assert "missing column 'x_s'" in done.stderr and 'Traceback' not in done.stderr
 
 
 def test_identify_writes_loadable_parameters(tmp_path, capsys):
-    data = volume_test_series(PARAMS, gases=(0.95, 1.05), effects=('wall_bulging',), seed=3, duration=6.0)
+    data = volume_test_series(PARAMS, gases=(0.95, 1.05), effects=('wall_bulging',), seed=3,
+                              duration=6.0)
     path = write(tmp_path / 'series.csv', data)
     out = tmp_path / 'fit.yaml'
     assert main(['identify', 'actuator', path, '--output', str(out), '--quiet']) == 0

@@ -24,17 +24,25 @@ def series():
 
 @pytest.fixture(scope='module')
 def start():
-    """Starting parameters: wrong tube, force curve and fitted E_V terms; kept E_V terms as the YAML."""
+    """
+    Return starting parameters: wrong tube, force curve and fitted E_V terms.
+
+    The kept E_V terms are the YAML's.
+    """
     def fitted_terms_zeroed(bellows):
         kept = {0, 1, 2, 5, 9}
-        return dataclasses.replace(bellows, e_v=tuple(a if k in kept else 0.0 for k, a in enumerate(bellows.e_v)))
-    return dataclasses.replace(TRUTH, v_tube=5e-6, f_mts=(900.0, -2000.0, 0.0), e_f=(0.5, 1e-5, 300.0, -1.01325),
-                               chamber=fitted_terms_zeroed(TRUTH.chamber), spring=fitted_terms_zeroed(TRUTH.spring))
+        return dataclasses.replace(bellows, e_v=tuple(a if k in kept else 0.0
+                                                      for k, a in enumerate(bellows.e_v)))
+    return dataclasses.replace(TRUTH, v_tube=5e-6, f_mts=(900.0, -2000.0, 0.0),
+                               e_f=(0.5, 1e-5, 300.0, -1.01325),
+                               chamber=fitted_terms_zeroed(TRUTH.chamber),
+                               spring=fitted_terms_zeroed(TRUTH.spring))
 
 
 @pytest.mark.slow
 def test_identification_recovers_e_v_within_0_4_ml(series, start):
-    fit = fit_actuator(start, series['x_c'], series['x_s'], series['p'], series['f'], run=series['run'])
+    fit = fit_actuator(start, series['x_c'], series['x_s'], series['p'], series['f'],
+                       run=series['run'])
     x_c, x_s, p = series['x_c'], series['x_s'], series['p']
     error_ml = (bulge_volume(fit.params, x_c, x_s, p) - bulge_volume(TRUTH, x_c, x_s, p)) * 1e6
     assert np.max(np.abs(error_ml)) < 0.4
@@ -49,13 +57,16 @@ def test_identification_recovers_e_v_within_0_4_ml(series, start):
     # The identified model predicts the stiffness figures of the truth.
     nominal = dataclasses.replace(fit.params, p_ref=TRUTH.p_ref)
     for x_c_point in (-0.02, 0.02):
-        assert stiffness(nominal, x_c_point) == pytest.approx(stiffness(TRUTH, x_c_point), rel=0.01)
+        assert stiffness(nominal,
+                         x_c_point) == pytest.approx(stiffness(TRUTH, x_c_point), rel=0.01)
 
 
 @pytest.mark.slow
 def test_geometric_baseline_fits_worse_on_bulging_data(series, start):
-    full = fit_actuator(start, series['x_c'], series['x_s'], series['p'], series['f'], run=series['run'])
-    base = fit_actuator(without_bulging(start), series['x_c'], series['x_s'], series['p'], series['f'],
+    full = fit_actuator(start, series['x_c'], series['x_s'], series['p'], series['f'],
+                        run=series['run'])
+    base = fit_actuator(without_bulging(start), series['x_c'], series['x_s'], series['p'],
+                        series['f'],
                         run=series['run'], wall_bulging=False, force_error=False)
     assert base.volume_error_ml[0] > 1.5 * full.volume_error_ml[0]
     assert base.force_error_n[0] > 2.0 * full.force_error_n[0]

@@ -32,7 +32,8 @@ def test_more_gas_raises_the_low_end_and_buckles_sooner():
     low_gas, high_gas = stiffness_range(PARAMS, 95e3), stiffness_range(PARAMS, 105e3)
     assert high_gas[0] > low_gas[0]
     # the rising branch ends at the buckling peak, reached at a smaller compression with more gas
-    assert stiffness_branch(PARAMS, 105e3)[1] < stiffness_branch(PARAMS, 95e3)[1] < PARAMS.chamber.x_max
+    assert stiffness_branch(PARAMS,
+                            105e3)[1] < stiffness_branch(PARAMS, 95e3)[1] < PARAMS.chamber.x_max
 
 
 def test_branch_is_the_rising_one_and_the_range_is_its_ends():
@@ -47,7 +48,8 @@ def test_branch_is_the_rising_one_and_the_range_is_its_ends():
     # with a little more gas the buckled spring ends below the elongated end: that low a stiffness
     # is not on the branch used, and the error says so
     gas = 106e3
-    k_below = 0.5 * (stiffness(PARAMS, PARAMS.chamber.x_max, gas) + stiffness_range(PARAMS, gas)[0])
+    k_below = 0.5 * (stiffness(PARAMS, PARAMS.chamber.x_max,
+                               gas) + stiffness_range(PARAMS, gas)[0])
     with pytest.raises(ParameterError, match='past the peak'):
         compression_for_stiffness(PARAMS, k_below, gas)
 

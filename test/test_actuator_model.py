@@ -19,7 +19,8 @@ def test_geometric_volumes_at_rest_match_table_ii():
     assert volume_geo(PARAMS.chamber, 0.0) * 1e6 == pytest.approx(56.9, abs=0.05)
     assert volume_geo(PARAMS.spring, 0.0) * 1e6 == pytest.approx(46.0, abs=0.05)
     # Compression (positive x) shrinks the volume over the working range.
-    assert volume_geo(PARAMS.chamber, 0.02) < volume_geo(PARAMS.chamber, 0.0) < volume_geo(PARAMS.chamber, -0.02)
+    assert volume_geo(PARAMS.chamber,
+                      0.02) < volume_geo(PARAMS.chamber, 0.0) < volume_geo(PARAMS.chamber, -0.02)
 
 
 def test_design_point_is_atmospheric():
@@ -27,7 +28,8 @@ def test_design_point_is_atmospheric():
     assert p == pytest.approx(P_ATM, rel=0.002)
 
 
-@pytest.mark.parametrize('params', [PARAMS, without_bulging(PARAMS)], ids=['augmented', 'geometric'])
+@pytest.mark.parametrize('params', [PARAMS, without_bulging(PARAMS)],
+                         ids=['augmented', 'geometric'])
 def test_gas_law_holds_everywhere(params):
     rng = np.random.default_rng(0)
     x_c = rng.uniform(params.chamber.x_min, params.chamber.x_max, 200)
@@ -150,7 +152,8 @@ def test_unknown_parameter_in_user_file_is_named(tmp_path):
 
 def test_overrides_are_laid_over_the_defaults(tmp_path):
     path = tmp_path / 'p.yaml'
-    path.write_text('/**:\n  ros__parameters:\n    actuator:\n      gas:\n        v_tube: 3.0e-5\n')
+    path.write_text('/**:\n  ros__parameters:\n    actuator:\n      gas:\n        v_tube: '
+                    '3.0e-5\n')
     params = load_actuator_params(path)
     assert params.v_tube == 3.0e-5
     assert params.chamber == PARAMS.chamber

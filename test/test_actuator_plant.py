@@ -1,4 +1,4 @@
-"""Simulated actuator: drive, sensors, and each physical effect moving the data its physical way."""
+"""Simulated actuator: drive, sensors, and each physical effect moving the data its way."""
 import numpy as np
 import pytest
 
@@ -27,7 +27,8 @@ def fast_spring_step(t, start=0.5, rise=0.05, amplitude=0.012):
 
 
 def test_effect_names():
-    assert ACTUATOR_EFFECTS == ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash',
+    assert ACTUATOR_EFFECTS == ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag',
+                                'backlash',
                                 'buckling')
 
 
@@ -141,7 +142,8 @@ def test_drive_speed_encoder_end_stops_and_self_locking():
     speed = plant.x_nut - x1
     assert 0.85 * plant.max_speed < speed <= plant.max_speed
     sample = plant.step(DT, 0.0, 0.0)
-    assert abs(plant.x_from_counts(sample.encoder_counts) - plant.x_nut) <= PARAMS.drive.metres_per_count
+    assert (abs(plant.x_from_counts(sample.encoder_counts) - plant.x_nut)
+            <= PARAMS.drive.metres_per_count)
     # Not back-drivable: once the rotor has coasted to rest, the gas load (here well above
     # ambient) cannot push the nut back at zero duty.
     run(plant, 0.5, 0.0, x_s=0.0)

@@ -1,5 +1,8 @@
-"""`bellows bench --only arm_control --json`: its figures, their structure, and their order on
-the short deterministic run (the first three moves of the bench trajectory; simulated time)."""
+"""
+`bellows bench --only arm_control --json`: its figures, their structure, and their order.
+
+On the short deterministic run (the first three moves of the bench trajectory; simulated time).
+"""
 import json
 import math
 

@@ -6,7 +6,7 @@ import pytest
 
 from bellows_ros.control.pressure_allocation import (allocate_paper_a, allocate_previous,
                                                      chain_pressures)
-from bellows_ros.models.segment import SegmentModel, load_segment_params
+from bellows_ros.models.segment import load_segment_params, SegmentModel
 
 P = load_segment_params()
 # One sample of the strain profile moves s~_a by (l0 π/2)/Nλ·λ1 (28); with λ1 < 2 that moves τ_a
@@ -19,8 +19,12 @@ def state(model):
 
 
 def pressurised(psi, p1, excursion=None, p2=None):
-    """A model stepped along a history: bend to `psi` vented, ramp chain 1 to `p1` (chain 2 to
-    `p2`), then optionally an excursion to the angle `excursion` and back at that pressure."""
+    """
+    Step a model along a history and return it.
+
+    Bend to `psi` vented, ramp chain 1 to `p1` (chain 2 to `p2`), then optionally an excursion to
+    the angle `excursion` and back at that pressure.
+    """
     p2 = P.p0 if p2 is None else p2
     model = SegmentModel(P)
     for k in range(1000):
@@ -88,8 +92,11 @@ def test_saturation_gives_the_nearest_end(allocate):
 
 
 def test_contact_memory_changes_the_pressures():
-    """Same (Ψ, τ) after two histories: paper A's inverse asks for different pressures, the
-    previous model for the same ones."""
+    """
+    Same (Ψ, τ) after two histories: paper A's inverse asks for different pressures.
+
+    The previous model asks for the same ones.
+    """
     plain = pressurised(0.8, 3.0e5)
     moved = pressurised(0.8, 3.0e5, excursion=-0.6)
     assert moved.memory1.s_a > plain.memory1.s_a  # the excursion through Ψ < 0 grew the contact

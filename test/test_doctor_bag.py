@@ -1,4 +1,5 @@
-"""The model doctor reads a rosbag2 recording (topics: docs/interfaces.md), names a hidden effect.
+"""
+The model doctor reads a rosbag2 recording (topics: docs/interfaces.md), names a hidden effect.
 
 The bag is written here with rosbags' own writer and the ROS 2 Jazzy type store: joint states
 (`air_chamber`, `spring`), chamber pressure (`actuator`) and the spring force (wrench, frame
@@ -9,7 +10,7 @@ import json
 import numpy as np
 import pytest
 from rosbags.rosbag2 import Writer
-from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys import get_typestore, Stores
 
 from bellows_ros.cli import main
 from bellows_ros.models.actuator import load_actuator_params
@@ -29,7 +30,8 @@ def header(t, frame=''):
 
 def joint_state(t, names, position=(), effort=()):
     return STORE.types[JOINT_STATE](header=header(t), name=list(names),
-                                    position=np.array(position, float), velocity=np.array([], float),
+                                    position=np.array(position, float),
+                                    velocity=np.array([], float),
                                     effort=np.array(effort, float))
 
 
@@ -51,8 +53,10 @@ def write_actuator_bag(path, record, every=4):
             ns = int(round(t * 1e9)) + 5 * 10 ** 9
             for connection, message, kind in (
                     (joints, joint_state(t, ('air_chamber', 'spring'),
-                                         position=(record['x_c'][k], record['x_s'][k])), JOINT_STATE),
-                    (chambers, joint_state(t, ('actuator',), effort=(record['p'][k],)), JOINT_STATE),
+                                         position=(record['x_c'][k], record['x_s'][k])),
+                     JOINT_STATE),
+                    (chambers, joint_state(t, ('actuator',), effort=(record['p'][k],)),
+                     JOINT_STATE),
                     (forces, wrench(t, float(record['f'][k])), WRENCH)):
                 writer.write(connection, ns, STORE.serialize_cdr(message, kind))
 

@@ -1,8 +1,11 @@
-"""The vectorised operators of the candidate causes agree with their plain step-by-step definitions,
-and the held-out blocks and decision rule behave as documented."""
-import numpy as np
+"""
+The vectorised operators of the candidate causes agree with their step-by-step definitions.
+
+And the held-out blocks and decision rule behave as documented.
+"""
 from hypothesis import given, settings
 from hypothesis import strategies as st
+import numpy as np
 
 from bellows_ros.doctor import scoring
 from bellows_ros.doctor.checks import reversals

@@ -1,4 +1,5 @@
-"""The model doctor on arm-segment data with hidden effects (paper A).
+"""
+The model doctor on arm-segment data with hidden effects (paper A).
 
 Records come from the segment plant on the test bench (`quasi_static_record`: slow excursions with
 reversals and holds, while the chain pressures follow their own schedule of steps and ramps at
@@ -17,7 +18,8 @@ from bellows_ros.models.segment_experiments import quasi_static_record
 
 NAMES = ('t', 'psi', 'p1', 'p2', 'tau_ext', 'psi_dot', 'tau_motion')
 DURATION = 30.0
-PRESSURE_HOLD = (0.5, 2.0)  # s between pressure changes (`quasi_static_record`'s pressure schedule)
+PRESSURE_HOLD = (0.5,
+                 2.0)  # s between pressure changes (`quasi_static_record`'s pressure schedule)
 MIN_GAIN = 0.30             # held-out gain every hidden effect must reach (the issue)
 
 EFFECTS = {
@@ -27,14 +29,16 @@ EFFECTS = {
     # Ψ_j0(p) is partly absorbed by the pressure polynomial of the baseline (34); a bellows that
     # takes most of its natural curvature below ~1 bar gauge (steep tanh) leaves a trace the
     # polynomial cannot follow once the record holds many pressures (docs/doctor.md).
-    'natural_curvature': lambda rng: {'c_psi0': rng.uniform(8.0, 12.0), 'c_psi0_p': rng.uniform(0.5, 0.7)},
+    'natural_curvature': lambda rng: {'c_psi0': rng.uniform(8.0, 12.0),
+                                      'c_psi0_p': rng.uniform(0.5, 0.7)},
 }
 
 
 def random_params(rng):
     """Segment coefficients the doctor does not know (it refits them)."""
     params = load_segment_params()
-    return params.replace(restoring_k_s=rng.uniform(-2.0, -1.0), friction_c_f=rng.uniform(0.2, 0.6))
+    return params.replace(restoring_k_s=rng.uniform(-2.0, -1.0),
+                          friction_c_f=rng.uniform(0.2, 0.6))
 
 
 def write_csv(path, record):
@@ -90,7 +94,7 @@ def test_no_effect_is_none(tmp_path):
 
 @pytest.mark.slow
 def test_effect_outside_the_vocabulary_is_unexplained(tmp_path):
-    """A 0.3 Hz torque ripple (no cause of the vocabulary makes one) must not get the nearest name."""
+    """A 0.3 Hz torque ripple (no cause in the vocabulary makes one) must not get a name."""
     rng = np.random.default_rng(21)
     record = quasi_static_record(random_params(rng), {}, seed=21, duration=DURATION,
                                  pressure_hold=PRESSURE_HOLD)
@@ -112,9 +116,13 @@ def test_two_effects_are_both_named(tmp_path):
 
 @pytest.mark.slow
 def test_paper_a_story_end_to_end(tmp_path):
-    """Paper A: the previous model (34) cannot show the contact hysteresis (error 3.2 N·m in Fig. 10,
-    0.6 N·m with the membrane-contact model). The doctor must find the cause by itself, with a gain
-    of the paper's order (1 - 0.6/3.2 = 81 %), and its extended YAML must reproduce the hysteresis."""
+    """
+    Paper A: the previous model (34) cannot show the contact hysteresis.
+
+    Its error is 3.2 N·m in Fig. 10, 0.6 N·m with the membrane-contact model. The doctor must find
+    the cause by itself, with a gain of the paper's order (1 - 0.6/3.2 = 81 %), and its extended
+    YAML must reproduce the hysteresis.
+    """
     params = load_segment_params()
     record = quasi_static_record(params, {'contact_hysteresis': {}}, seed=31, duration=40.0)
     data = write_csv(tmp_path / 'bench.csv', record)
@@ -136,11 +144,15 @@ def test_paper_a_story_end_to_end(tmp_path):
 
 @pytest.mark.slow
 def test_record_pressurised_only_at_its_end_names_nothing(tmp_path):
-    """Regression: a record (natural curvature hidden, pressures changing only between angle moves)
-    whose chains are pressurised only in its last ~2 s, below 2.9 bar abs. Every pressurised sample
-    then lies in the blocks of one fold: that fold's refit saw only sensor noise on its pressure
+    """
+    Regression: a record pressurised only in its last ~2 s must not get a cause named.
+
+    The record (natural curvature hidden, pressures changing only between angle moves) has its
+    chains pressurised only in its last ~2 s, below 2.9 bar abs. Every pressurised sample then
+    lies in the blocks of one fold: that fold's refit saw only sensor noise on its pressure
     columns, and the regression (32), scaled per training set, fitted the noise (held-out RMSE
-    ~4000 N·m against 0.018 in-sample) — and a cause was named from the broken baseline."""
+    ~4000 N·m against 0.018 in-sample) — and a cause was named from the broken baseline.
+    """
     rng = np.random.default_rng(1)
     params = random_params(rng)
     record = quasi_static_record(params, {'natural_curvature': EFFECTS['natural_curvature'](rng)},
@@ -158,7 +170,8 @@ def test_record_pressurised_only_at_its_end_names_nothing(tmp_path):
     # ... and the one that never did stays bounded (the true pressure torque, not noise × 1e5).
     assert report['baseline']['rmse'] < 20 * baseline['insample_rmse'] < 1.0
     assert details['heldout_failure'] is None
-    # No forced name: every cause acts through the pressures, which no held-out score can test here.
+    # No forced name: every cause acts through the pressures, which no held-out score can test
+    # here.
     assert report['cause'] == 'none' and report['causes'] == []
     assert all(c['heldout_rmse'] is None for c in report['candidates'])
     for cause in EFFECTS:

@@ -1,4 +1,5 @@
-"""Acceptance: the arm controller tracks an angle trajectory on the simulated arm over DDS.
+"""
+Acceptance: the arm controller tracks an angle trajectory on the simulated arm over DDS.
 
 Processes: sim_arm_node (paper A's full physics, sensor noise, valve lag; udp_multicast CAN),
 driver_node (arm only), arm_controller_node (paper A feedforward, config/nodes_sim.yaml gains).
@@ -12,19 +13,18 @@ the driver's watchdog never vented the arm while it tracked (the controller keep
 its rate).
 """
 import math
+from pathlib import Path
 import random
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
+from runtimes import node_env, override
 
 from bellows_ros.control import angle_trajectory
 from bellows_ros.runtime import dds_node
 from bellows_ros.runtime.messages import msg
-
-from runtimes import node_env, override
 
 BIN = Path(sys.executable).parent
 CONFIG = Path(__file__).resolve().parent.parent / 'config' / 'nodes_sim.yaml'

@@ -1,5 +1,8 @@
-"""The package's import graph (from the source, with ast): no cycles, and every import goes down
-the layers models -> identify/doctor -> hardware -> control -> nodes/runtime -> bench/demos/cli.
+"""
+The package's import graph (from the source, with ast): no cycles, every import goes down.
+
+The layers: models -> identify/doctor -> hardware -> control -> nodes/runtime ->
+bench/demos/cli.
 
 Every import counts, also one inside a function: a deferred import still ties the two modules
 together, it only hides the cycle until run time.
@@ -32,7 +35,7 @@ def _modules():
 
 
 def import_graph():
-    """{module: set of bellows_ros modules it imports} for every module of the package."""
+    """Return {module: set of bellows_ros modules it imports} for every module of the package."""
     modules = _modules()
 
     def resolve(name):

@@ -1,4 +1,5 @@
-"""Mixed graphs: an rclpy node and a DDS-runtime node on one ROS 2 graph.
+"""
+Mixed graphs: an rclpy node and a DDS-runtime node on one ROS 2 graph.
 
 Both exchange every topic of the contract (`topics.TOPICS`, each with its message type) in both
 directions and check the other's values (mixed_peer.py); the ROS 2 CLI (`ros2 node list`,
@@ -7,6 +8,7 @@ directions and check the other's values (mixed_peer.py); the ROS 2 CLI (`ros2 no
 """
 import json
 import os
+from pathlib import Path
 import random
 import select
 import shutil
@@ -14,13 +16,12 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
+from runtimes import node_env, require_rclpy
 
 from bellows_ros import params
 from bellows_ros.runtime.topics import TOPICS
-from runtimes import node_env, require_rclpy
 
 pytestmark = pytest.mark.slow
 
@@ -40,7 +41,7 @@ def domain():
 
 @pytest.fixture
 def start(domain):
-    """start(argv, runtime): a node process in the test's domain, stopped (SIGINT) at the end."""
+    """Return a starter of node processes in the test's domain, stopped (SIGINT) at the end."""
     processes = []
 
     def start_process(argv, runtime):
@@ -78,7 +79,7 @@ def ros2_until(domain, args, condition, attempts=8):
 
 
 def read_report(process, deadline):
-    """The peer's JSON line once it has the other side's values on every topic."""
+    """Return the peer's JSON line once it has the other side's values on every topic."""
     ready, _, _ = select.select([process.stdout], [], [], max(0.0, deadline - time.monotonic()))
     assert ready, f'{process.args[-1]} peer: not every topic within {TIMEOUT_S} s'
     line = process.stdout.readline()

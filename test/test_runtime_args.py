@@ -1,16 +1,16 @@
-"""`--ros-args` on the DDS runtime (ros_args): parsing, parameter precedence, names, remapping.
+"""
+`--ros-args` on the DDS runtime (ros_args): parsing, parameter precedence, names, remapping.
 
 The same rules run end to end on both runtimes in test_runtime_parameters.py; these are the unit
 tests of the pieces, and a fuzz of the parser (any tokens: a result or one ParameterError line).
 """
-import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
+import pytest
 
 from bellows_ros.errors import ParameterError
 from bellows_ros.runtime import ros_args
-from bellows_ros.runtime.ros_args import (node_identity, parameter_overrides, parse,
-                                          resolve_topic)
+from bellows_ros.runtime.ros_args import node_identity, parameter_overrides, parse, resolve_topic
 
 
 def test_parse_full_syntax(tmp_path):

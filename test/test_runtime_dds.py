@@ -5,16 +5,15 @@ import sys
 import textwrap
 import time
 
+from plain_cyclone import JOINT_STATE_SUBSCRIBER
 import pytest
 
 from bellows_ros.runtime import dds_node
 from bellows_ros.runtime.messages import msg
 
-from plain_cyclone import JOINT_STATE_SUBSCRIBER
-
 DOMAIN = '191'
 
-TALKER = textwrap.dedent('''
+TALKER = textwrap.dedent("""
     import sys
     from bellows_ros.runtime import Node, run
 
@@ -34,13 +33,13 @@ TALKER = textwrap.dedent('''
             self.publisher.publish(state)
 
     sys.exit(run(Talker))
-''')
+""")
 
 # A subscriber that knows nothing of bellows_ros: plain cyclonedds and its own IDL definitions
-# with the ROS 2 type names. It prints the last position it received and the type name and USER_DATA
-# of the matched writer (from discovery). (Reading the builtin DCPSPublication topic crashes
-# cyclonedds-python 11.0.1, so the matched-publication data is used instead.)
-INDEPENDENT = JOINT_STATE_SUBSCRIBER + textwrap.dedent('''\
+# with the ROS 2 type names. It prints the last position it received and the type name and
+# USER_DATA of the matched writer (from discovery). (Reading the builtin DCPSPublication topic
+# crashes cyclonedds-python 11.0.1, so the matched-publication data is used instead.)
+INDEPENDENT = JOINT_STATE_SUBSCRIBER + textwrap.dedent("""\
     topic = Topic(participant, 'rt/' + sys.argv[2].lstrip('/'), JointState)
     reader = DataReader(participant, topic, qos=Qos(Policy.Reliability.Reliable(0),
                                                      Policy.History.KeepLast(10)))
@@ -55,7 +54,7 @@ INDEPENDENT = JOINT_STATE_SUBSCRIBER + textwrap.dedent('''\
             typename = endpoint.type_name
         time.sleep(0.01)
     print(seen.name[0], seen.position[0], typename, userdata)
-''')
+""")
 
 
 @pytest.fixture
@@ -122,7 +121,7 @@ def test_independent_cyclone_subscriber_sees_the_runtime(tmp_path, env):
     name, position, typename, userdata = listener.stdout.split()
     assert name == 'segment_1' and float(position) > 0.5
     assert typename == 'sensor_msgs::msg::dds_::JointState_'
-    from rosbags.typesys import Stores, get_typestore
+    from rosbags.typesys import get_typestore, Stores
     expected = get_typestore(Stores.ROS2_JAZZY).hash_rihs01('sensor_msgs/msg/JointState')
     assert userdata == f'typehash={expected};'
 
@@ -186,11 +185,11 @@ def test_waiting_for_a_dead_reader_times_out(env):
     dds_node.init([])
     node = dds_node.Node('acked')
     publisher = node.create_publisher(msg.JointState, '/acked', 100)
-    reader = subprocess.Popen([sys.executable, '-c', JOINT_STATE_SUBSCRIBER + textwrap.dedent('''\
+    reader = subprocess.Popen([sys.executable, '-c', JOINT_STATE_SUBSCRIBER + textwrap.dedent("""\
         reader = DataReader(participant, Topic(participant, 'rt/acked', JointState),
                             qos=Qos(Policy.Reliability.Reliable(0), Policy.History.KeepLast(10)))
         time.sleep(60)
-        '''), DOMAIN], env={k: v for k, v in env.items() if k != 'PYTHONPATH'})
+        """), DOMAIN], env={k: v for k, v in env.items() if k != 'PYTHONPATH'})
     try:
         end = time.monotonic() + 20.0
         while publisher.get_subscription_count() == 0 and time.monotonic() < end:
@@ -207,8 +206,11 @@ def test_waiting_for_a_dead_reader_times_out(env):
 
 
 def test_a_backlog_of_two_topics_is_served_in_step(env):
-    """After a stall the two halves of each sample (two topics) must not drift apart: the model
-    node pairs them and drops a half after `max_pending` unmatched ones."""
+    """
+    After a stall the two halves of each sample (two topics) must not drift apart.
+
+    The model node pairs them and drops a half after `max_pending` unmatched ones.
+    """
     dds_node.init([])
     node = dds_node.Node('backlog')
     order = []

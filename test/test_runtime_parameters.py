@@ -1,4 +1,5 @@
-"""rcl's parameter and remapping rules, one table run on both runtimes.
+"""
+rcl's parameter and remapping rules, one table run on both runtimes.
 
 Each case starts `parameter_probe.py` (a node declaring `gain`, `label`, `port`, `segments` and
 publishing on a few topics) with the case's `--ros-args` on rclpy and on the DDS runtime, and
@@ -6,15 +7,14 @@ checks what the node got: parameter values, its name and namespace, the topics a
 resolved them, or exit status 2 with one line on stderr. The expected values are rcl's, measured
 on rclpy (Jazzy); the DDS runtime must give the same.
 """
+from dataclasses import dataclass, field
 import json
+from pathlib import Path
 import random
 import subprocess
 import sys
-from dataclasses import dataclass, field
-from pathlib import Path
 
 import pytest
-
 from runtimes import node_env
 
 PROBE = Path(__file__).resolve().parent / 'parameter_probe.py'
@@ -41,7 +41,7 @@ FILES = {
 class Case:
     """`argv` after `--ros-args`; what the node must report, or `error`: a fragment of its line."""
 
-    id: str
+    id: str  # noqa: A003 (pytest's word for a case name)
     argv: list
     parameters: dict = field(default_factory=dict)
     name: str = 'probe'
@@ -178,8 +178,12 @@ def test_rcl_rules(case, runtime, files):
 
 
 def test_array_of_another_type_later(runtime, files):
-    """rcl's quirk, not copied: a later array of another element type for the same node and name
-    is silently dropped by rcl (the earlier array stays); the DDS runtime reports the type."""
+    """
+    An rcl quirk, not copied: a later array of another element type is dropped by rcl.
+
+    For the same node and name rcl silently keeps the earlier array; the DDS runtime reports the
+    type.
+    """
     result = probe(runtime, files, ['--params-file', 'Q.yaml', '-p', 'probe:segments:=[1.0]'])
     if runtime == 'rclpy':
         assert result.returncode == 0, result.stderr

@@ -1,15 +1,18 @@
-"""`bellows simulate segment` / `bellows identify segment`: round trip and bad input (exit 2, one line
-naming file, line and column, no traceback)."""
+"""
+`bellows simulate segment` / `bellows identify segment`: round trip and bad input.
+
+Bad input: exit 2, one line naming file, line and column, no traceback.
+"""
 import csv
+from pathlib import Path
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from bellows_ros.cli import main
-from bellows_ros.models.segment import OUTPUTS, load_segment_params, simulate_model
+from bellows_ros.models.segment import load_segment_params, OUTPUTS, simulate_model
 from bellows_ros.models.segment_experiments import quasi_static_record
 from bellows_ros.models.segment_plant import FULL_MODEL
 
@@ -21,7 +24,8 @@ def write(path, record, columns=COLUMNS, extra=True):
         writer = csv.writer(stream)
         writer.writerow(columns + (['note'] if extra else []))
         for k in range(len(record['t'])):
-            writer.writerow([repr(float(record[c][k])) for c in columns] + (['keep me'] if extra else []))
+            writer.writerow([repr(float(record[c][k])) for c in columns]
+                            + (['keep me'] if extra else []))
     return path
 
 
@@ -33,12 +37,14 @@ def read(path):
 
 @pytest.fixture(scope='module')
 def record():
-    return quasi_static_record(load_segment_params(), FULL_MODEL, None, seed=4, duration=8.0, dt=1e-2)
+    return quasi_static_record(load_segment_params(), FULL_MODEL, None, seed=4, duration=8.0,
+                               dt=1e-2)
 
 
 def test_simulate_writes_input_plus_the_model_outputs_with_state_carried(tmp_path, record):
     source = write(tmp_path / 'in.csv', record)
-    assert main(['simulate', 'segment', '--input', str(source), '--output', str(tmp_path / 'out.csv')]) == 0
+    assert main(['simulate', 'segment', '--input', str(source), '--output',
+                 str(tmp_path / 'out.csv')]) == 0
     header, rows = read(tmp_path / 'out.csv')
     assert header == COLUMNS + ['note'] + list(OUTPUTS)
     assert all(row[6] == 'keep me' for row in rows)
@@ -63,15 +69,17 @@ def test_simulate_with_effects_runs_the_plant(tmp_path, record):
 
 @pytest.mark.slow
 def test_identify_round_trip_through_the_cli(tmp_path, record):
-    """identify (subprocess: the real entry point) -> YAML -> simulate with --params."""
+    """Identify (subprocess: the real entry point) -> YAML -> simulate with --params."""
     short = {k: v[:400] for k, v in record.items()}
     data = write(tmp_path / 'data.csv', short)
     fitted = tmp_path / 'fitted.yaml'
     bellows = Path(sys.executable).with_name('bellows')  # the installed console script
     done = subprocess.run([str(bellows), 'identify', 'segment', str(data),
-                           '--output', str(fitted), '--quiet'], capture_output=True, text=True, timeout=300)
+                           '--output', str(fitted), '--quiet'], capture_output=True, text=True,
+                          timeout=300)
     assert done.returncode == 0, done.stderr
-    assert 'paper A' in done.stdout and 'previous model (34)' in done.stdout and 'RMSE' in done.stdout
+    assert 'paper A' in done.stdout and 'previous model (34)' in done.stdout
+    assert 'RMSE' in done.stdout
     assert load_segment_params(fitted).ogden_gamma[0] > 2.0
     assert main(['simulate', 'segment', '--input', str(data), '--output', str(tmp_path / 'o.csv'),
                  '--params', str(fitted)]) == 0
@@ -101,26 +109,32 @@ def _rewrite(path, line, column, value):
     (8, 'p2', '800000', "bad.csv:8: column 'p2'"),
     (9, 'psi_dot', 'fast', "bad.csv:9: column 'psi_dot': not a number"),
 ])
-def test_bad_rows_name_file_line_and_column(tmp_path, capsys, record, line, column, value, expected):
+def test_bad_rows_name_file_line_and_column(tmp_path, capsys, record, line, column, value,
+                                            expected):
     bad = _rewrite(write(tmp_path / 'bad.csv', record), line, column, value)
-    err = _error(capsys, ['simulate', 'segment', '--input', str(bad), '--output', str(tmp_path / 'o.csv')])
+    err = _error(capsys,
+                 ['simulate', 'segment', '--input', str(bad), '--output', str(tmp_path / 'o.csv')])
     assert expected in err
 
 
 def test_missing_column_is_named(tmp_path, capsys, record):
     bad = write(tmp_path / 'bad.csv', record, columns=['t', 'psi', 'p2', 'tau_ext'])
-    err = _error(capsys, ['simulate', 'segment', '--input', str(bad), '--output', str(tmp_path / 'o.csv')])
+    err = _error(capsys,
+                 ['simulate', 'segment', '--input', str(bad), '--output', str(tmp_path / 'o.csv')])
     assert "bad.csv:1: missing column 'p1'" in err
-    err = _error(capsys, ['identify', 'segment', str(bad), '--output', str(tmp_path / 'p.yaml'), '--quiet'])
+    err = _error(capsys, ['identify', 'segment', str(bad), '--output', str(tmp_path / 'p.yaml'),
+                          '--quiet'])
     assert "missing column 'p1'" in err
 
 
 def test_unknown_parameter_and_effect_are_named(tmp_path, capsys, record):
     source = write(tmp_path / 'in.csv', record)
     params = tmp_path / 'p.yaml'
-    params.write_text('/**:\n  ros__parameters:\n    segment:\n      geometry:\n        l1: 0.05\n')
+    params.write_text('/**:\n  ros__parameters:\n    segment:\n      geometry:\n        l1: '
+                      '0.05\n')
     base = ['simulate', 'segment', '--input', str(source), '--output', str(tmp_path / 'o.csv')]
-    assert "p.yaml: unknown parameter 'segment.geometry.l1'" in _error(capsys, base + ['--params', str(params)])
+    assert "p.yaml: unknown parameter 'segment.geometry.l1'" in _error(
+        capsys, base + ['--params', str(params)])
     assert "unknown segment effect 'bogus'" in _error(capsys, base + ['--effect', 'bogus'])
     assert "unknown parameter 'tau_x'" in _error(capsys, base + ['--effect', 'sensor_lag:tau_x=1'])
 

@@ -1,5 +1,9 @@
-"""The rate estimator (bellows_ros.models.derivatives): streaming and batch forms give the same
-numbers, its delay and noise gain are the documented ones, and the users share it."""
+"""
+The rate estimator (bellows_ros.models.derivatives): streaming and batch forms agree.
+
+They give the same numbers, its delay and noise gain are the documented ones, and the users
+share it.
+"""
 import math
 
 import numpy as np

@@ -1,10 +1,11 @@
-"""Identification (30-33) recovers a known segment from noisy quasi-static + dynamic bench records.
+"""
+Identification (30-33) recovers a known segment from noisy quasi-static + dynamic bench records.
 
 Truth: config/segment.yaml, full paper-A physics. Records at 1 kHz with the issue's noise: pressure
-1 kPa, angle 1e-3 rad, torque 0.05 N·m (std; Ψ̇ 5e-3 rad/s). The search starts from a wrong material.
-Judged against the raw measured τ_ext on records the fit never saw: the issue's ≤ 1.2 σ_τ, for the
-fitted model and (as a check of the pipeline) the true parameters; and the Fig. 10 hysteresis from the
-fitted parameters.
+1 kPa, angle 1e-3 rad, torque 0.05 N·m (std; Ψ̇ 5e-3 rad/s). The search starts from a wrong
+material. Judged against the raw measured τ_ext on records the fit never saw: the issue's ≤ 1.2
+σ_τ, for the fitted model and (as a check of the pipeline) the true parameters; and the Fig. 10
+hysteresis from the fitted parameters.
 """
 import numpy as np
 import pytest
@@ -13,7 +14,8 @@ from bellows_ros.identify.segment import (fig10_torques, fit_segment, least_squa
                                           prediction_errors)
 from bellows_ros.models.ogden import free_strain
 from bellows_ros.models.segment import load_segment_params
-from bellows_ros.models.segment_experiments import dynamic_record, fig10_record, quasi_static_record
+from bellows_ros.models.segment_experiments import (dynamic_record, fig10_record,
+                                                    quasi_static_record)
 from bellows_ros.models.segment_plant import FULL_MODEL, NO_NOISE
 
 NOISE = {'p': 1000.0, 'psi': 1e-3, 'psi_dot': 5e-3, 'tau': 0.05}
@@ -23,11 +25,16 @@ FIG10 = (6.7, 9.1)  # paper A's measured |τ_ext| before / after the excursion, 
 
 
 def bench_records(truth, noise, seeds):
-    """A dynamic and a quasi-static record joined with a 1 s time gap (separate runs: the input filter
-    treats them apart). Dynamic first, so that the fit's training part (first 70 %) has both kinds of
-    motion and its held-out part is the end of the quasi-static run."""
+    """
+    Join a dynamic and a quasi-static record with a 1 s time gap.
+
+    Separate runs: the input filter treats them apart. Dynamic first, so that the fit's training
+    part (first 70 %) has both kinds of motion and its held-out part is the end of the
+    quasi-static run.
+    """
     dynamic = dynamic_record(truth, FULL_MODEL, noise, seed=seeds[1], duration=DURATION[1], dt=DT)
-    quasi = quasi_static_record(truth, FULL_MODEL, noise, seed=seeds[0], duration=DURATION[0], dt=DT)
+    quasi = quasi_static_record(truth, FULL_MODEL, noise, seed=seeds[0], duration=DURATION[0],
+                                dt=DT)
     offset = {'t': dynamic['t'][-1] + 1.0}
     return {k: np.concatenate([dynamic[k], quasi[k] + offset.get(k, 0.0)]) for k in quasi}
 
@@ -47,8 +54,8 @@ def test_fitted_model_is_within_the_noise_on_unseen_records(fitted):
     truth, fit = fitted
     sigma = NOISE['tau']
     assert fit.input_cutoff == truth.identify_input_cutoff and fit.rate == pytest.approx(1 / DT)
-    # the issue's criterion: unseen noisy 1 kHz records (quasi-static + dynamic), the fitted model's
-    # prediction pipeline (input filter + model) against the raw measured torque
+    # the issue's criterion: unseen noisy 1 kHz records (quasi-static + dynamic), the fitted
+    # model's prediction pipeline (input filter + model) against the raw measured torque
     noisy = bench_records(truth, NOISE, (31, 32))
     # measured: fitted 0.0572 N·m, true parameters 0.0530 N·m
     assert prediction_errors(truth, noisy)['model'][0] <= 1.2 * sigma
@@ -72,13 +79,15 @@ def test_fit_reproduces_the_fig10_hysteresis(fitted):
     truth, fit = fitted
     fit_before, fit_after, prev_before, prev_after = fig10_torques(fit.params)
     assert fit_after >= 1.1 * fit_before
-    assert fit_before == pytest.approx(FIG10[0], rel=0.1) and fit_after == pytest.approx(FIG10[1], rel=0.1)
+    assert fit_before == pytest.approx(FIG10[0],
+                                       rel=0.1) and fit_after == pytest.approx(FIG10[1], rel=0.1)
     assert prev_before == prev_after  # the previous model has no memory
     # the prediction pipeline (filtered noisy inputs) does not smear it: a noisy Fig. 10 record
     record, before, after = fig10_record(truth, FULL_MODEL, NOISE, seed=5)
     model = predict(fit.params, record)[0]
     assert model[after] >= 1.1 * model[before]
-    assert model[before] == pytest.approx(FIG10[0], rel=0.1) and model[after] == pytest.approx(FIG10[1], rel=0.1)
+    assert model[before] == pytest.approx(FIG10[0], rel=0.1)
+    assert model[after] == pytest.approx(FIG10[1], rel=0.1)
     # the material is identified where the data can see it: the stretch-load curve of (22) over the
     # loads p_rel·R met in the records (the four Ogden constants themselves trade off, and the two
     # terms may swap)
@@ -89,9 +98,13 @@ def test_fit_reproduces_the_fig10_hysteresis(fitted):
 
 
 def test_least_squares_plain_and_with_the_doctors_ridge():
-    """(32), the one linear solve: ridge 0 is the least-squares θ (checked against the normal
-    equations); ridge > 0 is the minimiser of |Xθ - Y|² + ridge |diag(scale) θ|² (checked against
-    the augmented system [X; √ridge diag(scale)] solved by SVD). An unexcited column gets 0."""
+    """
+    (32), the one linear solve: ridge 0 is least squares, ridge > 0 the scaled ridge minimiser.
+
+    Ridge 0 is the least-squares θ (checked against the normal equations); ridge > 0 is the
+    minimiser of |Xθ - Y|² + ridge |diag(scale) θ|² (checked against the augmented system
+    [X; √ridge diag(scale)] solved by SVD). An unexcited column gets 0.
+    """
     rng = np.random.default_rng(41)
     x = rng.standard_normal((400, 5)) * np.array([1.0, 10.0, 100.0, 1e-2, 3.0])
     y = x @ rng.standard_normal(5) + 0.01 * rng.standard_normal(400)

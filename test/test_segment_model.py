@@ -1,5 +1,9 @@
-"""Paper A segment model: Algorithm 1 (Appendix A/B), path dependence, regressors vs the 1 kHz step,
-the Fig. 10 calibration of config/segment.yaml, parameter checks."""
+"""
+Paper A segment model: Algorithm 1 (Appendix A/B), path dependence, regressors, calibration.
+
+Regressors vs the 1 kHz step, the Fig. 10 calibration of config/segment.yaml, parameter
+checks.
+"""
 import math
 
 import numpy as np
@@ -9,11 +13,11 @@ from bellows_ros.bench.segment import previous_step
 from bellows_ros.errors import ParameterError
 from bellows_ros.identify.segment import calibrate_fig10, fig10_torques
 from bellows_ros.models.contact import contact_angle
-from bellows_ros.models.segment import (OUTPUTS, SegmentModel, SegmentOutput, actuator_regressor,
-                                        contact_lengths, external_torque, friction_regressor,
-                                        load_segment_params, previous_regressor, relative_pressure,
-                                        restoring_regressor, scaled_pressure, simulate_model,
-                                        strain_memory)
+from bellows_ros.models.segment import (actuator_regressor, contact_lengths, external_torque,
+                                        friction_regressor, load_segment_params, OUTPUTS,
+                                        previous_regressor, relative_pressure, restoring_regressor,
+                                        scaled_pressure, SegmentModel, SegmentOutput,
+                                        simulate_model, strain_memory)
 
 
 @pytest.fixture(scope='module')
@@ -21,7 +25,8 @@ def params():
     return load_segment_params()
 
 
-@pytest.mark.parametrize('p_abs, psi_deg', [(4.0e5, 74.5), (2.0e5, 30.0), (7.5e5, 100.0), (6.0e5, -20.0)])
+@pytest.mark.parametrize('p_abs, psi_deg',
+                         [(4.0e5, 74.5), (2.0e5, 30.0), (7.5e5, 100.0), (6.0e5, -20.0)])
 def test_appendix_b_repeated_steps_converge_to_one_contact_length(params, p_abs, psi_deg):
     memory = strain_memory(params)
     alpha = contact_angle(math.radians(psi_deg), 1.0)
@@ -39,7 +44,8 @@ def test_appendix_b_repeated_steps_converge_to_one_contact_length(params, p_abs,
 
 def test_gamma_of_two_or_less_is_rejected(tmp_path, params):
     bad = tmp_path / 'bad.yaml'
-    bad.write_text('/**:\n  ros__parameters:\n    segment:\n      ogden:\n        gamma: [2.0, 6.0]\n')
+    bad.write_text('/**:\n  ros__parameters:\n    segment:\n      ogden:\n        gamma: [2.0, '
+                   '6.0]\n')
     with pytest.raises(ParameterError, match='segment.ogden.gamma'):
         load_segment_params(bad)
 
@@ -60,13 +66,18 @@ def _run(params, psi_path, p1):
 
 
 def test_same_pressure_and_angle_by_two_paths_gives_two_torques(params):
-    """Path dependence (the hysteresis of Fig. 10): Ψ = 74.5° at 4 bar reached directly, or after an
-    excursion to -30° and back. s̃_a and τ_a differ; the previous model (34) cannot tell them apart."""
+    """
+    Path dependence (the hysteresis of Fig. 10): Ψ = 74.5° at 4 bar, two ways.
+
+    Reached directly, or after an excursion to -30° and back. s̃_a and τ_a differ; the previous
+    model (34) cannot tell them apart.
+    """
     p0, psi_end = params.p0, math.radians(74.5)
     ramp = np.concatenate([np.linspace(p0, 4e5, 1000), np.full(3000, 4e5)])
     direct = _run(params, np.full(ramp.size, psi_end), ramp)
     excursion = np.concatenate([np.full(1000, psi_end),
-                                psi_end + (math.radians(-30) - psi_end) * np.sin(np.linspace(0, np.pi, 3000))])
+                                psi_end + (math.radians(-30) - psi_end)
+                                * np.sin(np.linspace(0, np.pi, 3000))])
     excursion[-1] = psi_end  # exactly the same final (p, Ψ)
     via = _run(params, excursion, ramp)
     assert via.sa1 > 1.1 * direct.sa1  # the stretched material snuggles the rib: more contact
@@ -85,8 +96,10 @@ def test_scalar_step_agrees_with_the_regressors(params):
     p2 = params.p0 + 2e5 * (0.5 + 0.5 * np.cos(2 * np.pi * 0.45 * t))
     out = simulate_model(params, psi, p1, p2, psi_dot)
     q1, q2 = scaled_pressure(params, p1), scaled_pressure(params, p2)
-    tau_a = actuator_regressor(psi, q1, q2, out['sa1'], out['sa2']) @ np.array(params.actuator_theta)
-    tau_s = restoring_regressor(psi, q1, q2, params.restoring_c_psi0, params.restoring_c_psi0_p) @ np.array(
+    tau_a = actuator_regressor(psi, q1, q2, out['sa1'],
+                               out['sa2']) @ np.array(params.actuator_theta)
+    tau_s = restoring_regressor(psi, q1, q2, params.restoring_c_psi0,
+                                params.restoring_c_psi0_p) @ np.array(
         [params.restoring_k_s, params.restoring_k_sp])
     tau_f = friction_regressor(psi_dot, q1, q2, params.friction_c_vel) @ np.array(
         [params.friction_c_f, params.friction_c_fp])
@@ -109,8 +122,12 @@ def test_reset_restores_the_initial_state(params):
 
 @pytest.mark.slow
 def test_fig10_calibration_of_the_default_parameters(params):
-    """Fig. 10 scenario (chain 1 at 4 bar abs, chain 2 vented, Ψ = 74.5°, excursion to -30° and
-    back): paper A measured 6.7 N·m before and 9.1 N·m after; the previous model gives one value."""
+    """
+    Fig. 10 scenario: paper A measured 6.7 N·m before and 9.1 N·m after.
+
+    Chain 1 at 4 bar abs, chain 2 vented, Ψ = 74.5°, excursion to -30° and back; the previous
+    model gives one value.
+    """
     before, after, prev_before, prev_after = fig10_torques(params)
     assert before == pytest.approx(6.7, abs=0.01)
     assert after == pytest.approx(9.1, abs=0.01)
@@ -118,13 +135,19 @@ def test_fig10_calibration_of_the_default_parameters(params):
     assert prev_before == prev_after and 5.0 <= prev_before <= 12.0
     # the YAML values are what the documented calibration produces (a trace, not magic numbers)
     calibrated = calibrate_fig10(params)
-    np.testing.assert_allclose(calibrated.actuator_theta, params.actuator_theta, rtol=1e-5, atol=1e-5)
-    np.testing.assert_allclose(calibrated.previous_theta, params.previous_theta, rtol=1e-5, atol=1e-5)
+    np.testing.assert_allclose(calibrated.actuator_theta, params.actuator_theta, rtol=1e-5,
+                               atol=1e-5)
+    np.testing.assert_allclose(calibrated.previous_theta, params.previous_theta, rtol=1e-5,
+                               atol=1e-5)
 
 
 def test_peek_is_the_next_step_without_the_update(params):
-    """`peek` returns what `step` will, through contact growth, release and emptying, and changes
-    nothing (the pressure allocation evaluates its candidates with it)."""
+    """
+    `peek` returns what `step` will, and changes nothing.
+
+    Through contact growth, release and emptying (the pressure allocation evaluates its
+    candidates with it).
+    """
     model = SegmentModel(params)
     rng = np.random.default_rng(3)
     t = np.arange(6000) * 1e-3
@@ -145,8 +168,11 @@ def test_peek_is_the_next_step_without_the_update(params):
 # --- the fast 1 kHz path against the reference functions ---------------------------------------
 
 def _random_params(params, rng):
-    """Parameters with every linear and natural-curvature constant drawn at random (seeded), so a
-    coefficient applied to the wrong term cannot cancel out."""
+    """
+    Return parameters with every linear and natural-curvature constant drawn at random (seeded).
+
+    So a coefficient applied to the wrong term cannot cancel out.
+    """
     return params.replace(
         actuator_theta=tuple(rng.normal(0.0, 5.0, 8)),
         previous_theta=tuple(rng.normal(0.0, 5.0, 4)),
@@ -157,15 +183,22 @@ def _random_params(params, rng):
 
 
 def _random_states(params, rng, n=3000):
-    """Random (Ψ, Ψ̇, p1, p2) rows: angles ±1.5 rad, rates ±3 rad/s, pressures from below
-    ambient to p_max (independent rows, so the strain memories jump between fill and release)."""
+    """
+    Return random (Ψ, Ψ̇, p1, p2) rows.
+
+    Angles ±1.5 rad, rates ±3 rad/s, pressures from below ambient to p_max (independent rows, so
+    the strain memories jump between fill and release).
+    """
     return (rng.uniform(-1.5, 1.5, n), rng.uniform(-3.0, 3.0, n),
             rng.uniform(0.5e5, params.p_max, n), rng.uniform(0.5e5, params.p_max, n))
 
 
 def _reference(params, psi, psi_dot, p1, p2, sa1, sa2):
-    """Torques of (3)-(5), (29), (34) from the regressors, and the size of their terms (for a
-    relative tolerance that means something where the terms cancel)."""
+    """
+    Return the torques of (3)-(5), (29), (34) from the regressors, and the size of their terms.
+
+    The size gives a relative tolerance that means something where the terms cancel.
+    """
     q1, q2 = scaled_pressure(params, p1), scaled_pressure(params, p2)
     blocks = [
         (actuator_regressor(psi, q1, q2, sa1, sa2), params.actuator_theta),
@@ -186,9 +219,13 @@ def _reference(params, psi, psi_dot, p1, p2, sa1, sa2):
 
 @pytest.mark.parametrize('seed', [11, 12, 13])
 def test_fast_step_equals_the_reference_functions(params, seed):
-    """`SegmentModel.step` (hand-expanded) against `relative_pressure`, `contact_angle` (via
-    `contact_lengths`), `scaled_pressure` and the regressors of (3)-(5), (29), (34): the contact
-    lengths exactly, the torques to 1e-12 of the size of their terms, over random states."""
+    """
+    `SegmentModel.step` (hand-expanded) against the reference functions, over random states.
+
+    Against `relative_pressure`, `contact_angle` (via `contact_lengths`), `scaled_pressure` and
+    the regressors of (3)-(5), (29), (34): the contact lengths exactly, the torques to 1e-12 of
+    the size of their terms.
+    """
     rng = np.random.default_rng(seed)
     trial = _random_params(params, rng)
     psi, psi_dot, p1, p2 = _random_states(trial, rng)
@@ -205,8 +242,11 @@ def test_fast_step_equals_the_reference_functions(params, seed):
 
 
 def test_bench_reference_equals_the_previous_model(params):
-    """The bench's reference step (`bench.segment.previous_step`, the cost of (34) alone) computes
-    τ_prev of the reference functions, to 1e-12 of the size of its terms."""
+    """
+    The bench's reference step computes τ_prev of the reference functions.
+
+    (`bench.segment.previous_step`, the cost of (34) alone), to 1e-12 of the size of its terms.
+    """
     rng = np.random.default_rng(21)
     trial = _random_params(params, rng)
     psi, psi_dot, p1, p2 = _random_states(trial, rng)
@@ -234,9 +274,12 @@ def test_relative_and_scaled_pressure(params):
 
 
 def test_external_torque_is_the_equation_of_motion(params):
-    """A(2) with non-zero M, C, N on an imposed Ψ(t) = A sin ωt with its exact rates:
+    """
+    A(2) with non-zero M, C, N on an imposed Ψ(t) = A sin ωt with its exact rates.
+
     τ_ext = M Ψ̈ + C Ψ̇ + N sin Ψ - τ_drive; the scalar path (math.sin) gives the same as the
-    array path."""
+    array path.
+    """
     m, c, g = 0.03, 0.4, 2.5
     p = params.replace(dynamics_inertia=m, dynamics_damping=c, dynamics_gravity=g)
     t = np.linspace(0.0, 2.0, 401)

@@ -1,12 +1,15 @@
-"""Ogden material (14, 15) and the free-membrane strain solve (22) against a 60-digit reference.
+"""
+Ogden material (14, 15) and the free-membrane strain solve (22) against a 60-digit reference.
 
 Reference: bisection on e = λ1 - 1 in Python's `decimal` at 60 significant digits (mpmath is not
-installed in .venv), 240 halvings of a bracket [0, load/Σμ] that is valid because T(λ) ≥ Σμ(λ - 1/λ)
-... ≥ Σμ (λ - 1) for γ ≥ 2 — so the reference is exact to far below 1e-15 relative.
+installed in .venv), 240 halvings of a bracket [0, load/Σμ] that is valid because T(λ) ≥
+Σμ(λ - 1/λ) ... ≥ Σμ (λ - 1) for γ ≥ 2 — so the reference is exact to far below 1e-15 relative.
 """
-import math
 from decimal import Decimal, localcontext
+import math
 
+from hypothesis import given, settings
+from hypothesis import strategies as st
 import pytest
 
 from bellows_ros.models.ogden import energy, free_strain, stress, stress_slope
@@ -89,29 +92,33 @@ def test_stress_is_the_derivative_of_the_energy_and_slope_its_derivative():
     for lam in (1.0, 1.05, 1.4, 2.5):
         h = 1e-6
         assert stress(lam, mu, gamma) == pytest.approx(
-            (energy(lam + h, mu, gamma) - energy(lam - h, mu, gamma)) / (2 * h), rel=1e-6, abs=1e-6)
+            (energy(lam + h, mu, gamma) - energy(lam - h, mu, gamma)) / (2 * h),
+            rel=1e-6, abs=1e-6)
         assert stress_slope(lam, mu, gamma) == pytest.approx(
             (stress(lam + h, mu, gamma) - stress(lam - h, mu, gamma)) / (2 * h), rel=1e-6)
     assert energy(1.0, mu, gamma) == 0.0 and stress(1.0, mu, gamma) == 0.0
 
 
-from hypothesis import given, settings, strategies as st  # noqa: E402
-
-
 @settings(max_examples=30, deadline=None)
 @given(log_load=st.floats(-12.0, 12.0), log_mu1=st.floats(0.0, 5.0), log_mu2=st.floats(0.0, 5.0),
-       gamma1=st.floats(2.0, 12.0, exclude_min=True), gamma2=st.floats(2.0, 12.0, exclude_min=True))
+       gamma1=st.floats(2.0, 12.0, exclude_min=True),
+       gamma2=st.floats(2.0, 12.0, exclude_min=True))
 def test_any_admissible_input_is_solved_to_1e10(log_load, log_mu1, log_mu2, gamma1, gamma2):
     load, mu = 10.0 ** log_load, (10.0 ** log_mu1, 10.0 ** log_mu2)
     lam = free_strain(load, mu[0], mu[1], gamma1, gamma2)
     assert math.isfinite(lam) and lam >= 1.0
-    assert lam == pytest.approx(1.0 + float(reference_strain(load, mu, (gamma1, gamma2))), rel=1e-10)
+    assert lam == pytest.approx(1.0 + float(reference_strain(load, mu, (gamma1, gamma2))),
+                                rel=1e-10)
 
 
 def test_free_strain_solves_the_reference_stress():
-    """A(15) has one home, `stress`; `free_strain` writes T in ln λ1 (for precision and speed in
-    the 1 kHz loop). Held equal: over random materials and loads (seeded), T(free_strain(load)) = load
-    to 1e-12, where λ1 - 1 ≥ 1e-3 (closer to 1, `stress` itself cancels digits)."""
+    """
+    A(15) has one home, `stress`; `free_strain` writes T in ln λ1 and is held equal to it.
+
+    (ln λ1 for precision and speed in the 1 kHz loop.) Over random materials and loads (seeded),
+    T(free_strain(load)) = load to 1e-12, where λ1 - 1 ≥ 1e-3 (closer to 1, `stress` itself
+    cancels digits).
+    """
     import numpy as np
 
     rng = np.random.default_rng(31)

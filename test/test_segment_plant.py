@@ -1,14 +1,14 @@
-"""The simulated segment: effects (doctor's vocabulary), valve and sensor lag, noise, free motion."""
+"""The simulated segment: effects (doctor's vocabulary), valve and sensor lag, noise, motion."""
 import math
 
 import numpy as np
 import pytest
 
 from bellows_ros.errors import ParameterError
-from bellows_ros.models.segment import SegmentModel, load_segment_params
+from bellows_ros.models.segment import load_segment_params, SegmentModel
 from bellows_ros.models.segment_experiments import fig10_record, quasi_static_record, run_plant
-from bellows_ros.models.segment_plant import (FULL_MODEL, NO_NOISE, SEGMENT_EFFECTS, SegmentPlant,
-                                              plant_physics)
+from bellows_ros.models.segment_plant import (FULL_MODEL, NO_NOISE, plant_physics, SEGMENT_EFFECTS,
+                                              SegmentPlant)
 
 
 @pytest.fixture(scope='module')
@@ -17,7 +17,8 @@ def params():
 
 
 def test_effect_vocabulary_matches_design():
-    assert SEGMENT_EFFECTS == ('contact_hysteresis', 'pressure_friction', 'natural_curvature', 'sensor_lag')
+    assert SEGMENT_EFFECTS == ('contact_hysteresis', 'pressure_friction', 'natural_curvature',
+                               'sensor_lag')
 
 
 @pytest.mark.parametrize('effects, message', [
@@ -66,7 +67,8 @@ def test_each_effect_changes_the_measured_torque_and_full_model_is_paper_a(param
 
 
 def test_effect_parameters_override_the_yaml(params):
-    physics = plant_physics(params, {'pressure_friction': {'c_fp': 2.5}, 'natural_curvature': {'k_sp': -3.0}})
+    physics = plant_physics(params, {'pressure_friction': {'c_fp': 2.5},
+                                     'natural_curvature': {'k_sp': -3.0}})
     assert physics.friction_c_fp == 2.5 and physics.restoring_k_sp == -3.0
     assert physics.restoring_c_psi0_p == params.restoring_c_psi0_p
     assert plant_physics(params, {}).restoring_c_psi0_p == 0.0
@@ -75,9 +77,11 @@ def test_effect_parameters_override_the_yaml(params):
 def test_pressures_follow_commands_through_the_valve_lag(params):
     plant = SegmentPlant(params, noise=NO_NOISE)
     tau = params.plant_valve_tau
-    samples = [plant.step(1e-3, 5e5, params.p0, psi_imposed=0.0) for _ in range(int(round(tau / 1e-3)))]
+    samples = [plant.step(1e-3, 5e5, params.p0,
+                          psi_imposed=0.0) for _ in range(int(round(tau / 1e-3)))]
     # after one time constant: 1 - 1/e of the step
-    assert samples[-1].p1 == pytest.approx(params.p0 + (5e5 - params.p0) * (1 - math.exp(-1)), rel=1e-3)
+    assert samples[-1].p1 == pytest.approx(params.p0 + (5e5 - params.p0) * (1 - math.exp(-1)),
+                                           rel=1e-3)
     for _ in range(int(10 * tau / 1e-3)):
         sample = plant.step(1e-3, 5e5, params.p0, psi_imposed=0.0)
     assert sample.p1 == pytest.approx(5e5, rel=1e-4)
@@ -97,7 +101,8 @@ def test_sensor_lag_delays_only_the_measured_pressure(params):
 def test_noise_has_the_configured_spread_and_seed_repeats(params):
     def run(seed):
         plant = SegmentPlant(params, seed=seed)
-        return np.array([plant.step(1e-3, params.p0, params.p0, psi_imposed=0.0) for _ in range(4000)])
+        return np.array([plant.step(1e-3, params.p0, params.p0,
+                                    psi_imposed=0.0) for _ in range(4000)])
     first, again, other = run(3), run(3), run(4)
     np.testing.assert_array_equal(first, again)
     assert not np.array_equal(first, other)
@@ -141,7 +146,7 @@ def test_quasi_static_record_has_the_design_columns_and_is_cheap(params):
 
 
 def test_a_late_real_time_caller_gets_the_same_motion(params):
-    """A simulator starved of CPU passes one long dt; the stiff end stop must not make it bounce."""
+    """A CPU-starved simulator passes one long dt; the stiff end stop must not make it bounce."""
     on_time = SegmentPlant(params, effects=FULL_MODEL, noise=NO_NOISE)
     late = SegmentPlant(params, effects=FULL_MODEL, noise=NO_NOISE)
     for _ in range(1000):      # pressurise chain 1 and let the segment run onto its end stop

@@ -1,4 +1,5 @@
-"""Paper B actuator: cost of the forward model, the inverse stiffness map and a plant step.
+"""
+Paper B actuator: cost of the forward model, the inverse stiffness map and a plant step.
 
 References measured in the same run: a plain `math.sqrt` call and one geometric volume (4) of a
 bellows. Every timed call draws its inputs from a fixed pseudo-random cycle, so no call repeats the
@@ -13,10 +14,12 @@ import time
 import numpy as np
 
 from bellows_ros.bench import Result, timing
-from bellows_ros.models.actuator import evaluate, evaluate_array, estimate_gas, load_actuator_params
+from bellows_ros.models.actuator import (estimate_gas, evaluate, evaluate_array,
+                                         load_actuator_params)
 from bellows_ros.models.actuator_geometry import P_ATM, volume_geo
 from bellows_ros.models.actuator_plant import ActuatorPlant
-from bellows_ros.models.stiffness_map import compression_for_stiffness, stiffness_map, stiffness_range
+from bellows_ros.models.stiffness_map import (compression_for_stiffness, stiffness_map,
+                                              stiffness_range)
 
 
 def run(quick=False):
@@ -24,7 +27,8 @@ def run(quick=False):
     params = load_actuator_params()
     rng = random.Random(1)
     c = params.chamber
-    points = itertools.cycle([(rng.uniform(c.x_min, c.x_max), rng.uniform(0.0, 0.02)) for _ in range(997)])
+    points = itertools.cycle([(rng.uniform(c.x_min, c.x_max),
+                               rng.uniform(0.0, 0.02)) for _ in range(997)])
     values = itertools.cycle([rng.uniform(1.0, 2.0) for _ in range(997)])
     stiffness_map(params)                      # build the table outside the timing
     targets = []
@@ -36,7 +40,8 @@ def run(quick=False):
 
     sqrt = math.sqrt
     reference = timing('reference: math.sqrt call', lambda: sqrt(next(values)), calls)
-    geometry = timing('reference: V_geo (4) of one bellows', lambda: volume_geo(c, next(points)[0]),
+    geometry = timing('reference: V_geo (4) of one bellows',
+                      lambda: volume_geo(c, next(points)[0]),
                       calls, reference=reference)
 
     def forward():
@@ -52,7 +57,8 @@ def run(quick=False):
         return estimate_gas(params, P_ATM, x_c, x_s)
 
     results = [reference, geometry,
-               timing('actuator forward: evaluate -> (P, F, K)', forward, calls, reference=reference,
+               timing('actuator forward: evaluate -> (P, F, K)', forward, calls,
+                      reference=reference,
                       target=10e-6),
                timing('actuator inverse: compression_for_stiffness', inverse, calls,
                       reference=reference, target=50e-6),
@@ -65,7 +71,8 @@ def run(quick=False):
     results.append(timing('actuator plant step (dt = 1 ms, no effects)',
                           lambda: plant.step(1e-3, next(duties), x_s_imposed=0.005), calls,
                           reference=reference, target=100e-6))
-    effects = {'air_leak': {}, 'heat_exchange': {}, 'wall_bulging': {}, 'sensor_lag': {}, 'backlash': {}}
+    effects = {'air_leak': {}, 'heat_exchange': {}, 'wall_bulging': {}, 'sensor_lag': {},
+               'backlash': {}}
     plant_all = ActuatorPlant(params, effects, seed=0)
     results.append(timing('actuator plant step (dt = 1 ms, all effects)',
                           lambda: plant_all.step(1e-3, next(duties), x_s_imposed=0.005), calls,

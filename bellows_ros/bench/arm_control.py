@@ -1,5 +1,8 @@
-"""The gain of model-based arm control, measured: RMS angle error tracking one trajectory on the
-simulated segment with feedback only, with the previous model (34) and with paper A's model.
+"""
+The gain of model-based arm control, measured.
+
+RMS angle error tracking one trajectory on the simulated segment with feedback only, with the
+previous model (34) and with paper A's model.
 
 In process and deterministic (`control.closed_loop`, seed 0): the segment plant with its default
 effects (contact hysteresis, pressure friction, natural curvature; valve lag and sensor noise are
@@ -29,7 +32,7 @@ import numpy as np
 from bellows_ros.bench import Result
 from bellows_ros.control import angle_trajectory, closed_loop
 from bellows_ros.models.contact import contact_angle
-from bellows_ros.models.segment import (SegmentModel, load_segment_params, simulate_model,
+from bellows_ros.models.segment import (load_segment_params, SegmentModel, simulate_model,
                                         strain_memory)
 
 MODES = (('feedback_only', 'none'), ('previous_model', 'previous'), ('paper_a_model', 'paper_a'))
@@ -38,8 +41,11 @@ SEED = 0
 
 
 def windows(run, trajectory, error=None):
-    """RMS of `error` (default: the angle error, rad) over holds, same-direction moves and
-    reversals."""
+    """
+    Return the RMS of `error` (default: the angle error, rad) by motion kind.
+
+    Over holds, same-direction moves and reversals.
+    """
     error = run.psi_d - run.psi if error is None else error
     kinds = [angle_trajectory.phases(trajectory, t) for t in run.t.tolist()]
     pick = {'holds': [k == ('hold', None) for k in kinds],
@@ -49,7 +55,8 @@ def windows(run, trajectory, error=None):
 
 
 class FrictionlessContact:
-    """Paper A's model without the contact memory: the stand-in for `SegmentModel` in the ablation.
+    """
+    Paper A's model without the contact memory: the stand-in for `SegmentModel` in the ablation.
 
     Paper A: for a frictionless contact the strain on the rib equals the free strain, λ_a = λ1
     (26 without the no-slip history). That is Algorithm 1's fixed point at constant (p, α) from
@@ -88,17 +95,23 @@ class FrictionlessContact:
 
 
 def track(mode, trajectory, rigid_body=True, lead=True, memory=True, duration=None):
-    """`closed_loop.track`, and for paper A without its contact memory on request (an ablation:
-    `FrictionlessContact` in place of the no-slip memory)."""
+    """
+    Run `closed_loop.track`, for paper A without its contact memory on request.
+
+    The ablation puts `FrictionlessContact` in place of the no-slip memory.
+    """
     return closed_loop.track(mode, trajectory, rigid_body=rigid_body, lead=lead, seed=SEED,
                              duration=duration,
                              model_factory=None if memory else FrictionlessContact)
 
 
 def memory_torque(run, trajectory, every=10):
-    """RMS (N·m) over the windows of what the contact memory adds to paper A's driving torque
-    along a run: τ_drive with the memory minus with the frictionless contact, every `every`-th
-    sample of the true states."""
+    """
+    Return the RMS (N·m) over the windows of what the contact memory adds to paper A's torque.
+
+    Along a run: τ_drive with the memory minus with the frictionless contact, every `every`-th
+    sample of the true states.
+    """
     segment = load_segment_params()
     model = SegmentModel(segment)
     frictionless = FrictionlessContact(segment)
@@ -115,7 +128,7 @@ def memory_torque(run, trajectory, every=10):
 
 
 def short_trajectory():
-    """The first moves of REVERSALS (out, reversal through Ψ = 0, back): the quick run."""
+    """Return the first moves of REVERSALS (out, reversal through Ψ = 0, back): the quick run."""
     return angle_trajectory.Trajectory(angle_trajectory.REVERSALS.start,
                                        angle_trajectory.REVERSALS.waypoints[:3])
 

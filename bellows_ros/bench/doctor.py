@@ -1,13 +1,14 @@
-"""Benchmark of `bellows diagnose`: a 10-minute 1 kHz actuator record (600 000 rows).
+"""
+Benchmark of `bellows diagnose`: a 10-minute 1 kHz actuator record (600 000 rows).
 
 Target (issue 6): under 60 s per diagnosis on the project machine. The reference, measured in the
 same run, is reading the file and fitting and scoring the baseline only; the ratio says what the
 search over the candidate causes costs on top of that.
 """
+from pathlib import Path
 import statistics
 import tempfile
 import time
-from pathlib import Path
 
 import numpy as np
 

@@ -1,5 +1,8 @@
-"""Cost of one full segment step of paper A's model (both chains: contact update, τ_a, τ_s, τ_f, and
-τ_prev), against the previous model (34) alone, measured in the same run.
+"""
+Cost of one full segment step of paper A's model against the previous model (34) alone.
+
+Both chains: contact update, τ_a, τ_s, τ_f, and τ_prev; the reference is measured in the same
+run.
 
 The inputs cycle through a recorded quasi-static excursion (pressurised chain, angle reversals), so
 the strain memories really fill and release as in use. Target: ≤ 20 µs per step (issue 2).
@@ -7,26 +10,32 @@ the strain memories really fill and release as in use. Target: ≤ 20 µs per st
 import math
 
 from bellows_ros.bench import Result, timing
-from bellows_ros.models.segment import SegmentModel, load_segment_params
+from bellows_ros.models.segment import load_segment_params, SegmentModel
 
 TARGET = 20e-6
 
 
 def _inputs(count=4000):
-    """One cycle of (psi, psi_dot, p1, p2): chain 1 at 4 bar, chain 2 at 1.5 bar, Ψ swinging ±1.3 rad."""
+    """
+    Return one cycle of (psi, psi_dot, p1, p2).
+
+    Chain 1 at 4 bar, chain 2 at 1.5 bar, Ψ swinging ±1.3 rad.
+    """
     rows = []
     for k in range(count):
         phase = 2.0 * math.pi * k / count
-        rows.append((1.3 * math.sin(phase), 1.3 * math.cos(phase) * 2.0 * math.pi, 4.0e5 + 2e4 * math.sin(3 * phase),
+        rows.append((1.3 * math.sin(phase), 1.3 * math.cos(phase) * 2.0 * math.pi,
+                     4.0e5 + 2e4 * math.sin(3 * phase),
                      1.5e5))
     return rows
 
 
 def previous_step(params):
-    """The previous model (34) alone as a step function (the reference cost)."""
+    """Step the previous model (34) alone (the reference cost)."""
     p0, span = params.p0, 1.0 / (params.p_max - params.p0)
     u0, u1, u2, u3 = params.previous_theta
-    k_s, k_sp, c_f, c_fp, c_vel = (params.restoring_k_s, params.restoring_k_sp, params.friction_c_f,
+    k_s, k_sp, c_f, c_fp, c_vel = (params.restoring_k_s, params.restoring_k_sp,
+                                   params.friction_c_f,
                                    params.friction_c_fp, params.friction_c_vel)
     c_psi0, c_psi0_p = params.restoring_c_psi0, params.restoring_c_psi0_p
     tanh = math.tanh
@@ -57,9 +66,11 @@ def run(quick=False):
     rows = _inputs()
     calls = 20_000 if quick else 200_000
     model = SegmentModel(params)
-    reference = timing('segment: previous model (34) step', _cycling(previous_step(params), rows), calls)
+    reference = timing('segment: previous model (34) step', _cycling(previous_step(params), rows),
+                       calls)
     full = timing('segment: paper A model step (both chains)', _cycling(model.step, rows), calls,
                   reference=reference, target=TARGET)
-    overhead = timing('segment: loop overhead (empty step)', _cycling(lambda *a: None, rows), calls)
+    overhead = timing('segment: loop overhead (empty step)', _cycling(lambda *a: None, rows),
+                      calls)
     full.extra['minus_loop_overhead'] = full.value - overhead.value
     return [reference, full, Result(overhead.name, overhead.value, 's', calls)]

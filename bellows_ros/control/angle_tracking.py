@@ -1,5 +1,7 @@
-"""Angle tracking of one arm segment: PID feedback plus model-based feedforward through the
-pressure allocation.
+"""
+Angle tracking of one arm segment.
+
+PID feedback plus model-based feedforward through the pressure allocation.
 
 Paper A's equation of motion (2) for the free segment (τ_ext = 0) asks the bellows for the driving
 torque τ_drive = M Ψ̈ + C Ψ̇ + N(Ψ). The controller asks for
@@ -29,11 +31,11 @@ allocated pair the change of the pure feedforward pair (τ = M Ψ̈_d + C Ψ̇_d
 same contact memory) between now and `lead` seconds ahead on the set-point, when the caller gives
 the set-point there (`ahead`); 0 = no lead.
 """
-import math
 from dataclasses import dataclass
+import math
 
-from bellows_ros.control.pressure_allocation import (Allocation, allocate_paper_a,
-                                                     allocate_previous, chain_pressures)
+from bellows_ros.control.pressure_allocation import (allocate_paper_a, allocate_previous,
+                                                     Allocation, chain_pressures)
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.segment import SegmentModel
 
@@ -42,9 +44,14 @@ FEEDFORWARDS = ('paper_a', 'previous', 'none')
 
 @dataclass(frozen=True)
 class TrackingGains:
-    """kp N·m/rad, ki N·m/(rad·s), kd N·m·s/rad, velocity_cutoff Hz, integral_limit N·m,
+    """
+    Gains and settings of the tracker.
+
+    kp N·m/rad, ki N·m/(rad·s), kd N·m·s/rad, velocity_cutoff Hz, integral_limit N·m,
     base_pressure Pa abs (co-contraction of the antagonistic path), lead s (valve lag the
-    feedforward anticipates)."""
+    feedforward anticipates).
+    """
+
     kp: float
     ki: float
     kd: float
@@ -74,9 +81,12 @@ def check_feedforward(name, source='arm controller'):
 
 
 def pressure_gain(model, p_base):
-    """g0, N·m per Pa of u: slope of the previous model's torque (34) at Ψ = 0, at rest, from the
-    base pressure over a tenth of the path each way (the feedback-only controller's only
-    number)."""
+    """
+    Return g0, N·m per Pa of u: the slope of the previous model's torque (34) at Ψ = 0, at rest.
+
+    Taken from the base pressure over a tenth of the path each way (the feedback-only
+    controller's only number).
+    """
     p = model.params
     du = 0.1 * (p.p_max - p.p0)
     up = model.torques(0.0, 0.0, *chain_pressures(p, du, p_base), 0.0, 0.0)[4]
@@ -85,7 +95,8 @@ def pressure_gain(model, p_base):
 
 
 class AngleTracker:
-    """One segment's tracker. `observe` every measured sample; `command` at the control rate.
+    """
+    One segment's tracker. `observe` every measured sample; `command` at the control rate.
 
     params: SegmentParams (the model's); gains: TrackingGains; feedforward: one of FEEDFORWARDS.
     """
@@ -103,24 +114,33 @@ class AngleTracker:
         self.restart()
 
     def restart(self):
-        """Forget the feedback state (integral, velocity), keep the model's contact memory: after
-        an interruption (the driver vented the arm) the integral no longer fits the segment."""
+        """
+        Forget the feedback state (integral, velocity), keep the model's contact memory.
+
+        After an interruption (the driver vented the arm) the integral no longer fits the segment.
+        """
         self.integral = 0.0
         self.velocity = 0.0
         self.saturated = False
 
     def observe(self, psi, psi_dot, p1, p2, dt):
-        """One measured sample (rad, rad/s, Pa abs, Pa abs; dt s since the previous one): the
-        contact memory advances (Algorithm 1) and the velocity filter takes Ψ̇."""
+        """
+        Take one measured sample (rad, rad/s, Pa abs, Pa abs; dt s since the previous one).
+
+        The contact memory advances (Algorithm 1) and the velocity filter takes Ψ̇.
+        """
         self.model.step(psi, psi_dot, p1, p2)
         if dt > 0.0:
             blend = 1.0 - math.exp(-2.0 * math.pi * self.gains.velocity_cutoff * dt)
             self.velocity += blend * (psi_dot - self.velocity)
 
     def command(self, psi_d, psi_dot_d, psi_ddot_d, psi, dt, ahead=None):
-        """Pressure command for set-point (Ψ_d, Ψ̇_d, Ψ̈_d) at measured Ψ; dt s since the last
-        command; `ahead`: the set-point `lead` s later, or None. Returns an `Allocation` (p1, p2
-        Pa abs, the torque asked for N·m, saturated)."""
+        """
+        Return the pressure command for set-point (Ψ_d, Ψ̇_d, Ψ̈_d) at measured Ψ.
+
+        dt s since the last command; `ahead`: the set-point `lead` s later, or None. Returns an
+        `Allocation` (p1, p2 Pa abs, the torque asked for N·m, saturated).
+        """
         g, p = self.gains, self.params
         error = psi_d - psi
         if not self.saturated:
@@ -146,7 +166,7 @@ class AngleTracker:
         return out._replace(tau=tau)
 
     def _feedforward(self, allocate, psi_d, psi_dot_d, psi_ddot_d):
-        """The pair for the set-point alone: (2)'s rigid-body torque at the desired state."""
+        """Return the set-point's own pair: (2)'s rigid-body torque at the desired state."""
         p = self.params
         tau = (p.dynamics_inertia * psi_ddot_d + p.dynamics_damping * psi_dot_d
                + p.dynamics_gravity * math.sin(psi_d))

@@ -1,12 +1,13 @@
-"""Built-in angle trajectories for the arm controller: waypoints joined by smooth moves and holds.
+"""
+Built-in angle trajectories for the arm controller: waypoints joined by smooth moves and holds.
 
 A trajectory is a tuple of waypoints (Ψ_target rad, move_time s, hold_time s) starting from
 `start` (rad): each move is a half-cosine from the previous target (zero velocity at both ends,
 peak speed |ΔΨ| π / (2 T)), followed by a hold. Sampled by `setpoint(trajectory, t)` ->
 (Ψ_d, Ψ̇_d, Ψ̈_d); before 0 and after the end it holds the first / last angle.
 """
-import math
 from collections import namedtuple
+import math
 
 from bellows_ros.errors import ParameterError
 
@@ -34,7 +35,7 @@ TRAJECTORIES = {'reversals': REVERSALS, 'sweep': SWEEP}
 
 
 def by_name(name):
-    """The built-in trajectory `name`; ParameterError names the known ones."""
+    """Return the built-in trajectory `name`; ParameterError names the known ones."""
     try:
         return TRAJECTORIES[name]
     except KeyError:
@@ -68,8 +69,11 @@ def setpoint(trajectory, t):
 
 
 def phases(trajectory, t):
-    """'hold' or 'move' at time `t`, and for a move whether it reverses the previous move's
-    direction (True/False; None for holds)."""
+    """
+    Tell whether time `t` is in a 'hold' or a 'move', and whether a move reverses.
+
+    For a move: whether it reverses the previous move's direction (True/False; None for holds).
+    """
     here, start, direction = trajectory.start, 0.0, 0.0
     for target, move, hold in trajectory.waypoints:
         step = math.copysign(1.0, target - here)

@@ -1,4 +1,5 @@
-"""The arm controller closed around the simulated segment, in process (bench, scenario, tests).
+"""
+The arm controller closed around the simulated segment, in process (bench, scenario, tests).
 
 Per 1 kHz sample, as on the graph: the plant (`SegmentPlant`, effects and noise as given) is
 measured; Ψ̇ is the backward difference of the measured angles (what the driver publishes, the arm
@@ -7,8 +8,8 @@ sample the tracker commands new pressures; the plant's valves get the newest com
 `setpoint_every` samples (the arm bus sends its set-point frames at a fixed cycle, config/arm.dbc)
 and hold it in between. Deterministic for a given seed.
 """
-import dataclasses
 from collections import namedtuple
+import dataclasses
 
 import numpy as np
 
@@ -30,7 +31,8 @@ DT = 1e-3
 
 def simulate(params, gains, feedforward, trajectory, effects, seed=0, control_every=5,
              setpoint_every=1, duration=None, noise=None, plant_params=None, model=None):
-    """Track `trajectory` on `SegmentPlant(plant_params, effects, noise, seed)` -> TrackingRun.
+    """
+    Track `trajectory` on `SegmentPlant(plant_params, effects, noise, seed)` -> TrackingRun.
 
     params: the tracker's model (SegmentParams); plant_params: the plant's (default: the same);
     model: a stand-in for the tracker's `SegmentModel` (step, peek, torques, params), for
@@ -80,14 +82,14 @@ def controller_settings(segment):
 
 
 def setpoint_every():
-    """Samples between the arm bus's set-point frames (config/arm.dbc cycle times)."""
+    """Count the samples between the arm bus's set-point frames (config/arm.dbc cycle times)."""
     db = can_protocol.load_dbc()
     return round(db.get_message_by_name('ARM_HOST_HEARTBEAT').cycle_time
                  / db.get_message_by_name('ARM_SEG1_SAMPLE').cycle_time)
 
 
 def with_rigid_body(segment):
-    """The model's (2) with the simulated segment's M, C, N (as an arm's segment.dynamics)."""
+    """Return the model's (2) with the simulated segment's M, C, N (as segment.dynamics)."""
     return segment.replace(dynamics_inertia=segment.plant_inertia,
                            dynamics_damping=segment.plant_damping,
                            dynamics_gravity=segment.plant_gravity)
@@ -95,10 +97,13 @@ def with_rigid_body(segment):
 
 def track(mode, trajectory, rigid_body=True, lead=True, seed=0, duration=None,
           model_factory=None):
-    """One closed-loop run of controller `mode` ('none', 'previous', 'paper_a') on the default
-    simulated segment with its full physics (`FULL_MODEL`), the gains of config/nodes_sim.yaml's
-    arm_controller_node -> TrackingRun. Optionally without the rigid-body terms of (2) or the
-    valve-lag lead; `model_factory(params)` replaces the tracker's own SegmentModel."""
+    """
+    Run controller `mode` ('none', 'previous', 'paper_a') in closed loop -> TrackingRun.
+
+    On the default simulated segment with its full physics (`FULL_MODEL`), the gains of
+    config/nodes_sim.yaml's arm_controller_node. Optionally without the rigid-body terms of (2) or
+    the valve-lag lead; `model_factory(params)` replaces the tracker's own SegmentModel.
+    """
     segment = load_segment_params()
     gains, control_every = controller_settings(segment)
     if not lead:

@@ -1,4 +1,5 @@
-"""PD position control of the lead screw (paper B, section II: PD control on the chamber compression).
+"""
+PD position control of the lead screw (paper B, section II: PD control on the chamber compression).
 
 The lead screw is not back-drivable and the motor's electrical and mechanical time constants are
 milliseconds, so the chamber behaves like a velocity-commanded integrator: x_c' ~ duty x v_max.
@@ -7,15 +8,20 @@ A proportional term alone then closes a first-order loop without overshoot; the 
 The encoder velocity is low-pass filtered because differentiating a quantised position at 1 kHz
 is mostly noise.
 """
-import math
 from dataclasses import dataclass
+import math
 
 
 @dataclass(frozen=True)
 class PDGains:
-    """kp: duty per metre of error (1/m); kd: duty per m/s (s/m); velocity_cutoff: Hz of the
+    """
+    Gains and limits of the PD controller.
+
+    kp: duty per metre of error (1/m); kd: duty per m/s (s/m); velocity_cutoff: Hz of the
     velocity filter; duty_max: output limit (-duty_max..duty_max); deadband: m of error inside
-    which the output is zero (stops dithering on the encoder's last count)."""
+    which the output is zero (stops dithering on the encoder's last count).
+    """
+
     kp: float
     kd: float
     velocity_cutoff: float
@@ -24,7 +30,8 @@ class PDGains:
 
 
 class PDController:
-    """Discrete PD with derivative on the measurement and output saturation.
+    """
+    Discrete PD with derivative on the measurement and output saturation.
 
     `update(target, x, dt)` -> duty in [-duty_max, duty_max]; target and x in m, dt in s.
     """

@@ -1,4 +1,5 @@
-"""Pressure allocation: the chain pressures that give a segment a desired driving torque.
+"""
+Pressure allocation: the chain pressures that give a segment a desired driving torque.
 
 The inverse of paper A's driving-torque model τ_drive = τ_a + τ_s + τ_f (2, 29, 3, 5), and of the
 previous model (34) for comparison, at the segment's present state: angle Ψ, velocity Ψ̇ (for the
@@ -61,7 +62,8 @@ def invert(torque, params, tau, p_base):
 
 
 def allocate_paper_a(model, psi, psi_dot, tau, p_base):
-    """Pressures for driving torque `tau` with paper A's model (29, 3, 5; Algorithm 1 peeked).
+    """
+    Pressures for driving torque `tau` with paper A's model (29, 3, 5; Algorithm 1 peeked).
 
     model: a `SegmentModel` stepped with the measured samples so far (not changed here);
     psi (rad), psi_dot (rad/s, friction (5)), tau (N·m), p_base (co-contraction, Pa abs).

@@ -1,12 +1,13 @@
-"""Stiffness set-point -> chamber compression target, corrected from the measured pressure.
+"""
+Stiffness set-point -> chamber compression target, corrected from the measured pressure.
 
 Paper B tunes the spring's stiffness by compressing the air chamber: K = K_s(x_c) (13-17). The
 inverse map (`models.stiffness_map`) gives the compression for a target stiffness *for a given
 amount of gas*. A slow leak or a temperature change alters that amount, so a fixed x_c would drift
 the stiffness. The amount is therefore estimated continuously from the measured pressure at the
 measured (x_c, x_s) (`models.actuator.estimate_gas`, the gas law (17)), low-pass filtered (the
-estimate is as noisy as the pressure sensor, and the drift it corrects takes seconds to minutes), and
-the target compression is recomputed with it.
+estimate is as noisy as the pressure sensor, and the drift it corrects takes seconds to minutes),
+and the target compression is recomputed with it.
 
 Where the spring buckles, K(x_c) rises to a peak and falls again; the map (and so this class) uses
 the rising branch, from the elongated end stop to the peak (`models.stiffness_map`), and `range()`
@@ -22,7 +23,8 @@ from bellows_ros.models.stiffness_map import (BRANCH, compression_for_stiffness,
 
 
 class StiffnessSetpoint:
-    """Tracks the gas amount and turns stiffness set-points into compression targets.
+    """
+    Tracks the gas amount and turns stiffness set-points into compression targets.
 
     params: ActuatorParams; gas_time_constant: s, filter of the gas estimate.
     `update_measurement(x_c, x_s, p, dt)` feeds one sample (m, m, Pa abs, s);
@@ -46,7 +48,7 @@ class StiffnessSetpoint:
         self.k_target = float(k_target)
         self.warning = None
 
-    def range(self):
+    def range(self):  # noqa: A003 (the public name; a method cannot shadow the builtin)
         """(k_min, k_max), N/m, reachable on the map's branch with the present gas amount."""
         return stiffness_range(self.params, self.gas)
 

@@ -1,4 +1,5 @@
-"""The actuator's baseline and its candidate causes, as physically parameterised extensions.
+"""
+The actuator's baseline and its candidate causes, as physically parameterised extensions.
 
 Baseline (docs/doctor.md): paper B's gas law (17) with the purely geometric volume (2-4, no
 E_V), isothermal sealed gas; the gas amount (as `p_ref`), `v_tube` and the zero of the motor
@@ -35,11 +36,11 @@ import dataclasses
 import numpy as np
 
 from bellows_ros.doctor.filters import lag, play, recurrence, relax
-from bellows_ros.errors import ParameterError
 from bellows_ros.doctor.scoring import Model, noise_floor, noise_floor_ramps
+from bellows_ros.errors import ParameterError
 from bellows_ros.models.actuator import (Buckling, buckling_force, params_to_flat, pressure,
                                          without_buckling, without_bulging)
-from bellows_ros.models.actuator_geometry import P_ATM, e_v, frustum_state, volume_geo
+from bellows_ros.models.actuator_geometry import e_v, frustum_state, P_ATM, volume_geo
 
 CAUSES = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash', 'buckling')
 BASELINE = ('paper B (17): geometric volume (no E_V), isothermal sealed gas, '
@@ -48,7 +49,8 @@ BASELINE = ('paper B (17): geometric volume (no E_V), isothermal sealed gas, '
 # Measured outputs: (column, unit, name). The first is the legacy single output.
 OUTPUTS = (('p', 'Pa', 'pressure'), ('f', 'N', 'force'))
 F_MTS_DEGREE = 3
-FIT_RATE = 200.0  # Hz, highest rate the doctor fits at: sensor lag and heating act within tens of ms
+# Hz, highest rate the doctor fits at: sensor lag and heating act within tens of ms
+FIT_RATE = 200.0
 UNIT = 'Pa'
 SIGNAL = 'p'
 ML = 1e-6  # m³ per mL: volumes are fitted in mL so that all parameters are O(1)
@@ -62,7 +64,8 @@ SPECS = {
     'air_leak': [('log10_conductance', -11.0, -15.0, -7.0)],
     'heat_exchange': [('log10_time_constant', 0.0, -1.0, 2.5), ('gamma', 1.4, 1.0, 1.67)],
     'wall_bulging': [('e_q_ml', 0.0, -200.0, 200.0), ('e_dq_chamber_ml', 0.0, -200.0, 200.0),
-                     ('e_dq_spring_ml', 0.0, -200.0, 200.0), ('e_dd_chamber_ml', 0.0, -200.0, 200.0),
+                     ('e_dq_spring_ml', 0.0, -200.0, 200.0),
+                     ('e_dd_chamber_ml', 0.0, -200.0, 200.0),
                      ('e_dd_spring_ml', 0.0, -200.0, 200.0)],
     'sensor_lag': [('log10_time_constant', -1.5, -3.5, 0.5)],
     'backlash': [('width_mm', 0.3, 0.0, 3.0)],
@@ -103,13 +106,16 @@ def _onset_width(params):
 
 
 def noise_floors(record):
-    """White-noise floor of each output at the record's rate: {column: sigma}. The force is ramped
-    fast by the test machine, so its floor comes from second differences."""
+    """
+    Return the white-noise floor of each output at the record's rate: {column: sigma}.
+
+    The force is ramped fast by the test machine, so its floor comes from second differences.
+    """
     return {'p': noise_floor(record['p']), 'f': noise_floor_ramps(record['f'])}
 
 
 def measured(record, scales):
-    """The measured outputs, one row each, divided by their (averaged) noise floors `scales`."""
+    """Return the measured outputs, a row each, over their (averaged) noise floors `scales`."""
     return np.vstack([record[name] / scales[name] for name, *_ in OUTPUTS])
 
 
@@ -118,7 +124,8 @@ def initial_guess(record, params):
     base = without_bulging(params)
     v = total_geometric_volume(base, record['x_c'], record['x_s'], base.v_tube)
     v_ref = total_geometric_volume(base, base.x_c_ref, 0.0, base.v_tube)
-    return {'p_ref_kpa': float(np.mean(record['p'] * v) / v_ref / 1e3), 'v_tube_ml': base.v_tube / ML,
+    return {'p_ref_kpa': float(np.mean(record['p'] * v) / v_ref / 1e3),
+            'v_tube_ml': base.v_tube / ML,
             'x_c_offset_mm': 0.0}
 
 
@@ -134,13 +141,17 @@ def bulged(params, e):
     spring = [0.0] * 10
     chamber[2], chamber[4], chamber[3] = e_q, e_dq_c, e_dd_c   # a01, a11, a20 of (5)
     spring[4], spring[3] = e_dq_s, e_dd_s
-    return dataclasses.replace(params, chamber=dataclasses.replace(params.chamber, e_v=tuple(chamber)),
+    return dataclasses.replace(params,
+                               chamber=dataclasses.replace(params.chamber, e_v=tuple(chamber)),
                                spring=dataclasses.replace(params.spring, e_v=tuple(spring)))
 
 
 def geometric_volumes(params, x_c, x_s):
-    """V_geo,c(x_c), V_geo,s(x_s) (arrays) and V_geo at the design point (4), m³: everything of the
-    volume that the fitted parameters do not change, computed once per record."""
+    """
+    Compute V_geo,c(x_c), V_geo,s(x_s) (arrays) and V_geo at the design point (4), m³.
+
+    Everything of the volume that the fitted parameters do not change, computed once per record.
+    """
     design = volume_geo(params.chamber, params.x_c_ref) + volume_geo(params.spring, 0.0)
     return volume_geo(params.chamber, x_c), volume_geo(params.spring, x_s), design
 
@@ -151,15 +162,18 @@ def predict(params, causes, values, x_c, x_s, dt, geometry=None):
 
 
 def predict_state(params, causes, values, x_c, x_s, dt, geometry=None):
-    """Pressure at the sensor and in the gas (Pa) the extended model predicts over a record.
+    """
+    Pressure at the sensor and in the gas (Pa) the extended model predicts over a record.
 
     `values`: physical parameters {cause: {name: value}} plus 'baseline': {'p_ref', 'v_tube',
     'x_c_offset' (optional, m)}; `geometry`: `geometric_volumes(params, x_c, x_s)` if already
     computed (for the encoder's x_c; the chamber's volume is recomputed when the offset is not 0).
-    Only the inputs x_c, x_s enter: no measured pressure, so nothing of the held-out output leaks in.
+    Only the inputs x_c, x_s enter: no measured pressure, so nothing of the held-out output leaks
+    in.
     """
     base = values['baseline']
-    model = dataclasses.replace(without_bulging(params), p_ref=base['p_ref'], v_tube=base['v_tube'])
+    model = dataclasses.replace(without_bulging(params), p_ref=base['p_ref'],
+                                v_tube=base['v_tube'])
     if 'wall_bulging' in causes:
         e = values['wall_bulging']
         model = bulged(model, [e['e_q'], e['e_dq_chamber'], e['e_dq_spring'], e['e_dd_chamber'],
@@ -178,7 +192,8 @@ def predict_state(params, causes, values, x_c, x_s, dt, geometry=None):
         temperature = np.ones(len(x_c))
         if 'heat_exchange' in causes:
             h = values['heat_exchange']
-            temperature = np.exp(relax(-(h['gamma'] - 1.0) * np.log(volume), dt, h['time_constant']))
+            temperature = np.exp(relax(-(h['gamma'] - 1.0) * np.log(volume), dt,
+                                       h['time_constant']))
         gas = temperature
         if 'air_leak' in causes:
             # N_{k+1} = N_k - dt C P_k (N_k T_k / V_k - P_atm), with N relative to N_0; the flow's
@@ -197,9 +212,12 @@ def predict_state(params, causes, values, x_c, x_s, dt, geometry=None):
 
 
 def force_columns(params, causes, values, x_s, p_gas):
-    """The force the model knows, (7)-(10) (+ buckling), and the columns of the linear material
-    force: 1 (load cell zero), x_s .. x_s^3 (F_MTS), E_F's shape exp(C2 (P - P_atm) + C3 Δh)
-    (11)."""
+    """
+    Return the force the model knows, (7)-(10) (+ buckling), and the material force's columns.
+
+    The columns of the linear material force: 1 (load cell zero), x_s .. x_s^3 (F_MTS), E_F's
+    shape exp(C2 (P - P_atm) + C3 Δh) (11).
+    """
     s = params.spring
     _, _, f = frustum_state(s, x_s)
     area = s._k * f
@@ -260,8 +278,11 @@ def _to_si(part, raw):
 
 
 def build_model(record, params, causes, warm=None, scales=None):
-    """The baseline plus `causes` on `record`, as a `scoring.Model` to fit to the measured outputs
-    (`measured(record, scales)`: pressure and force, each over its noise floor in `scales`).
+    """
+    Build the baseline plus `causes` on `record` as a `scoring.Model`.
+
+    The model is fitted to the measured outputs (`measured(record, scales)`: pressure and force,
+    each over its noise floor in `scales`).
 
     `warm` ({fit variable: value}) starts the fit from an earlier model's solution.
     """
@@ -317,9 +338,12 @@ def build_model(record, params, causes, warm=None, scales=None):
 
 
 def extended_flat(params, causes, values):
-    """Flat ROS 2 parameters of the extended model (for `params.write_file`): the refitted gas and
-    tube, E_V if wall bulging pays, and the fitted effect parameters under `actuator.effects.*`
-    (read by `bellows simulate actuator --effect NAME` and the plant)."""
+    """
+    Return the flat ROS 2 parameters of the extended model (for `params.write_file`).
+
+    The refitted gas and tube, E_V if wall bulging pays, and the fitted effect parameters under
+    `actuator.effects.*` (read by `bellows simulate actuator --effect NAME` and the plant).
+    """
     base = values['baseline']
     model = dataclasses.replace(params, p_ref=base['p_ref'], v_tube=base['v_tube'])
     model = without_buckling(without_bulging(model))

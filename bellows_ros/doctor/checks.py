@@ -1,4 +1,5 @@
-"""Loading and checking the data the doctor is given.
+"""
+Loading and checking the data the doctor is given.
 
 Two kinds of verdict: a `DataError` when the file cannot be diagnosed at all (too short, unevenly
 sampled, the input never moves), and per cause a reason why this record cannot separate that cause
@@ -22,6 +23,7 @@ MAX_GAP = 10.0            # a gap this many sampling intervals long is an error
 @dataclass
 class Record:
     """Evenly sampled columns of one record. `factor` > 1 for a block-averaged copy."""
+
     system: str
     path: str
     dt: float
@@ -43,8 +45,12 @@ class Record:
         return float(self.columns['t'][-1] - self.columns['t'][0])
 
     def decimated(self, factor):
-        """Block means of `factor` consecutive samples (an anti-alias filter and a decimator in one:
-        it also divides white noise variance by `factor`)."""
+        """
+        Return the block means of `factor` consecutive samples.
+
+        An anti-alias filter and a decimator in one: it also divides white noise variance by
+        `factor`.
+        """
         if factor <= 1:
             return self
         n = len(self) // factor * factor
@@ -58,20 +64,22 @@ def load(path, system):
     """Read a CSV or rosbag2 record of `system`, check it, return an evenly sampled `Record`."""
     table = read_table(path, system)
     if len(table) < MIN_SAMPLES:
-        raise DataError(path, f'only {len(table)} samples; the doctor needs at least {MIN_SAMPLES} '
-                              'to fit on some blocks of time and score on others')
+        raise DataError(path, f'only {len(table)} samples; the doctor needs at least '
+                              f'{MIN_SAMPLES} to fit on some blocks of time and score on others')
     columns = {name: np.asarray(table[name], float) for name in table.values}
     t = columns['t']
     duration = t[-1] - t[0]
     if duration < MIN_DURATION:
         raise DataError(path, f'record lasts {duration:.3g} s; the doctor needs at least '
-                              f'{MIN_DURATION:g} s (held-out blocks of time must each contain motion)')
+                              f'{MIN_DURATION:g} s (held-out blocks of time must each contain '
+                              'motion)')
     steps = np.diff(t)
     dt = float(np.median(steps))
     worst = int(np.argmax(steps))
     if steps[worst] > MAX_GAP * dt:
-        raise DataError(path, f'gap of {steps[worst]:.3g} s in the time column after t = {t[worst]:.6g} s '
-                              f'(sampling interval {dt:.3g} s); split the record at the gap',
+        raise DataError(path, f'gap of {steps[worst]:.3g} s in the time column after t = '
+                              f'{t[worst]:.6g} s (sampling interval {dt:.3g} s); split the record '
+                              'at the gap',
                         table.line(worst + 1), 't')
     if system == 'actuator':
         check_range(table, 'p', 1e3, 2e6, 'Pa')
@@ -83,7 +91,8 @@ def load(path, system):
         check_range(table, 'psi', -np.pi, np.pi, 'rad')
     resampled = bool(np.std(steps) > MAX_JITTER * dt)
     if resampled:
-        # Stamped samples from a bag arrive with jitter; the filters of the causes need a fixed step.
+        # Stamped samples from a bag arrive with jitter; the filters of the causes need a fixed
+        # step.
         grid = t[0] + dt * np.arange(int(duration / dt) + 1)
         columns = {name: np.interp(grid, t, column) for name, column in columns.items()}
         columns['t'] = grid
@@ -95,17 +104,21 @@ def load(path, system):
 def _check_excitation(record):
     if record.system == 'actuator':
         if np.ptp(record['x_c']) < 1e-4:
-            raise DataError(record.path, "column 'x_c': not identifiable from this data: the air-chamber "
-                                         'compression never changes by 0.1 mm, so the model has no input')
+            raise DataError(record.path, "column 'x_c': not identifiable from this data: the "
+                                         'air-chamber compression never changes by 0.1 mm, so the '
+                                         'model has no input')
     else:
         if np.ptp(record['psi']) < np.radians(1.0):
-            raise DataError(record.path, "column 'psi': not identifiable from this data: the segment "
-                                         'angle never changes by 1 degree')
+            raise DataError(record.path, "column 'psi': not identifiable from this data: the "
+                                         'segment angle never changes by 1 degree')
 
 
 def reversals(signal, threshold):
-    """Number of direction reversals of `signal` by more than `threshold` (a zig-zag count that
-    ignores noise smaller than the threshold)."""
+    """
+    Count the direction reversals of `signal` by more than `threshold`.
+
+    A zig-zag count that ignores noise smaller than the threshold.
+    """
     count, direction = 0, 0
     high = low = float(signal[0])
     for value in np.asarray(signal, float).tolist():
@@ -135,14 +148,17 @@ def moving_fraction(position, dt, speed):
 
 
 def pressure_coverage(record, share=0.5):
-    """None if every fold's training rows reach `share` of the record's highest chain pressure
-    (gauge), else why not.
+    """
+    Tell why not every fold's training rows reach `share` of the highest chain pressure.
+
+    None if they all do (gauge pressures).
 
     The segment models' pressure coefficients are shared by both chains (Σ_j σ_j p_j [...], (34),
-    (29)), so what a fold refit can learn is set by the highest gauge pressure either chain holds in
-    its training rows. A record pressurised only in the blocks one fold holds out (a rig that
-    pressurises in the last 2 s) leaves that fold's pressure coefficients to the noise: its held-out
-    score measures an extrapolation, and comparing causes on it names whichever extrapolates least.
+    (29)), so what a fold refit can learn is set by the highest gauge pressure either chain holds
+    in its training rows. A record pressurised only in the blocks one fold holds out (a rig that
+    pressurises in the last 2 s) leaves that fold's pressure coefficients to the noise: its
+    held-out score measures an extrapolation, and comparing causes on it names whichever
+    extrapolates least.
     """
     gauge = np.maximum(record['p1'], record['p2']) - P_ATM
     top = float(gauge.max())
@@ -151,15 +167,16 @@ def pressure_coverage(record, share=0.5):
         if reached < share * top:
             held = np.flatnonzero(~train & (gauge > share * top))
             t = record['t']
-            return (f'the chains reach {top / 1e5:.2f} bar gauge but, without the blocks fold {fold} '
-                    f'holds out, only {reached / 1e5:.2f} bar (the higher pressures lie in '
-                    f't = {t[held[0]]:.1f}-{t[held[-1]]:.1f} s); the held-out score would measure an '
-                    'extrapolation in pressure')
+            return (f'the chains reach {top / 1e5:.2f} bar gauge but, without the blocks fold '
+                    f'{fold} holds out, only {reached / 1e5:.2f} bar (the higher pressures lie in '
+                    f't = {t[held[0]]:.1f}-{t[held[-1]]:.1f} s); the held-out score would measure '
+                    'an extrapolation in pressure')
     return None
 
 
 def identifiability(record, noise):
-    """For each cause: None if this record can separate it, else the reason why not.
+    """
+    For each cause: None if this record can separate it, else the reason why not.
 
     `record` is the (decimated) record, `noise` the white-noise floor of the measured signal.
     """
@@ -173,22 +190,26 @@ def identifiability(record, noise):
         moving = float(np.mean((rate_c > 2e-5) | (rate_s > 1e-3)))
         offset = float(np.median(np.abs(p - P_ATM)))
         reasons['air_leak'] = (None if offset > 300 and record.duration >= 10 else
-                               f'the pressure stays within {offset:.0f} Pa of ambient (or the record is '
-                               'shorter than 10 s), so no air would flow through a leak')
+                               f'the pressure stays within {offset:.0f} Pa of ambient (or the '
+                               'record is shorter than 10 s), so no air would flow through a '
+                               'leak')
         # Any compression heats the gas; the relaxation is separable from the static gas law as
         # soon as the volume changes at different rates (ramps that start and stop, steps, holds).
         rate_change = np.ptp(rate_c) > 1e-4 or np.ptp(rate_s) > 1e-3
-        reasons['heat_exchange'] = (None if moving > 0.01 and rate_change and np.ptp(p) > 30 * noise else
+        reasons['heat_exchange'] = (None if moving > 0.01 and rate_change
+                                    and np.ptp(p) > 30 * noise else
                                     'the volume never changes at varying rates, so the heating by '
-                                    'compression and its relaxation cannot be told from the gas law')
+                                    'compression and its relaxation cannot be told from the gas '
+                                    'law')
         reasons['sensor_lag'] = (None if np.ptp(p) > 30 * noise and moving > 0.02 else
-                                 'the pressure hardly changes, so a lag of the sensor cannot be seen')
+                                 'the pressure hardly changes, so a lag of the sensor cannot be '
+                                 'seen')
         reasons['backlash'] = (None if turns >= 1 else
-                               'the air-chamber compression never reverses; backlash shows only at '
-                               'reversals')
+                               'the air-chamber compression never reverses; backlash shows only '
+                               'at reversals')
         reasons['wall_bulging'] = (None if np.ptp(p) > 2000 else
-                                   f'the pressure spans only {np.ptp(p):.0f} Pa; a pressure-dependent '
-                                   'volume needs a wider range')
+                                   f'the pressure spans only {np.ptp(p):.0f} Pa; a '
+                                   'pressure-dependent volume needs a wider range')
         # Buckling loads the spring with compression and pressure at once: the record must hold
         # the spring compressed by several mm at raised pressure and over a span of pressures, or
         # the onset (which moves with the pressure) cannot be told from the material force.
@@ -204,17 +225,21 @@ def identifiability(record, noise):
         turns = reversals(psi, np.radians(1.0))
         spread = max(np.ptp(p1), np.ptp(p2))
         moving = moving_fraction(psi, record.dt, np.radians(0.5))
-        reasons['contact_hysteresis'] = (None if turns >= 2 and max(p1.max(), p2.max()) > P_ATM + 2e4 else
+        reasons['contact_hysteresis'] = (None if turns >= 2
+                                         and max(p1.max(), p2.max()) > P_ATM + 2e4 else
                                          f'the angle reverses only {turns} time(s) or no chain is '
-                                         'pressurised; the contact memory shows only on a return path')
+                                         'pressurised; the contact memory shows only on a return '
+                                         'path')
         reasons['pressure_friction'] = (None if spread > 5e4 and moving > 0.02 and turns >= 2 else
-                                        'friction needs motion in both directions at several pressures')
+                                        'friction needs motion in both directions at several '
+                                        'pressures')
         reasons['natural_curvature'] = (None if spread > 5e4 else
                                         f'the chain pressures span only {spread:.0f} Pa; a '
                                         'pressure-dependent rest angle needs a wider range')
         rate = np.abs(np.gradient(p1, record.dt)) + np.abs(np.gradient(p2, record.dt))
         reasons['sensor_lag'] = (None if spread > 5e4 and np.percentile(rate, 99) > 1e5 else
-                                 'the pressures never change fast, so a lag of the sensors cannot be seen')
+                                 'the pressures never change fast, so a lag of the sensors cannot '
+                                 'be seen')
         # Every segment cause acts through the chain pressures: none can be scored on held-out
         # blocks that only one fold's refit has not seen pressurised.
         uncovered = pressure_coverage(record)

@@ -1,4 +1,5 @@
-"""The model doctor's decision procedure (docs/doctor.md).
+"""
+The model doctor's decision procedure (docs/doctor.md).
 
 1. Load and check the record; estimate the white-noise floor of the measured signal at full rate.
 2. Fit on a block-averaged copy (at most the system's `FIT_RATE` Hz and `FIT_SAMPLES` samples): the
@@ -15,15 +16,16 @@ fitted and scored on all of them at once, each divided by its own noise floor; t
 then works on that combined residual (in noise floors), and `outputs` holds the figures of each
 output in its own unit.
 """
+from dataclasses import dataclass, field
 import sys
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from bellows_ros.doctor import checks, scoring
 
-FIT_SAMPLES = 20000     # most samples of the fitted copy (the highest rate is the system's FIT_RATE)
+# most samples of the fitted copy (the highest rate is the system's FIT_RATE)
+FIT_SAMPLES = 20000
 # Unexplained structure: final held-out RMSE above this multiple of the (averaged) noise floor ...
 UNEXPLAINED_RATIO = 2.0
 # ... and a Ljung-Box statistic over LB_LAGS lags of the residual with p below LB_P.
@@ -46,6 +48,7 @@ class Candidate:
 @dataclass
 class OutputView:
     """One measured output of a diagnosis in its own unit: held-out residuals, RMSEs, evidence."""
+
     name: str
     unit: str
     label: str
@@ -88,7 +91,8 @@ class Diagnosis:
     values: dict                   # physical parameters of the final model {part: {name: value}}
     extended_flat: dict            # ROS 2 parameters of the extended model
     timings: dict = field(default_factory=dict)
-    failure: str = None            # why the baseline's held-out score is broken (then no cause is tried)
+    # why the baseline's held-out score is broken (then no cause is tried)
+    failure: str = None
     outputs: list = field(default_factory=list)   # OutputView per measured output (multi-output)
     primary: int = 0               # the output where the first cause pays most
 
@@ -143,7 +147,8 @@ def decimation_factor(record, rate):
 
 
 def diagnose(system, path, params_path=None, progress=False, causes=None):
-    """Diagnose the record at `path` (CSV or rosbag2 directory). Returns a `Diagnosis`.
+    """
+    Diagnose the record at `path` (CSV or rosbag2 directory). Returns a `Diagnosis`.
 
     `causes` restricts the candidates (default: the whole vocabulary of the system; `()` fits and
     scores the baseline only, the benchmark's reference).
@@ -253,8 +258,12 @@ def _structured(evidence):
 
 
 def _doubt(result, cause, floor):
-    """None, or why a scored candidate cannot be named whatever its gain: a physical parameter at
-    the edge of its range (it absorbs some other error), or a broken held-out score."""
+    """
+    Tell why a scored candidate cannot be named whatever its gain, or return None.
+
+    A physical parameter at the edge of its range (it absorbs some other error), or a broken
+    held-out score.
+    """
     edge = scoring.at_edge(result, cause)
     if edge:
         return f'fitted {", ".join(edge)} at the edge of its physical range'
@@ -262,9 +271,12 @@ def _doubt(result, cause, floor):
 
 
 def _worsens(result, current, outputs):
-    """None, or which output `result` makes worse than `current` by more than `scoring.MIN_GAIN`:
-    a cause must not buy a better fit of one output with a worse one of another (the combined
-    residual is dominated by whichever output is furthest above its noise floor)."""
+    """
+    Name the output `result` makes worse than `current` by more than `scoring.MIN_GAIN`, or None.
+
+    A cause must not buy a better fit of one output with a worse one of another (the combined
+    residual is dominated by whichever output is furthest above its noise floor).
+    """
     for i, (name, unit, label) in enumerate(outputs or ()):
         loss = -scoring.gain(result.output_rmse(i), current.output_rmse(i))
         if loss > scoring.MIN_GAIN:

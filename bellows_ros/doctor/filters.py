@@ -1,4 +1,5 @@
-"""Vectorised dynamic operators the candidate causes are built from (pure functions on arrays).
+"""
+Vectorised dynamic operators the candidate causes are built from (pure functions on arrays).
 
 - `lag`: first-order low pass (a sensor with time constant tau), first-order-hold discretisation,
   via `scipy.signal.lfilter`.
@@ -12,11 +13,13 @@ from scipy.signal import lfilter
 
 
 def lag(x, dt, tau):
-    """y' = (x - y) / tau with y(0) = x(0), sampled every dt.
+    """
+    Low-pass: y' = (x - y) / tau with y(0) = x(0), sampled every dt.
 
     First-order-hold discretisation (x linear between samples): exact for ramps, and right for
-    block-averaged records, whose samples are the moving average of the signal at the block centres;
-    the zero-order hold would add a delay of dt/2 that a coarse fitting rate cannot afford.
+    block-averaged records, whose samples are the moving average of the signal at the block
+    centres; the zero-order hold would add a delay of dt/2 that a coarse fitting rate cannot
+    afford.
     """
     x = np.asarray(x, float)
     if tau <= 0:
@@ -29,7 +32,8 @@ def lag(x, dt, tau):
 
 
 def relax(x, dt, tau):
-    """z' = x' - z / tau with z(0) = 0: the part of the change of x that has not yet relaxed.
+    """
+    High-pass: z' = x' - z / tau with z(0) = 0, the part of the change of x not yet relaxed.
 
     A step of x by h gives z = h exp(-t / tau): the adiabatic jump and its decay.
     """
@@ -40,7 +44,8 @@ def relax(x, dt, tau):
 
 
 def play(x, width, start=None):
-    """Backlash: the output follows x only when x pushes it from one side of a gap of `width`.
+    """
+    Backlash: the output follows x only when x pushes it from one side of a gap of `width`.
 
     y_k = clamp(y_{k-1}, x_k - width/2, x_k + width/2), y_{-1} = `start` (default x_0). A
     composition of clamps is a clamp, so the recursion is a prefix scan over (low, high) pairs.
@@ -61,9 +66,12 @@ def play(x, width, start=None):
 
 
 def recurrence(a, b, x0):
-    """x_0 = x0, x_{k+1} = a_k x_k + b_k (a time-varying first-order system, e.g. the gas amount
-    of a leaking chamber). Closed form x_k = A_k (x0 + Σ_{j<k} b_j / A_{j+1}), A_k = Π_{j<k} a_j,
-    evaluated in chunks short enough that A stays within exp(±30)."""
+    """
+    Run x_0 = x0, x_{k+1} = a_k x_k + b_k (a time-varying first-order system).
+
+    E.g. the gas amount of a leaking chamber. Closed form x_k = A_k (x0 + Σ_{j<k} b_j / A_{j+1}),
+    A_k = Π_{j<k} a_j, evaluated in chunks short enough that A stays within exp(±30).
+    """
     a = np.asarray(a, float)
     b = np.asarray(b, float)
     n = len(a)

@@ -1,12 +1,14 @@
-"""Before/after plots of a diagnosis (matplotlib, Agg backend, PNG).
+"""
+Before/after plots of a diagnosis (matplotlib, Agg backend, PNG).
 
 All residuals plotted are held-out residuals: what the model got wrong on blocks of time it was not
-fitted on. "baseline" is the simulation before the doctor, "extended" the model with the causes found.
-A diagnosis of several outputs (the actuator's pressure and force) gets every plot for each: the
-first output under the plain names, the others with `_<label>` appended (fit_force.png ...).
+fitted on. "baseline" is the simulation before the doctor, "extended" the model with the causes
+found. A diagnosis of several outputs (the actuator's pressure and force) gets every plot for each:
+the first output under the plain names, the others with `_<label>` appended (fit_force.png ...).
 """
 from pathlib import Path  # noqa: E402
 from types import SimpleNamespace  # noqa: E402
+
 import matplotlib
 
 matplotlib.use('Agg')
@@ -30,8 +32,11 @@ def _inputs(diagnosis):
 
 
 def write_plots(diagnosis, directory):
-    """Write residuals.png, fit.png, hysteresis.png, autocorrelation.png (and the same per further
-    output); returns the file names."""
+    """
+    Write residuals.png, fit.png, hysteresis.png, autocorrelation.png; return the file names.
+
+    The same plots follow for each further output.
+    """
     names = []
     for suffix, view in _views(diagnosis):
         for name, draw in (('residuals', _residuals), ('fit', _fit),
@@ -59,7 +64,8 @@ def _views(d):
 
 
 def _label(diagnosis):
-    return f'extended ({" + ".join(diagnosis.causes)})' if diagnosis.causes else 'extended (= baseline)'
+    return (f'extended ({" + ".join(diagnosis.causes)})' if diagnosis.causes
+            else 'extended (= baseline)')
 
 
 def _residuals(d):
@@ -69,7 +75,8 @@ def _residuals(d):
     direction = np.sign(np.where(np.abs(rate) > 0.02 * np.max(np.abs(rate)), rate, 0.0))
     thin = _thin(len(t))
     figure, axes = plt.subplots(2, 2, figsize=(12, 8))
-    series = (('baseline', d.baseline.heldout, 'tab:red'), (_label(d), d.final.heldout, 'tab:blue'))
+    series = (('baseline', d.baseline.heldout, 'tab:red'),
+              (_label(d), d.final.heldout, 'tab:blue'))
     for label, residual, colour in series:
         axes[0, 0].plot(t[thin], residual[thin], lw=0.6, color=colour, label=label)
         axes[0, 1].plot(rate[thin], residual[thin], '.', ms=1.5, color=colour, alpha=0.5)
@@ -78,7 +85,8 @@ def _residuals(d):
     data, ticks = [], []
     for value, name in groups:
         for label, residual, _ in series:
-            data.append(residual[direction == value] if np.any(direction == value) else np.zeros(1))
+            data.append(residual[direction == value] if np.any(direction == value)
+                        else np.zeros(1))
             ticks.append(f'{name}\n{label.split(" ")[0]}')
     axes[1, 0].boxplot(data, showfliers=False)
     axes[1, 0].set_xticks(range(1, len(ticks) + 1), ticks, fontsize=7)
@@ -104,7 +112,8 @@ def _fit(d):
     axis.plot(t[thin], (d.signal + d.final.heldout)[thin], color='tab:blue', lw=0.8,
               label=f'{_label(d)} (held-out RMSE {d.final.rmse:.4g} {d.unit})')
     what = getattr(d, 'what', 'driving torque τ_motion - τ_ext')
-    axis.set(xlabel='time (s)', ylabel=f'{what} ({d.unit})', title='before and after, on held-out blocks')
+    axis.set(xlabel='time (s)', ylabel=f'{what} ({d.unit})',
+             title='before and after, on held-out blocks')
     axis.legend(fontsize=8)
     axis.grid(alpha=0.3)
     figure.tight_layout()
@@ -118,7 +127,8 @@ def _hysteresis(d):
     for axis, (label, residual) in zip(axes, (('baseline', d.baseline.heldout),
                                               (_label(d), d.final.heldout))):
         axis.plot(position[thin], d.signal[thin], color='k', lw=0.6, label='measured')
-        axis.plot(position[thin], (d.signal + residual)[thin], color='tab:blue', lw=0.6, label=label)
+        axis.plot(position[thin], (d.signal + residual)[thin], color='tab:blue', lw=0.6,
+                  label=label)
         axis.set(xlabel=position_label, title=f'loops: {label}')
         axis.grid(alpha=0.3)
         axis.legend(fontsize=8)
@@ -131,7 +141,8 @@ def _autocorrelation(d):
     lags = min(200, len(d.signal) // 4)
     figure, axis = plt.subplots(figsize=(8, 4))
     seconds = np.arange(lags + 1) * d.record.dt
-    axis.plot(seconds, autocorrelation(d.baseline.heldout, lags), color='tab:red', label='baseline')
+    axis.plot(seconds, autocorrelation(d.baseline.heldout, lags), color='tab:red',
+              label='baseline')
     axis.plot(seconds, autocorrelation(d.final.heldout, lags), color='tab:blue', label=_label(d))
     band = 2.0 / np.sqrt(len(d.signal))
     axis.axhspan(-band, band, color='0.85', label='white noise ±2/√n')

@@ -1,11 +1,13 @@
-"""`bellows diagnose`: run the doctor and write DIR/report.json, report.md, extended.yaml, details.json
-and the PNG plots.
+"""
+`bellows diagnose`: run the doctor and write the report.
 
-report.json has the keys of docs/interfaces.md; for a system with several measured outputs (the actuator's
-pressure p and force f) its baseline/extended/gain and the candidates' held-out RMSE are those of
-the output where the first cause pays most (`baseline.unit` says which), and `outputs` adds the
-figures of every output. Everything else (per-candidate gains, the decision, the residual evidence,
-timings) goes to details.json.
+DIR/report.json, report.md, extended.yaml, details.json and the PNG plots.
+
+report.json has the keys of docs/interfaces.md; for a system with several measured outputs (the
+actuator's pressure p and force f) its baseline/extended/gain and the candidates' held-out RMSE are
+those of the output where the first cause pays most (`baseline.unit` says which), and `outputs`
+adds the figures of every output. Everything else (per-candidate gains, the decision, the residual
+evidence, timings) goes to details.json.
 """
 import json
 import math
@@ -28,8 +30,9 @@ def diagnose_command(args):
     write_report(result, args.report)
     causes = ', '.join(result.causes) or 'none'
     print(f'{args.system}: cause {causes}; held-out RMSE {result.baseline_rmse:.4g} -> '
-          f'{result.final_rmse:.4g} {result.unit} (gain {100 * result.gain:.1f} %)'
-          f'{"; unexplained structure left" if result.unexplained else ""}; report in {args.report}')
+          f'{result.final_rmse:.4g} {result.unit} (gain {100 * result.gain:.1f} '
+          f'%){"; unexplained structure left" if result.unexplained else ""}; report in '
+          f'{args.report}')
     return 0
 
 
@@ -92,7 +95,8 @@ def details_dict(d):
         'heldout_units': ('noise floors of each output (combined)' if d.outputs else d.unit),
         'evidence_per_output': {o.name: o.evidence for o in d.outputs},
         'heldout_failure': d.failure,
-        'rule': {'min_gain': scoring.MIN_GAIN, 'blocks': scoring.BLOCKS, 'penalty': 'BIC on held-out',
+        'rule': {'min_gain': scoring.MIN_GAIN, 'blocks': scoring.BLOCKS,
+                 'penalty': 'BIC on held-out',
                  'unexplained_ratio': engine.UNEXPLAINED_RATIO, 'ljung_box_p': engine.LB_P,
                  'failure_over_noise': scoring.FAILURE_NOISE,
                  'failure_over_insample': scoring.FAILURE_INSAMPLE},
@@ -104,8 +108,11 @@ def details_dict(d):
 
 
 def fold_rmse(heldout):
-    """Held-out RMSE of each fold (`scoring.block_masks`): a fold far above the others is one whose
-    refit extrapolates."""
+    """
+    Return the held-out RMSE of each fold (`scoring.block_masks`).
+
+    A fold far above the others is one whose refit extrapolates.
+    """
     return [float(np.sqrt(np.mean(heldout[..., test] ** 2)))
             for _, test in scoring.block_masks(np.shape(heldout)[-1])]
 
@@ -117,9 +124,11 @@ def write_report(d, directory):
     try:
         directory.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise BellowsError(f'{directory}: cannot create the report directory ({exc.strerror})') from None
+        raise BellowsError(
+            f'{directory}: cannot create the report directory ({exc.strerror})') from None
     (directory / 'report.json').write_text(json.dumps(report_dict(d), indent=2) + '\n')
-    (directory / 'details.json').write_text(json.dumps(details_dict(d), indent=2, default=float) + '\n')
+    (directory / 'details.json').write_text(json.dumps(details_dict(d), indent=2,
+                                                       default=float) + '\n')
     header = (f'Extended {d.system} model written by `bellows diagnose` from {d.path}\n'
               f'causes: {", ".join(d.causes) or "none"}; held-out gain {100 * d.gain:.1f} %')
     param_files.write_file(directory / EXTENDED_FILE, d.extended_flat, header)
@@ -134,18 +143,19 @@ def _fmt(value):
 
 
 def markdown(d, plots):
-    lines = [f'# Model doctor: {d.system}', '', f'Data: `{d.path}` — {len(d.record)} samples fitted '
+    lines = [f'# Model doctor: {d.system}', '',
+             f'Data: `{d.path}` — {len(d.record)} samples fitted '
              f'at {1 / d.record.dt:.0f} Hz (block means of {d.record.factor} raw samples).', '']
     if d.causes:
-        lines.append(f'**Cause: {", ".join(f"`{c}`" for c in d.causes)}.** Extending the baseline with '
-                     f'{"it" if len(d.causes) == 1 else "them"} cuts the held-out RMSE from '
-                     f'{d.baseline_rmse:.4g} to {d.final_rmse:.4g} {d.unit} '
-                     f'(gain {100 * d.gain:.1f} %).')
+        lines.append(f'**Cause: {", ".join(f"`{c}`" for c in d.causes)}.** Extending the baseline '
+                     f'with {"it" if len(d.causes) == 1 else "them"} cuts the held-out RMSE from '
+                     f'{d.baseline_rmse:.4g} to {d.final_rmse:.4g} {d.unit} (gain '
+                     f'{100 * d.gain:.1f} %).')
     elif d.failure:
         lines.append(f'**Cause: `none` — the baseline could not be scored.** Its {d.failure} '
-                     f'{d.unit}. Causes compared against a broken score would name whichever breaks '
-                     'least, so none was tried; this is a failure of the doctor on this record, not a '
-                     'finding about the system.')
+                     f'{d.unit}. Causes compared against a broken score would name whichever '
+                     'breaks least, so none was tried; this is a failure of the doctor on this '
+                     'record, not a finding about the system.')
     else:
         lines.append(f'**Cause: `none`.** No candidate cause improves the held-out RMSE '
                      f'({d.baseline_rmse:.4g} {d.unit}) by at least '
@@ -162,7 +172,7 @@ def markdown(d, plots):
                          f'{o.baseline_rmse:.4g} ({o.baseline_rmse / o.scale:.1f} × floor) | '
                          f'{o.final_rmse:.4g} ({o.final_rmse / o.scale:.1f} × floor) | '
                          f'{100 * o.gain:.1f} % |')
-        lines.append(f'\nThe headline figures above are the {d.outputs[d.primary].label}\'s, '
+        lines.append(f"\nThe headline figures above are the {d.outputs[d.primary].label}'s, "
                      'where the first cause pays most.')
     lines += ['', '## What is left', '']
     for label, unit, ev in ([(o.label + ': ', o.unit, o.evidence) for o in d.outputs]
@@ -178,9 +188,9 @@ def markdown(d, plots):
                   f'direction {ev["correlation_with_direction"]:.2f}.', '']
     if d.unexplained:
         lines.append('**Unexplained structure remains**: the residual is more than '
-                     f'{engine.UNEXPLAINED_RATIO:g} × the noise floor and correlated in time, and no '
-                     'candidate in the vocabulary removes it. Something outside the vocabulary is at '
-                     'work; the correlations above say what it moves with.')
+                     f'{engine.UNEXPLAINED_RATIO:g} × the noise floor and correlated in time, and '
+                     'no candidate in the vocabulary removes it. Something outside the vocabulary '
+                     'is at work; the correlations above say what it moves with.')
     else:
         lines.append('No structure beyond the noise is left that the doctor can tell apart.')
     lines += ['', '## Candidates (held-out, greedy forward selection)', '',
@@ -191,7 +201,8 @@ def markdown(d, plots):
             lines.append(f'| `{cause}` | no: {c.reason} | | | | no |')
             continue
         if c.score is None:
-            lines.append(f'| `{cause}` | yes | | | | not tried: the baseline\'s held-out score is broken |')
+            lines.append(f'| `{cause}` | yes | | | | '
+                         "not tried: the baseline's held-out score is broken |")
             continue
         extends = ' + '.join(('baseline',) + c.extends)
         verdict = 'yes' if c.pays else ('no: ' + c.note if c.note else 'no')
@@ -206,34 +217,36 @@ def markdown(d, plots):
         if values:
             lines.append(f'- {part}: ' + ', '.join(f'{k} = {_fmt(v)}' for k, v in values.items()))
     lines += ['', '## Using the extended model', '',
-              f'`{EXTENDED_FILE}` holds the extended model in ROS 2 parameter format. Lay it over the '
-              'defaults wherever parameters are read:', '',
-              f'    bellows simulate {d.system} --input IN.csv --output OUT.csv --params {EXTENDED_FILE}'
+              f'`{EXTENDED_FILE}` holds the extended model in ROS 2 parameter format. Lay it over '
+              'the defaults wherever parameters are read:', '',
+              f'    bellows simulate {d.system} --input IN.csv --output OUT.csv --params '
+              f'{EXTENDED_FILE}'
               + ''.join(f' --effect {c}' for c in d.causes if c in _PLANT_ONLY.get(d.system, ())),
               f'    ros2 run bellows_ros <node> --ros-args --params-file {EXTENDED_FILE}', '']
     if d.system == 'segment':
-        output, name = (('tau_drive', 'membrane-contact torque (29)') if 'contact_hysteresis' in d.causes
+        output, name = (('tau_drive',
+                         'membrane-contact torque (29)') if 'contact_hysteresis' in d.causes
                         else ('tau_prev', 'previous model (34)'))
-        lines.append(f'The extended segment model\'s driving torque is the `{output}` output of '
+        lines.append(f"The extended segment model's driving torque is the `{output}` output of "
                      f'`bellows simulate segment` and of the model node ({name}).')
     plant_only = [c for c in d.causes if c in _PLANT_ONLY.get(d.system, ())]
     if plant_only:
         verb = 'is a dynamic effect' if len(plant_only) == 1 else 'are dynamic effects'
-        lines.append(f'{", ".join(plant_only)} {verb} of the plant: the fitted values are its `--effect` '
-                     'defaults in the file, so '
-                     '`--effect NAME` switches it on with them.')
+        lines.append(f'{", ".join(plant_only)} {verb} of the plant: the fitted values are its '
+                     '`--effect` defaults in the file, so `--effect NAME` switches it on with '
+                     'them.')
     lines += ['', '## How the doctor decided', '',
               f'The record was cut into {scoring.BLOCKS} contiguous blocks of time, dealt into '
-              f'{scoring.FOLDS} folds; every model was refitted without each fold and scored on the '
-              'blocks it did not see. A cause pays when it '
-              f'cuts the held-out RMSE of the current model by at least {100 * scoring.MIN_GAIN:.0f} % '
-              'and its held-out BIC (n ln MSE + k ln n) decreases; the best paying cause is added and the '
-              'search repeats (see docs/doctor.md).', '', '## Plots', '']
+              f'{scoring.FOLDS} folds; every model was refitted without each fold and scored on '
+              'the blocks it did not see. A cause pays when it cuts the held-out RMSE of the '
+              f'current model by at least {100 * scoring.MIN_GAIN:.0f} % and its held-out BIC (n '
+              'ln MSE + k ln n) decreases; the best paying cause is added and the search repeats '
+              '(see docs/doctor.md).', '', '## Plots', '']
     lines += [f'![{name}]({name})' for name in plots]
     return '\n'.join(lines) + '\n'
 
 
-# Causes that are plant effects switched on by `--effect` (the rest change the model's own parameters).
+# Causes that are plant effects switched on by `--effect` (the rest change the model's own
+# parameters).
 _PLANT_ONLY = {'actuator': ('air_leak', 'heat_exchange', 'sensor_lag', 'backlash', 'buckling'),
                'segment': ('sensor_lag',)}
-

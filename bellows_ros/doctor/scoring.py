@@ -1,4 +1,5 @@
-"""Fitting candidate models and scoring them on held-out blocks of time.
+"""
+Fitting candidate models and scoring them on held-out blocks of time.
 
 A *model* here is the baseline with zero or more candidate causes switched on. It is described by
 its nonlinear physical parameters (time constants, conductances, widths ...) with bounds, and a
@@ -24,7 +25,8 @@ from typing import Callable
 import numpy as np
 from scipy.optimize import least_squares
 
-# A cause must cut the held-out RMSE of the current model by at least this fraction (docs/doctor.md).
+# A cause must cut the held-out RMSE of the current model by at least this fraction
+# (docs/doctor.md).
 MIN_GAIN = 0.10
 # Contiguous blocks of time, and folds they are dealt into (each fold holds out BLOCKS / FOLDS).
 BLOCKS = 20
@@ -45,13 +47,15 @@ SCOUT_NFEV = 8
 
 @dataclass
 class Model:
-    """The baseline plus the causes in `causes`, ready to fit.
+    """
+    The baseline plus the causes in `causes`, ready to fit.
 
     names, x0, lower, upper: nonlinear parameters (scaled so that O(1) steps are meaningful).
     predict(theta, train) -> (prediction over the whole record, dict of linear coefficients).
     physical(theta, linear) -> dict of physical parameters for the report (SI units).
     n_linear: number of linear coefficients solved inside `predict` (counts in the penalty).
     """
+
     causes: tuple
     names: list
     x0: list
@@ -76,7 +80,8 @@ class Fit:
 
 
 def fit(model, y, train, x0=None, max_nfev=60):
-    """Least-squares fit of `model` to `y` on the boolean mask `train`.
+    """
+    Least-squares fit of `model` to `y` on the boolean mask `train`.
 
     Starts are `x0` (a warm start) if given, else `model.x0` and `model.starts`; with several, each
     gets `SCOUT_NFEV` evaluations and the best is refined with `max_nfev`. Returns a `Fit`.
@@ -110,14 +115,15 @@ def _cost(prediction, y, mask):
 
 
 def block_masks(n, blocks=BLOCKS, folds=FOLDS, guard=GUARD):
-    """(train, test) boolean masks of each fold.
+    """
+    (train, test) boolean masks of each fold.
 
-    The record is cut into `blocks` contiguous blocks of time; fold k holds out blocks k, k + folds,
-    k + 2 folds, ... Spreading each fold's held-out time over the record keeps every training set
-    covering the whole range of the operating conditions (so the score measures the model, not an
-    extrapolation to an unseen pressure), while each held-out block stays long compared with the
-    dynamics of the causes. `guard` (fraction of a block) is left out of training on both sides of
-    a held-out block.
+    The record is cut into `blocks` contiguous blocks of time; fold k holds out blocks k, k +
+    folds, k + 2 folds, ... Spreading each fold's held-out time over the record keeps every
+    training set covering the whole range of the operating conditions (so the score measures the
+    model, not an extrapolation to an unseen pressure), while each held-out block stays long
+    compared with the dynamics of the causes. `guard` (fraction of a block) is left out of training
+    on both sides of a held-out block.
     """
     edges = np.linspace(0, n, blocks + 1).astype(int)
     pad = int(guard * n / blocks)
@@ -134,7 +140,8 @@ def block_masks(n, blocks=BLOCKS, folds=FOLDS, guard=GUARD):
 
 @dataclass
 class Score:
-    """A model fitted on all data (`full`) and its held-out residual (`heldout`, one per sample)."""
+    """A model fitted on all data (`full`) and its held-out residual (`heldout`, per sample)."""
+
     model: Model
     full: Fit
     heldout: np.ndarray
@@ -157,8 +164,11 @@ class Score:
 
 
 def score(model, y, warm=None):
-    """Fit `model` to all of `y`, then refit per held-out block (warm-started) and collect the
-    held-out residuals. `warm` optionally gives a start for the full fit."""
+    """
+    Fit `model` to all of `y`, then refit per held-out block and collect the held-out residuals.
+
+    The block refits are warm-started; `warm` optionally gives a start for the full fit.
+    """
     n = np.shape(y)[-1]
     everything = np.ones(n, bool)
     full = fit(model, y, everything, x0=warm)
@@ -170,17 +180,21 @@ def score(model, y, warm=None):
 
 
 def heldout_failure(score, noise):
-    """None, or why the held-out score of `score` is not a measure of its model: held-out RMSE above
-    `FAILURE_NOISE` × `noise` (the averaged noise floor) while the same model fits all the data to
-    within 1 / `FAILURE_INSAMPLE` of that. Such a gap is not physics a cause could remove but a fold
-    refit gone wrong (an ill-posed solve, or a fold whose training rows never see the conditions of
-    its held-out blocks), and comparing causes against it would name whichever breaks least.
+    """
+    Tell why the held-out score of `score` is not a measure of its model, or return None.
+
+    That is a held-out RMSE above `FAILURE_NOISE` × `noise` (the averaged noise floor) while the
+    same model fits all the data to within 1 / `FAILURE_INSAMPLE` of that. Such a gap is not
+    physics a cause could remove but a fold refit gone wrong (an ill-posed solve, or a fold whose
+    training rows never see the conditions of its held-out blocks), and comparing causes against
+    it would name whichever breaks least.
     """
     held, fitted = score.rmse, score.insample_rmse
-    if not np.isfinite(held) or (held > FAILURE_NOISE * noise and held > FAILURE_INSAMPLE * fitted):
+    if not np.isfinite(held) or (held > FAILURE_NOISE * noise
+                                 and held > FAILURE_INSAMPLE * fitted):
         ratio = f'{held / noise:.0f} ×' if noise > 0 else 'far above'
-        return (f'numerical failure of the held-out refits: held-out RMSE {held:.4g} is {ratio} the '
-                f'noise floor while the fit on all data reaches {fitted:.4g}')
+        return (f'numerical failure of the held-out refits: held-out RMSE {held:.4g} is {ratio} '
+                f'the noise floor while the fit on all data reaches {fitted:.4g}')
     return None
 
 
@@ -190,8 +204,11 @@ def gain(extended_rmse, baseline_rmse):
 
 
 def bic_delta(candidate, current):
-    """Change of a BIC-like criterion on held-out residuals: n ln(MSE ratio) + k ln(n), with n the
-    number of held-out samples and k the number of parameters the candidate adds.
+    """
+    Return the change of a BIC-like criterion on held-out residuals.
+
+    n ln(MSE ratio) + k ln(n), with n the number of held-out samples and k the number of parameters
+    the candidate adds.
 
     Negative means the candidate is worth its added parameters. With thousands of samples this
     penalty is small; the minimum gain is then the binding part of the rule.
@@ -208,7 +225,8 @@ def pays(candidate, current):
 
 
 def at_edge(score, cause, margin=0.005):
-    """Names of `cause`'s fitted nonlinear parameters that ended at a bound of their physical range.
+    """
+    Names of `cause`'s fitted nonlinear parameters that ended at a bound of their physical range.
 
     A cause whose parameter runs to the edge (a sensor lag of 1 ms at 100 Hz, a natural curvature
     steeper than any bellows) is not describing its physics: it is absorbing some other error.
@@ -234,7 +252,8 @@ def autocorrelation(x, max_lag):
 
 
 def ljung_box(residual, lags):
-    """Ljung-Box Q over lags 1..`lags` and its p-value (chi-square with `lags` dof).
+    """
+    Ljung-Box Q over lags 1..`lags` and its p-value (chi-square with `lags` dof).
 
     For white noise Q ≈ lags; structure left in a residual makes Q large.
     """
@@ -246,19 +265,26 @@ def ljung_box(residual, lags):
 
 
 def noise_floor(signal):
-    """Standard deviation of the white measurement noise on `signal`, from its first differences
-    (robust MAD estimate). At 1 kHz the signal itself changes little between samples, so the
-    differences are dominated by noise: var(diff) = 2 sigma^2."""
+    """
+    Estimate the standard deviation of the white measurement noise on `signal`.
+
+    From its first differences (robust MAD estimate). At 1 kHz the signal itself changes little
+    between samples, so the differences are dominated by noise: var(diff) = 2 sigma^2.
+    """
     d = np.diff(np.asarray(signal, float))
     d = d - np.median(d)
     return float(1.4826 * np.median(np.abs(d)) / np.sqrt(2))
 
 
 def noise_floor_ramps(signal):
-    """`noise_floor` from second differences: for a signal that is ramped fast for much of the
-    record (the spring force under test-machine ramps changes by more than its noise per sample),
-    the first differences carry the ramp's slope; the second differences only its kinks.
-    For white noise var(second difference) = 6 sigma^2."""
+    """
+    Estimate `noise_floor` from second differences.
+
+    For a signal that is ramped fast for much of the record (the spring force under test-machine
+    ramps changes by more than its noise per sample), the first differences carry the ramp's
+    slope; the second differences only its kinks. For white noise
+    var(second difference) = 6 sigma^2.
+    """
     d = np.diff(np.asarray(signal, float), 2)
     d = d - np.median(d)
     return float(1.4826 * np.median(np.abs(d)) / np.sqrt(6))

@@ -1,8 +1,9 @@
-"""The segment's baseline and its candidate causes, as physically parameterised extensions.
+"""
+The segment's baseline and its candidate causes, as physically parameterised extensions.
 
-What is compared: the driving torque the record implies, Y = τ_motion - τ_ext (30), with the model's
-driving torque. τ_motion comes from the record's `tau_motion` column, else from the equation of
-motion (2) with `segment.dynamics` (quasi-static by default: Y = -τ_ext).
+What is compared: the driving torque the record implies, Y = τ_motion - τ_ext (30), with the
+model's driving torque. τ_motion comes from the record's `tau_motion` column, else from the
+equation of motion (2) with `segment.dynamics` (quasi-static by default: Y = -τ_ext).
 
 Baseline (docs/doctor.md): paper A's previous model (34) with constant friction (c_f only)
 and no natural curvature (Ψ_j0 = 0, no k_s,p): Y = X_prev θ_prev + 2Ψ k_s + tanh(c_vel Ψ̇) c_f, all
@@ -10,11 +11,11 @@ linear coefficients solved by least squares (32) on the training rows.
 
 Each cause adds the missing piece (paper A; docs/equations.md):
 - contact_hysteresis: X_prev is swapped for the membrane-contact actuator torque (29), X_a(s̃_a),
-  with s̃_a carried along the record by the no-slip strain memory (Algorithm 1) for the material and
-  geometry of the parameter file; θ_a refitted.
+  with s̃_a carried along the record by the no-slip strain memory (Algorithm 1) for the material
+  and geometry of the parameter file; θ_a refitted.
 - pressure_friction: adds c_f,p (5), the friction that grows with the bearing load.
-- natural_curvature: adds Ψ_j0(p) = σ_j c_Ψ0,p tanh(c_Ψ0 p_scl,j) (4) and k_s,p (3); c_Ψ0, c_Ψ0,p are
-  fitted (nonlinear), k_s, k_s,p by least squares.
+- natural_curvature: adds Ψ_j0(p) = σ_j c_Ψ0,p tanh(c_Ψ0 p_scl,j) (4) and k_s,p (3); c_Ψ0, c_Ψ0,p
+  are fitted (nonlinear), k_s, k_s,p by least squares.
 - sensor_lag: the pressure sensors lag the chambers with a time constant τ; the model is fed the
   pressures the sensors lag behind, p + τ dp/dt (the inverse of the first-order lag).
 """
@@ -30,7 +31,8 @@ from bellows_ros.models.segment import (actuator_regressor, contact_lengths, fri
 CAUSES = ('contact_hysteresis', 'pressure_friction', 'natural_curvature', 'sensor_lag')
 BASELINE = ('paper A previous model (34), constant friction c_f, no natural curvature '
             '(psi_j0 = 0, k_s,p = 0); coefficients refitted')
-FIT_RATE = 100.0  # Hz, highest rate the doctor fits at: quasi-static bench records; the sensor lag is ~30 ms
+# Hz, highest rate the doctor fits at: quasi-static bench records; the sensor lag is ~30 ms
+FIT_RATE = 100.0
 UNIT = 'N·m'
 # Samples of the centred Savitzky-Golay derivative dp/dt of `sensor_lag` at the fit rate: 50 ms at
 # 100 Hz. A 9-sample (90 ms) window smoothed the bench's fastest pressure steps (~50 ms) so much
@@ -49,15 +51,17 @@ STARTS = {
 
 
 def add_columns(record, params):
-    """Add the derived columns the segment causes need: Ψ̇ (if absent) and Y (the target), and
-    low-pass the measured inputs as the identification does (`identify.segment.filter_inputs` at
-    `segment.identify.input_cutoff`).
+    """
+    Add the derived columns the segment causes need: Ψ̇ (if absent) and Y (the target).
+
+    The measured inputs are low-passed as the identification does (`identify.segment.filter_inputs`
+    at `segment.identify.input_cutoff`).
 
     Why filter: the torque is steep in the pressure (~0.05 N·m per kPa), so white pressure-sensor
     noise (1 kPa) would reach the prediction as ~0.05 N·m at 1 kHz — as large as the torque
     sensor's own noise — and Algorithm 1's strain memory would ratchet with it. The signals are
-    band-limited (valve/chamber lag, imposed motion), so a 25 Hz zero-phase filter removes that noise
-    without delaying anything. Y (the measured output) is never filtered.
+    band-limited (valve/chamber lag, imposed motion), so a 25 Hz zero-phase filter removes that
+    noise without delaying anything. Y (the measured output) is never filtered.
     """
     columns = record.columns
     if 'psi_dot' not in columns:
@@ -73,7 +77,8 @@ def measured(record):
 
 
 class ContactLengths:
-    """s̃_a of both chains over the record, computed once (Algorithm 1 is sequential and costly).
+    """
+    s̃_a of both chains over the record, computed once (Algorithm 1 is sequential and costly).
 
     Algorithm 1 makes one fixed-point iteration per time step (appendix B), so its contact state
     follows the angle and pressure at a pace set by the step: run on the 100 Hz fitted copy it lags
@@ -96,7 +101,8 @@ class ContactLengths:
 
 
 def build_model(record, params, causes, warm=None, contact=None, noise=None):
-    """The baseline plus `causes` on `record` (with `add_columns` applied), as a `scoring.Model`.
+    """
+    Build the baseline plus `causes` on `record` (`add_columns` applied) as a `scoring.Model`.
 
     `noise`: white-noise standard deviation of Y on `record` (N·m), for the prior of the linear
     solve; default: the noise floor of Y estimated on `record` itself.
@@ -202,8 +208,9 @@ def build_model(record, params, causes, warm=None, contact=None, noise=None):
                 part = 'natural_curvature'
             out[part][label] = float(value)
         if 'natural_curvature' in causes:
-            out['natural_curvature']['restoring.c_psi0'] = float(values['natural_curvature.c_psi0'])
-            out['natural_curvature']['restoring.c_psi0_p'] = float(values['natural_curvature.c_psi0_p'])
+            curvature = out['natural_curvature']
+            curvature['restoring.c_psi0'] = float(values['natural_curvature.c_psi0'])
+            curvature['restoring.c_psi0_p'] = float(values['natural_curvature.c_psi0_p'])
         if 'sensor_lag' in causes:
             out['sensor_lag']['tau'] = float(10.0 ** values['sensor_lag.log10_tau'])
         return out
@@ -212,15 +219,18 @@ def build_model(record, params, causes, warm=None, contact=None, noise=None):
 
 
 def extended_flat(params, causes, values):
-    """Flat ROS 2 parameters of the extended model for `params.write_file` (names of
-    config/segment.yaml, loadable by `load_segment_params`).
+    """
+    Return the flat ROS 2 parameters of the extended model for `params.write_file`.
+
+    Names of config/segment.yaml, loadable by `load_segment_params`.
 
     The fitted coefficients go to their YAML names; physics a cause did not find is written as
     switched off (c_f,p = 0, c_Ψ0,p = k_s,p = 0), so the file describes exactly the extended model.
     A fitted sensor lag goes to `segment.plant.sensor_lag_tau` (the plant's `sensor_lag` effect).
     """
     flat = params.flat()
-    vector = {'actuator.theta': list(params.actuator_theta), 'previous.theta': list(params.previous_theta)}
+    vector = {'actuator.theta': list(params.actuator_theta),
+              'previous.theta': list(params.previous_theta)}
     scalars = {}
     if 'pressure_friction' not in causes:
         scalars['friction.c_fp'] = 0.0

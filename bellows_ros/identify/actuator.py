@@ -1,15 +1,17 @@
-"""Identification of paper B's actuator model from a record `t, x_c, x_s, p, f`.
+"""
+Identification of paper B's actuator model from a record `t, x_c, x_s, p, f`.
 
 Two stages, as in the paper:
 
 1. Gas and volume (1, 5, 6, 17). The gas law P (V_geo,c + V_geo,s + V_tube + E_V,c + E_V,s) = N is
    linear in the unknowns (N, V_tube, E_V coefficients) once P is measured:
        P (V_geo,c + V_geo,s) = N - P V_tube - Σ a_k P m_k(Δh, P),
-   so one least-squares solve gives them. From sealed records E_V is identifiable only up to terms a different V_tube or N can imitate: a00, the pressure-only terms and
-   the term linear in Δh are kept from the starting parameters (see `fit_volume`); several
-   separately sealed runs (a `run` column) pin the rest better. P0 (`p_ref`) follows from N.
-   The volume error is reported the paper's way: the volume the gas law gives for the measured
-   pressure (N/P) against the model's volume, in mL.
+   so one least-squares solve gives them. From sealed records E_V is identifiable only up to terms
+   a different V_tube or N can imitate: a00, the pressure-only terms and the term linear in Δh are
+   kept from the starting parameters (see `fit_volume`); several separately sealed runs (a `run`
+   column) pin the rest better. P0 (`p_ref`) follows from N. The volume error is reported the
+   paper's way: the volume the gas law gives for the measured pressure (N/P) against the model's
+   volume, in mL.
 2. Force (7-12). With P measured, f - (P - P_atm) A(Δh_s, P) = F_MTS(x_s) + E_F(Δh_s, P): the
    polynomial F_MTS and C1 are linear, (C2, C3) enter E_F nonlinearly — variable projection with
    SciPy `least_squares` over (C2, C3) from several starting points. C4 is fixed at -C2 P_atm (it
@@ -21,8 +23,8 @@ Two stages, as in the paper:
 `calibrate_stiffness` is how `config/actuator.yaml` was made to reproduce the measured stiffness.
 """
 import dataclasses
-import sys
 from dataclasses import dataclass
+import sys
 
 import numpy as np
 from scipy.optimize import fsolve, least_squares
@@ -30,8 +32,8 @@ from scipy.optimize import fsolve, least_squares
 from bellows_ros.errors import BellowsError
 from bellows_ros.models.actuator import (buckling_force, evaluate_array, p_ref_of_amount,
                                          stiffness, total_volume)
-from bellows_ros.models.actuator_geometry import (E_V_TERMS, P_ATM, e_v, e_v_regressors, frustum_state,
-                                                  volume_geo)
+from bellows_ros.models.actuator_geometry import (e_v, e_v_regressors, E_V_TERMS, frustum_state,
+                                                  P_ATM, volume_geo)
 
 # E_V terms kept from the starting parameters (see `fit_volume`): the constant, the pressure-only
 # terms and the term linear in Δh. Fitted: a20, a11, a30, a21, a12 (bulging that grows with the
@@ -44,11 +46,13 @@ _RIDGE = 1e-8
 
 @dataclass
 class ActuatorFit:
-    """Result of `fit_actuator`: fitted parameters and the errors the paper reports.
+    """
+    Result of `fit_actuator`: fitted parameters and the errors the paper reports.
 
     volume_error_ml: (rms, min, max) of model minus gas-law volume, mL;
     force_error_n: (rms, min, max) of model minus measured force, N.
     """
+
     params: object
     volume_error_ml: tuple
     force_error_n: tuple
@@ -56,7 +60,8 @@ class ActuatorFit:
 
 
 def fit_volume(params, x_c, x_s, p, wall_bulging=True, run=None):
-    """Stage 1: V_tube, the gas amount of each run and (optionally) the E_V coefficients.
+    """
+    Stage 1: V_tube, the gas amount of each run and (optionally) the E_V coefficients.
 
     `run` (optional array of run numbers) marks separately sealed fills, each with its own gas
     amount, like the paper's syringe settings; without it the record is one sealed fill.
@@ -85,7 +90,8 @@ def fit_volume(params, x_c, x_s, p, wall_bulging=True, run=None):
                 continue
             columns += [-p * m_c[k], -p * m_s[k]]
             names += [('chamber', k), ('spring', k)]
-    # Unknowns in convenient units (N in Pa·m³, volumes in mL) so one ridge weight fits all E_V terms.
+    # Unknowns in convenient units (N in Pa·m³, volumes in mL) so one ridge weight fits all E_V
+    # terms.
     a = np.column_stack(columns)
     units = np.array([1.0] * runs + [1e-6] * (len(columns) - runs))
     a = a * units
@@ -95,7 +101,8 @@ def fit_volume(params, x_c, x_s, p, wall_bulging=True, run=None):
     penalty = np.zeros((len(columns) - first_ev, len(columns)))
     penalty[:, first_ev:] = np.sqrt(_RIDGE * len(p)) * np.eye(len(columns) - first_ev)
     solution, *_ = np.linalg.lstsq(np.vstack([a, penalty]),
-                                   np.concatenate([p * v_known, np.zeros(len(penalty))]), rcond=None)
+                                   np.concatenate([p * v_known, np.zeros(len(penalty))]),
+                                   rcond=None)
     solution = solution * units
     amounts, v_tube = solution[:runs], solution[runs]
     if not (np.all(np.isfinite(amounts)) and np.all(amounts > 0.0)):
@@ -131,7 +138,8 @@ def fit_force(params, x_s, p, f, force_error=True, seed=0, progress=False):
     dh = x_s / params.spring.n
     if not force_error:
         coef, *_ = np.linalg.lstsq(poly, target, rcond=None)
-        return dataclasses.replace(params, f_mts=tuple(float(v) for v in coef), e_f=(0.0, 0.0, 0.0, 0.0))
+        return dataclasses.replace(params,
+                                   f_mts=tuple(float(v) for v in coef), e_f=(0.0, 0.0, 0.0, 0.0))
 
     def solve_linear(z):
         c2, c3 = z[0] * 1e-5, z[1] * 1e2          # scaled so both unknowns are O(1)
@@ -141,11 +149,13 @@ def fit_force(params, x_s, p, f, force_error=True, seed=0, progress=False):
         return coef, a @ coef - target
 
     rng = np.random.default_rng(seed)
-    starts = [np.array([3.0, 8.0]), np.array([1.0, 2.0])] + [rng.uniform([0.0, 0.0], [10.0, 15.0]) for _ in range(4)]
+    starts = [np.array([3.0, 8.0]),
+              np.array([1.0, 2.0])] + [rng.uniform([0.0, 0.0], [10.0, 15.0]) for _ in range(4)]
     best = None
     bar = _progress(len(starts), 'force fit', progress)
     for start in starts:
-        result = least_squares(lambda z: solve_linear(z)[1], start, bounds=([-20.0, -30.0], [20.0, 30.0]),
+        result = least_squares(lambda z: solve_linear(z)[1], start,
+                               bounds=([-20.0, -30.0], [20.0, 30.0]),
                                x_scale=1.0, max_nfev=200)
         if best is None or result.cost < best.cost:
             best = result
@@ -158,9 +168,10 @@ def fit_force(params, x_s, p, f, force_error=True, seed=0, progress=False):
 
 
 def _progress(total, label, enabled):
-    """A tqdm bar on stderr that appears only if the work takes more than a second."""
+    """Make a tqdm bar on stderr that appears only if the work takes more than a second."""
     from tqdm import tqdm
-    return tqdm(total=total, desc=label, file=sys.stderr, delay=1.0, disable=not enabled, leave=False)
+    return tqdm(total=total, desc=label, file=sys.stderr, delay=1.0, disable=not enabled,
+                leave=False)
 
 
 def fit_actuator(params, x_c, x_s, p, f, run=None, wall_bulging=True, force_error=True, seed=0,
@@ -181,7 +192,8 @@ def _summary(error):
 
 
 def calibrate_stiffness(params, k_low=1483.0, k_high=1975.0, x_c_low=-0.020, x_c_high=0.020):
-    """Scale F_MTS and C1 of E_F so the model's stiffness is k_low at x_c_low and k_high at x_c_high.
+    """
+    Scale F_MTS and C1 of E_F so the model's stiffness is k_low at x_c_low and k_high at x_c_high.
 
     Paper B measured 1483 N/m at x_c = -20 mm and 1975 N/m at +20 mm (section IV-D). The shape of
     F_MTS (ratios of its coefficients) and C2, C3 are kept; the two amplitudes are solved for.
@@ -196,7 +208,8 @@ def calibrate_stiffness(params, k_low=1483.0, k_high=1975.0, x_c_low=-0.020, x_c
     def residual(z):
         trial = with_amplitudes(z)
         return [stiffness(trial, x_c_low) - k_low, stiffness(trial, x_c_high) - k_high]
-    solution, info, ok, message = fsolve(residual, [params.f_mts[0], params.e_f[0]], full_output=True)
+    solution, info, ok, message = fsolve(residual, [params.f_mts[0], params.e_f[0]],
+                                         full_output=True)
     if ok != 1:
         raise BellowsError(f'stiffness calibration did not converge: {message}')
     return with_amplitudes(solution)

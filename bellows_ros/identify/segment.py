@@ -1,27 +1,30 @@
-"""Identification of the segment driving-torque model (paper A, eqs. 30-33) and the Fig. 10 calibration.
+"""
+Identification of the segment driving-torque model (paper A, eqs. 30-33).
 
-Inner problem (32): for fixed nonlinear parameters, θ = [θ_a (8), k_s, k_s,p, c_f, c_f,p] is the linear
-least-squares solution of Y = X θ, X = [X_a X_s X_f] (31), Y = τ_motion - τ_ext (30); solved with
-`least_squares` (no explicit inverse). Outer problem (33): minimise the inner residual over
+Also the Fig. 10 calibration.
+
+Inner problem (32): for fixed nonlinear parameters, θ = [θ_a (8), k_s, k_s,p, c_f, c_f,p] is the
+linear least-squares solution of Y = X θ, X = [X_a X_s X_f] (31), Y = τ_motion - τ_ext (30); solved
+with `least_squares` (no explicit inverse). Outer problem (33): minimise the inner residual over
 (μ1, μ2, γ1, γ2) — which move s̃_a through the strain memory — and the natural-curvature constants
 (c_Ψ0, c_Ψ0,p), within bounds (γ_k > 2): Sobol screening, then bounded Nelder-Mead from several
-starts (the problem has local minima; see `fit_segment`). The previous model (34) is refitted on the same rows:
-θ_prev by least squares on Y - τ_s - τ_f (its τ_s, τ_f are the shared ones of the YAML, so the stored
-θ_prev reproduces exactly what `simulate` outputs as tau_prev).
+starts (the problem has local minima; see `fit_segment`). The previous model (34) is refitted on
+the same rows: θ_prev by least squares on Y - τ_s - τ_f (its τ_s, τ_f are the shared ones of the
+YAML, so the stored θ_prev reproduces exactly what `simulate` outputs as tau_prev).
 
-Held-out error: the fit uses the first `1 - holdout` of the rows; RMSE and MAE are reported on the rest.
-The strain memory always runs over the whole record (its state needs the history).
+Held-out error: the fit uses the first `1 - holdout` of the rows; RMSE and MAE are reported on the
+rest. The strain memory always runs over the whole record (its state needs the history).
 
 Errors in variables: the measured inputs (p1, p2, Ψ, Ψ̇) carry white sensor noise over the whole
-0..f_s/2 band, while the signals themselves are band-limited (valve/chamber lag, imposed motion), and the
-torque is steep in the pressure (~0.05 N·m per kPa). Both the fit and the prediction pipeline of the
-fitted model therefore first low-pass the inputs with a zero-phase Butterworth filter
-(`segment.identify.input_cutoff`, `filter_inputs`). The measured torque τ_ext (the target) is never
-filtered: errors are against the raw measurement.
+0..f_s/2 band, while the signals themselves are band-limited (valve/chamber lag, imposed motion),
+and the torque is steep in the pressure (~0.05 N·m per kPa). Both the fit and the prediction
+pipeline of the fitted model therefore first low-pass the inputs with a zero-phase Butterworth
+filter (`segment.identify.input_cutoff`, `filter_inputs`). The measured torque τ_ext (the target)
+is never filtered: errors are against the raw measurement.
 """
+from dataclasses import dataclass
 import math
 import sys
-from dataclasses import dataclass
 
 import numpy as np
 from scipy import optimize, signal, stats
@@ -29,14 +32,15 @@ from scipy.linalg import cho_factor, cho_solve
 
 from bellows_ros.models.derivatives import rates
 from bellows_ros.models.segment import (actuator_regressor, contact_lengths, external_torque,
-                                        friction_regressor, previous_regressor, restoring_regressor,
-                                        scaled_pressure)
+                                        friction_regressor, previous_regressor,
+                                        restoring_regressor, scaled_pressure)
 
 # Outer (nonlinear) parameters: name, SegmentParams field, bounds; μ searched in log space.
 NONLINEAR = (('mu1', (100.0, 1e5)), ('mu2', (10.0, 1e5)), ('gamma1', (2.05, 12.0)),
              ('gamma2', (2.05, 12.0)), ('c_psi0', (0.1, 20.0)), ('c_psi0_p', (-1.5, 1.5)))
 # The outer search runs on at most this many (evenly strided) training rows: on a 1 kHz record a
-# stride near 50 Hz biases Algorithm 1 enough to move the optimum into another basin; ~140 Hz does not.
+# stride near 50 Hz biases Algorithm 1 enough to move the optimum into another basin; ~140 Hz does
+# not.
 SEARCH_ROWS = 12000
 REFINE_ROWS = 24000  # ... and its refinement (step 3) on at most this many
 POLISH_EVALUATIONS = 40  # full-rate forward runs of the final polish (step 4), ~0.5-1.8 s each
@@ -50,6 +54,7 @@ GAP_STEPS = 10.0  # a time step longer than this many median steps separates joi
 @dataclass
 class Fit:
     """Result of `fit_segment`: fitted params, held-out errors (N·m), and the search trace."""
+
     params: object
     heldout: dict         # {'model': (rmse, mae), 'previous': (rmse, mae)}
     train_rows: int
@@ -61,17 +66,18 @@ class Fit:
 
 
 def filter_inputs(record, cutoff):
-    """Zero-phase low-pass of the measured inputs p1, p2, Ψ, Ψ̇ (those present) of `record`.
+    """
+    Zero-phase low-pass of the measured inputs p1, p2, Ψ, Ψ̇ (those present) of `record`.
 
     Butterworth of order INPUT_FILTER_ORDER at `cutoff` Hz, run forward and backward
     (`scipy.signal.sosfiltfilt`: no delay, so the contact state and friction sign stay aligned with
     the torque), at the rate 1 / median time step. A time step over GAP_STEPS median steps marks
     records joined end to end: each piece is filtered on its own (filtering across the join would
     smear the jump between unrelated records into both); pieces too short to pad stay unfiltered.
-    τ_ext, τ_motion and t are passed through unchanged. Returns (filtered copy of the record, cutoff
-    applied in Hz or None, rate in Hz); the inputs are left as measured (cutoff None) when `cutoff` is
-    0/None or when the rate is below MIN_RATE_PER_CUTOFF × cutoff (the filter would cut into the
-    signal band).
+    τ_ext, τ_motion and t are passed through unchanged. Returns (filtered copy of the record,
+    cutoff applied in Hz or None, rate in Hz); the inputs are left as measured (cutoff None) when
+    `cutoff` is 0/None or when the rate is below MIN_RATE_PER_CUTOFF × cutoff (the filter would cut
+    into the signal band).
     """
     filtered = dict(record)
     t = np.asarray(record['t'], float)
@@ -98,8 +104,12 @@ def _cutoff(params, input_cutoff):
 
 
 def target(params, record):
-    """Y = τ_motion - τ_ext (30), N·m. τ_motion from the record if it has the column, else from the
-    model's equation of motion (2) with `segment.dynamics` (quasi-static default: 0)."""
+    """
+    Compute Y = τ_motion - τ_ext (30), N·m.
+
+    τ_motion comes from the record if it has the column, else from the model's equation of motion
+    (2) with `segment.dynamics` (quasi-static default: 0).
+    """
     if 'tau_motion' in record:
         motion = np.asarray(record['tau_motion'], float)
     else:
@@ -111,8 +121,11 @@ def target(params, record):
 
 
 def regressors(params, record, rows=slice(None)):
-    """Regressor blocks over `record` (Algorithm 1 carried over the selected rows):
-    returns dict X_a (N,8), X_s (N,2), X_f (N,2), X_prev (N,4)."""
+    """
+    Build the regressor blocks over `record` (Algorithm 1 carried over the selected rows).
+
+    Returns dict X_a (N,8), X_s (N,2), X_f (N,2), X_prev (N,4).
+    """
     psi = np.asarray(record['psi'], float)[rows]
     t = np.asarray(record['t'], float)
     psi_dot = (np.asarray(record['psi_dot'], float) if 'psi_dot' in record
@@ -121,13 +134,15 @@ def regressors(params, record, rows=slice(None)):
     q1, q2 = scaled_pressure(params, p1), scaled_pressure(params, p2)
     sa1, sa2 = contact_lengths(params, psi, p1, p2)
     return {'X_a': actuator_regressor(psi, q1, q2, sa1, sa2),
-            'X_s': restoring_regressor(psi, q1, q2, params.restoring_c_psi0, params.restoring_c_psi0_p),
+            'X_s': restoring_regressor(psi, q1, q2, params.restoring_c_psi0,
+                                       params.restoring_c_psi0_p),
             'X_f': friction_regressor(psi_dot, q1, q2, params.friction_c_vel),
             'X_prev': previous_regressor(psi, q1, q2)}
 
 
 def least_squares(x, y, ridge=0.0, scale=None):
-    """θ minimising |X θ - Y|² + ridge |diag(scale) θ|² (32), the one linear solve of the project.
+    """
+    θ minimising |X θ - Y|² + ridge |diag(scale) θ|² (32), the one linear solve of the project.
 
     ridge = 0 (identification): plain least squares by `numpy.linalg.lstsq` (SVD, no explicit
     inverse; the minimum-norm θ if X is rank deficient). ridge > 0 (the doctor): the MAP estimate
@@ -153,7 +168,7 @@ def solve_linear(blocks, y):
 
 
 def with_linear(params, theta):
-    """params with θ = [θ_a(8), k_s, k_s,p, c_f, c_f,p] set."""
+    """Return `params` with θ = [θ_a(8), k_s, k_s,p, c_f, c_f,p] set."""
     theta = [float(v) for v in theta]
     return params.replace(actuator_theta=tuple(theta[:8]), restoring_k_s=theta[8],
                           restoring_k_sp=theta[9], friction_c_f=theta[10], friction_c_fp=theta[11])
@@ -165,7 +180,11 @@ def linear_of(params):
 
 
 def restoring_and_friction(params, blocks, rows=slice(None)):
-    """τ_s + τ_f (3, 5), N·m, on `rows` of the regressor blocks, with k_s, k_s,p, c_f, c_f,p of `params`."""
+    """
+    Compute τ_s + τ_f (3, 5), N·m, on `rows` of the regressor blocks.
+
+    With k_s, k_s,p, c_f, c_f,p of `params`.
+    """
     theta = linear_of(params)
     return blocks['X_s'][rows] @ theta[8:10] + blocks['X_f'][rows] @ theta[10:12]
 
@@ -206,10 +225,11 @@ def _bounds():
 def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=150, screen=32,
                 progress=True, input_cutoff=None, search_rows=SEARCH_ROWS, refine_rows=REFINE_ROWS,
                 polish_evaluations=POLISH_EVALUATIONS):
-    """Fit paper A's model to `record` (arrays, columns of docs/interfaces.md); returns a `Fit`.
+    """
+    Fit paper A's model to `record` (arrays, columns of docs/interfaces.md); returns a `Fit`.
 
-    `params` gives the fixed geometry and one candidate start. Search, on at most `search_rows` evenly
-    strided rows of the training part:
+    `params` gives the fixed geometry and one candidate start. Search, on at most `search_rows`
+    evenly strided rows of the training part:
     1. screening: `screen` points of a scrambled Sobol design over the material bounds (plus the
        given material), each scored by the residual of (32);
     2. bounded Nelder-Mead (derivative-free: the ceil() of Algorithm 1 makes the residual piecewise
@@ -287,9 +307,10 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=1
                                           bounds=(bounds.lb[4:], bounds.ub[4:]), diff_step=1e-4).x
 
         def full_rate_polish(z0):
-            # Gauss-Newton (trust region) on all six nonlinear parameters over every training row, θ
-            # re-solved by (32) in each residual; forward runs cached per material, so the curvature
-            # columns of the finite-difference Jacobian cost none. About 1 + 4 runs per iteration.
+            # Gauss-Newton (trust region) on all six nonlinear parameters over every training row,
+            # θ re-solved by (32) in each residual; forward runs cached per material, so the
+            # curvature columns of the finite-difference Jacobian cost none. About 1 + 4 runs per
+            # iteration.
             psi, y = np.asarray(record['psi'], float)[train], y_all[train]
             q1 = scaled_pressure(params, np.asarray(record['p1'], float)[train])
             q2 = scaled_pressure(params, np.asarray(record['p2'], float)[train])
@@ -339,19 +360,27 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=1
 
 
 def predict(params, record, input_cutoff=None):
-    """The fitted model's prediction pipeline on a measured record: the same input filter as the fit
-    (`filter_inputs` at `input_cutoff` Hz, None: `params.identify_input_cutoff`), then the regressors
-    (31) with θ of `params`. Returns (Ŷ of paper A's model, Ŷ of the previous model (34), Y measured)
-    in N·m, Y = τ_motion - τ_ext (30) with the raw measured τ_ext."""
+    """
+    Run the fitted model's prediction pipeline on a measured record.
+
+    The same input filter as the fit (`filter_inputs` at `input_cutoff` Hz, None:
+    `params.identify_input_cutoff`), then the regressors (31) with θ of `params`. Returns (Ŷ of
+    paper A's model, Ŷ of the previous model (34), Y measured) in N·m, Y = τ_motion - τ_ext (30)
+    with the raw measured τ_ext.
+    """
     filtered = filter_inputs(record, _cutoff(params, input_cutoff))[0]
     blocks = regressors(params, filtered)
     rows = slice(None)
-    return _predict(params, blocks, rows), _predict_previous(params, blocks, rows), target(params, filtered)
+    return _predict(params, blocks,
+                    rows), _predict_previous(params, blocks, rows), target(params, filtered)
 
 
 def prediction_errors(params, record, input_cutoff=None):
-    """(RMSE, MAE) in N·m of `predict` against the raw measured torque:
-    {'model': ..., 'previous': ...}."""
+    """
+    Return (RMSE, MAE) in N·m of `predict` against the raw measured torque.
+
+    As {'model': ..., 'previous': ...}.
+    """
     model, previous, y = predict(params, record, input_cutoff)
     return {'model': errors(y - model), 'previous': errors(y - previous)}
 
@@ -367,20 +396,22 @@ def _predict_previous(params, blocks, rows):
             + restoring_and_friction(params, blocks, rows))
 
 
-# --- Fig. 10 calibration of config/segment.yaml ------------------------------------------------------
+# --- Fig. 10 calibration of config/segment.yaml
+# ------------------------------------------------------
 
 FIG10_BEFORE, FIG10_AFTER = 6.7, 9.1  # |τ_ext| measured by paper A before/after the excursion, N·m
 
 
 def calibrate_fig10(params, before=FIG10_BEFORE, after=FIG10_AFTER, free=(0, 1), seed=0):
-    """Choose θ_a so paper A's Fig. 10 scenario gives |τ_ext| = before/after; refit θ_prev.
+    """
+    Choose θ_a so paper A's Fig. 10 scenario gives |τ_ext| = before/after; refit θ_prev.
 
     Geometry, material, restoring and friction parameters are taken from `params` (chosen by hand,
-    see docs/segment.md). s̃_a does not depend on θ_a, so one noise-free run of the scenario gives the
-    regressor rows at the two instants, and the two entries `free` of θ_a (the others kept) follow from
-    a 2x2 linear solve. τ_ext = -τ_drive at rest (τ_motion = 0 there). θ_prev is then the least-squares
-    fit of (34) to a noise-free quasi-static record of the calibrated physics, as paper A refitted its
-    previous model on the same data. Returns the calibrated SegmentParams.
+    see docs/segment.md). s̃_a does not depend on θ_a, so one noise-free run of the scenario gives
+    the regressor rows at the two instants, and the two entries `free` of θ_a (the others kept)
+    follow from a 2x2 linear solve. τ_ext = -τ_drive at rest (τ_motion = 0 there). θ_prev is then
+    the least-squares fit of (34) to a noise-free quasi-static record of the calibrated physics, as
+    paper A refitted its previous model on the same data. Returns the calibrated SegmentParams.
     """
     from bellows_ros.models.segment_experiments import fig10_record, quasi_static_record
     from bellows_ros.models.segment_plant import FULL_MODEL, NO_NOISE
@@ -396,15 +427,20 @@ def calibrate_fig10(params, before=FIG10_BEFORE, after=FIG10_AFTER, free=(0, 1),
            - x[:, others] @ theta_a[others])
     theta_a[free] = np.linalg.solve(x[:, free], rhs)
     calibrated = params.replace(actuator_theta=tuple(float(v) for v in theta_a))
-    quasi = quasi_static_record(calibrated, FULL_MODEL, NO_NOISE, seed=seed, duration=300.0, dt=5e-3)
+    quasi = quasi_static_record(calibrated, FULL_MODEL, NO_NOISE, seed=seed, duration=300.0,
+                                dt=5e-3)
     qblocks = regressors(calibrated, quasi)
     theta_prev = fit_previous(calibrated, qblocks, target(calibrated, quasi))
     return calibrated.replace(previous_theta=tuple(float(v) for v in theta_prev))
 
 
 def fig10_torques(params, effects=None, noise=None, seed=None):
-    """|τ_ext| of the Fig. 10 scenario before and after the excursion, and the previous model's
-    prediction -τ_prev at the same two instants (N·m): (before, after, prev_before, prev_after)."""
+    """
+    Return |τ_ext| of the Fig. 10 scenario before and after the excursion, with the old model's.
+
+    The previous model's prediction -τ_prev at the same two instants (N·m): (before, after,
+    prev_before, prev_after).
+    """
     from bellows_ros.models.segment import simulate_model
     from bellows_ros.models.segment_experiments import fig10_record
     from bellows_ros.models.segment_plant import FULL_MODEL, NO_NOISE
@@ -417,8 +453,11 @@ def fig10_torques(params, effects=None, noise=None, seed=None):
 
 
 def main(argv=None):
-    """`python -m bellows_ros.identify.segment --calibrate`: redo the Fig. 10 calibration of
-    config/segment.yaml and print the θ values to paste there, with the resulting torques."""
+    """
+    Run `python -m bellows_ros.identify.segment --calibrate`: redo the Fig. 10 calibration.
+
+    Prints the θ values of config/segment.yaml to paste there, with the resulting torques.
+    """
     import argparse
 
     from bellows_ros.models.segment import load_segment_params

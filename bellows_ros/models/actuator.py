@@ -1,14 +1,16 @@
-"""Paper B's dual-bellows tunable-stiffness actuator: gas, force and stiffness (equations 1-17).
+"""
+Paper B's dual-bellows tunable-stiffness actuator: gas, force and stiffness (equations 1-17).
 
 Two bellows, the air chamber (c) and the spring (s), share one sealed gas through a tube. Given the
-chamber compression x_c and the spring compression x_s (m, positive = compressed), the pressure P is
-the root of the isothermal gas law (17) with volumes that depend on P through E_V (14, 15):
+chamber compression x_c and the spring compression x_s (m, positive = compressed), the pressure P
+is the root of the isothermal gas law (17) with volumes that depend on P through E_V (14, 15):
 
     P (V_c(x_c, P) + V_s(x_s, P) + V_tube) = N,
 
 where N (Pa·m³) is the amount of gas. The amount is given as `p_ref`: the pressure the same gas
 would have at the design point (x_c = x_c_ref = 20 mm, x_s = 0); nominally atmospheric, as in the
-paper's design. A leak or a temperature change shows up as a different `p_ref` (see `estimate_gas`).
+paper's design. A leak or a temperature change shows up as a different `p_ref` (see
+`estimate_gas`).
 
 The spring force is F = F_air + F_mat + F_buckle (7) with F_air = (P - P_atm) A (9, 10),
 F_mat = F_MTS(x_s) + E_F(Δh_s, P) (11, 12) and F_buckle <= 0 the force the spring loses when it
@@ -20,14 +22,14 @@ exact total derivative (P moves with x_s), not a finite difference.
 NumPy arrays (a vectorised Newton on P).
 """
 import dataclasses
-import math
 from dataclasses import dataclass
+import math
 
 import numpy as np
 
 from bellows_ros import params as param_files
 from bellows_ros.errors import ParameterError
-from bellows_ros.models.actuator_geometry import (P_ATM, Bellows, e_v, e_v_in_q, frustum_state,
+from bellows_ros.models.actuator_geometry import (Bellows, e_v, e_v_in_q, frustum_state, P_ATM,
                                                   volume, volume_geo)
 
 _NEWTON_TOL = 1e-6   # Pa
@@ -36,13 +38,15 @@ _NEWTON_MAX = 30
 
 @dataclass(frozen=True)
 class Drive:
-    """Motor, gearbox and lead screw (section II-A): a Pololu-class 12 V DC gear motor.
+    """
+    Motor, gearbox and lead screw (section II-A): a Pololu-class 12 V DC gear motor.
 
     supply_voltage V; resistance Ω; inductance H; torque_constant N·m/A (= back-EMF V·s/rad);
     rotor_inertia kg·m²; viscous_friction N·m·s/rad (motor side); gear_ratio (100:1);
     counts_per_rev: encoder counts per motor turn; lead: m per lead-screw turn (20 TPI = 1.27 mm);
     efficiency: lead screw (< 0.5, so it is not back-drivable).
     """
+
     supply_voltage: float
     resistance: float
     inductance: float
@@ -69,6 +73,7 @@ class Drive:
 @dataclass(frozen=True)
 class Sensors:
     """Pressure and force sensors: white noise (standard deviation) and quantisation step."""
+
     pressure_noise: float
     pressure_quantum: float
     force_noise: float
@@ -77,13 +82,15 @@ class Sensors:
 
 @dataclass(frozen=True)
 class Buckling:
-    """The spring's buckling under pressure and compression (`buckling_force`), SI units.
+    """
+    The spring's buckling under pressure and compression (`buckling_force`), SI units.
 
     stiffness_loss: k_b, N/m, stiffness lost once buckled; critical_pressure: p_cr, Pa gauge, the
     pressure at which the free spring would buckle; critical_compression: x_cr, m, the compression
     at which the unpressurised spring would buckle; onset_width: δ, the smoothness of the onset
     (fraction of the critical load); bounds: ((name, (low, high)), ...) the physical range of each.
     """
+
     stiffness_loss: float
     critical_pressure: float
     critical_compression: float
@@ -115,7 +122,8 @@ NO_BUCKLING = None  # `ActuatorParams.buckling` of an actuator whose spring does
 
 @dataclass(frozen=True)
 class ActuatorParams:
-    """All parameters of `config/actuator.yaml` (section `actuator.`), SI units.
+    """
+    All parameters of `config/actuator.yaml` (section `actuator.`), SI units.
 
     chamber, spring: `Bellows` (Table II, E_V); p_ref: gas amount as the design-point pressure, Pa;
     x_c_ref: design-point chamber compression, m; v_tube: tube volume, m³ (17);
@@ -124,6 +132,7 @@ class ActuatorParams:
     drive, sensors: the hardware; effects: default parameters of the plant's physical effects;
     buckling: `Buckling` of the spring (None, or stiffness_loss 0: the spring does not buckle).
     """
+
     chamber: Bellows
     spring: Bellows
     p_ref: float
@@ -140,12 +149,14 @@ class ActuatorParams:
 
     def __post_init__(self):
         if len(self.e_f) != 4:
-            raise ParameterError(f'actuator.force.e_f: expected 4 coefficients C1..C4, got {len(self.e_f)}')
+            raise ParameterError('actuator.force.e_f: expected 4 coefficients C1..C4, got '
+                                 f'{len(self.e_f)}')
         if not self.f_mts:
             raise ParameterError('actuator.force.f_mts: expected at least one coefficient')
         for bellows, name in ((self.chamber, 'air_chamber'), (self.spring, 'spring')):
             if len(bellows.e_v) != 10:
-                raise ParameterError(f'actuator.{name}.e_v: expected 10 coefficients, got {len(bellows.e_v)}')
+                raise ParameterError(f'actuator.{name}.e_v: expected 10 coefficients, got '
+                                     f'{len(bellows.e_v)}')
         object.__setattr__(self, '_gas_nominal', gas_amount(self, self.p_ref))
 
     def effect_defaults(self):
@@ -197,7 +208,8 @@ def params_from_flat(flat, source='parameters'):
 
 
 def _check_admissible(parts, source):
-    """Refuse values the equations cannot use, naming the parameter (as the segment's check does).
+    """
+    Refuse values the equations cannot use, naming the parameter (as the segment's check does).
 
     Without this a zero height divides by zero while the gas amount is computed, a fractional
     segment count is silently truncated, and a travel range beyond the frustum geometry (3) takes
@@ -277,7 +289,8 @@ def params_to_flat(params):
     for name, bellows in (('air_chamber', params.chamber), ('spring', params.spring)):
         for field in dataclasses.fields(Bellows):
             value = getattr(bellows, field.name)
-            flat[f'actuator.{name}.{field.name}'] = list(value) if isinstance(value, tuple) else value
+            flat[f'actuator.{name}.{field.name}'] = (list(value) if isinstance(value, tuple)
+                                                     else value)
     flat['actuator.gas.p_ref'] = params.p_ref
     flat['actuator.gas.x_c_ref'] = params.x_c_ref
     flat['actuator.gas.v_tube'] = params.v_tube
@@ -300,17 +313,17 @@ def params_to_flat(params):
 
 
 def without_bulging(params):
-    """The same actuator with the purely geometric volume (E_V = 0): the doctor's baseline."""
+    """Return the actuator with the purely geometric volume (E_V = 0): the doctor's baseline."""
     return scaled_bulging(params, 0.0)
 
 
 def without_buckling(params):
-    """The same actuator with a spring that does not buckle: (7)-(12) only, as in the paper."""
+    """Return the actuator with a spring that does not buckle: (7)-(12) only, as in the paper."""
     return scaled_buckling(params, 0.0)
 
 
 def scaled_buckling(params, scale):
-    """The same actuator with the buckling's stiffness loss multiplied by `scale`."""
+    """Return the same actuator with the buckling's stiffness loss multiplied by `scale`."""
     if params.buckling is NO_BUCKLING:
         return params
     return dataclasses.replace(params, buckling=dataclasses.replace(
@@ -318,10 +331,11 @@ def scaled_buckling(params, scale):
 
 
 def scaled_bulging(params, scale):
-    """The same actuator with both E_V polynomials multiplied by `scale`."""
+    """Return the same actuator with both E_V polynomials multiplied by `scale`."""
     return dataclasses.replace(
         params,
-        chamber=dataclasses.replace(params.chamber, e_v=tuple(scale * a for a in params.chamber.e_v)),
+        chamber=dataclasses.replace(params.chamber,
+                                    e_v=tuple(scale * a for a in params.chamber.e_v)),
         spring=dataclasses.replace(params.spring, e_v=tuple(scale * a for a in params.spring.e_v)))
 
 
@@ -342,7 +356,8 @@ def _gas(params, gas):
 
 
 def pressure(params, x_c, x_s, gas=None, v_geo=None):
-    """System pressure P (Pa) at (x_c, x_s): the root of (17), floats or arrays.
+    """
+    System pressure P (Pa) at (x_c, x_s): the root of (17), floats or arrays.
 
     `v_geo`: the geometric total volume V_c + V_s + V_tube (m³), if the caller already has it.
     """
@@ -351,7 +366,8 @@ def pressure(params, x_c, x_s, gas=None, v_geo=None):
 
 
 def _solve_pressure(params, x_c, x_s, amount, v_geo=None):
-    """Newton on g(P) = P·V(P) - N; returns P and g'(P) = V + P ∂V/∂P (needed for dP/dx).
+    """
+    Newton on g(P) = P·V(P) - N; returns P and g'(P) = V + P ∂V/∂P (needed for dP/dx).
 
     `v_geo` (the geometric total volume) may be passed when the caller already has it.
     """
@@ -383,7 +399,8 @@ def _solve_pressure(params, x_c, x_s, amount, v_geo=None):
 
 
 def estimate_gas(params, p_measured, x_c, x_s):
-    """Gas amount as `p_ref` (Pa) from a measured pressure at (x_c, x_s).
+    """
+    Gas amount as `p_ref` (Pa) from a measured pressure at (x_c, x_s).
 
     The stiffness controller uses this to correct for a slow leak or a temperature change: the
     measured P with (17) gives N = P·V(x_c, x_s, P), and `p_ref` is the design-point pressure of N.
@@ -392,17 +409,23 @@ def estimate_gas(params, p_measured, x_c, x_s):
 
 
 def p_ref_of_amount(params, amount):
-    """Design-point pressure p_ref (Pa) of the gas amount N (Pa·m³): (17) solved at the design point."""
+    """
+    Return the design-point pressure p_ref (Pa) of the gas amount N (Pa·m³).
+
+    (17) solved at the design point.
+    """
     if isinstance(amount, np.ndarray):
         x_c = np.full(amount.shape, params.x_c_ref)
         return _solve_pressure(params, x_c, np.zeros(amount.shape), amount)[0]
     return _solve_pressure(params, params.x_c_ref, 0.0, float(amount))[0]
 
 
-# --- force and stiffness (7-13) -------------------------------------------------------------------
+# --- force and stiffness (7-13)
+# -------------------------------------------------------------------
 
 def evaluate(params, x_c, x_s, gas=None):
-    """Pressure P (Pa), spring force F (N) and stiffness K = dF/dx_s (N/m) at one (x_c, x_s).
+    """
+    Pressure P (Pa), spring force F (N) and stiffness K = dF/dx_s (N/m) at one (x_c, x_s).
 
     The fast scalar path: floats in, floats out. `gas` is the gas amount as `p_ref` (Pa), default
     `params.p_ref`.
@@ -411,7 +434,8 @@ def evaluate(params, x_c, x_s, gas=None):
 
 
 def evaluate_array(params, x_c, x_s, gas=None):
-    """`evaluate` over arrays (broadcast); returns three float arrays (P, F, K).
+    """
+    `evaluate` over arrays (broadcast); returns three float arrays (P, F, K).
 
     `gas` may be a scalar or an array of `p_ref` values (e.g. a leak over a record).
     """
@@ -451,7 +475,8 @@ def _forward(params, x_c, x_s, amount, exp):
 
 
 def _spring_force(params, x_s, p, dp_dx, exp, area=None):
-    """Spring force F (7) at (x_s, P) and its total derivative along x_s when P moves at dP/dx_s.
+    """
+    Spring force F (7) at (x_s, P) and its total derivative along x_s when P moves at dP/dx_s.
 
     `area`: (A, ∂A/∂x_s, ∂A/∂P) of (10) if the caller already has them.
     """
@@ -484,7 +509,8 @@ def _spring_force(params, x_s, p, dp_dx, exp, area=None):
 
 
 def buckling_force(b, x_s, p, exp=math.exp):
-    """Force the buckled spring loses, F_b <= 0 (N), and ∂F_b/∂x_s (N/m), ∂F_b/∂P (N/Pa).
+    """
+    Force the buckled spring loses, F_b <= 0 (N), and ∂F_b/∂x_s (N/m), ∂F_b/∂P (N/Pa).
 
     [choice: paper B sees buckling "under high pressure and compression" but gives no model.]
     A pressurised bellows column buckles when its load index λ = x_s/x_cr + (P - P_atm)/p_cr
@@ -513,7 +539,11 @@ def buckling_force(b, x_s, p, exp=math.exp):
 
 
 def stiffness(params, x_c, gas=None):
-    """Paper B's stiffness figure (N/m): the average slope of F over spring 0-12 mm (section IV-D)."""
+    """
+    Compute paper B's stiffness figure (N/m).
+
+    The average slope of F over spring 0-12 mm (section IV-D).
+    """
     amount = _gas(params, gas)
     low, high = params.x_s_low, params.x_s_high
     f_low = _forward(params, float(x_c), low, amount, math.exp)[1]
@@ -522,7 +552,8 @@ def stiffness(params, x_c, gas=None):
 
 
 def stiffness_from_rest(params, x_c, gas=None):
-    """Average slope of F from the spring's rest point (F = 0) to x_s_high, N/m (section IV-D).
+    """
+    Average slope of F from the spring's rest point (F = 0) to x_s_high, N/m (section IV-D).
 
     Paper B's extended range, "extending the curves out to the spring bellows' rest length": the
     window starts where the force curve at this chamber compression crosses zero (the spring
@@ -535,7 +566,8 @@ def stiffness_from_rest(params, x_c, gas=None):
 
 
 def rest_compression(params, x_c, gas=None, step=5e-4):
-    """Spring compression (m) at which the spring force vanishes, chamber at x_c (sealed gas).
+    """
+    Spring compression (m) at which the spring force vanishes, chamber at x_c (sealed gas).
 
     The zero nearest to x_s = 0 along the force curve, searched in `step`s towards the spring's
     end stop (extended) or x_s_high (contracted): the polynomial F_MTS is only valid near its data.
@@ -559,7 +591,8 @@ def rest_compression(params, x_c, gas=None, step=5e-4):
 
 
 def rest_length_change(params, p, x_low=-0.03, x_high=0.03):
-    """Elongation (m, positive = longer) of the spring's rest length at pressure P (Fig. 10).
+    """
+    Elongation (m, positive = longer) of the spring's rest length at pressure P (Fig. 10).
 
     The spring alone held at pressure P: the rest point is where F(x_s, P) = 0, so the elongation
     is -x_s there. Below atmospheric it contracts, above it extends.
@@ -571,4 +604,5 @@ def rest_length_change(params, p, x_low=-0.03, x_high=0.03):
     try:
         return -brentq(force, x_low, x_high, xtol=1e-9)
     except ValueError:
-        raise ParameterError(f'actuator: no rest length within [{x_low}, {x_high}] m at {p:.0f} Pa') from None
+        raise ParameterError(
+            f'actuator: no rest length within [{x_low}, {x_high}] m at {p:.0f} Pa') from None

@@ -1,4 +1,5 @@
-"""Synthetic actuator records shaped like paper B's experiments (for the doctor and the tests).
+"""
+Synthetic actuator records shaped like paper B's experiments (for the doctor and the tests).
 
 `actuator_record` drives `ActuatorPlant` through a seeded random programme:
 - air chamber, position-controlled by a PD loop on the encoder (as in the paper, section II-A):
@@ -19,7 +20,10 @@ _KD = 40.0        # s/m
 
 
 def chamber_programme(rng, n, dt, x0, low, high, max_speed, monotone=False):
-    """Reference compression (m) of the air chamber, n samples: steps, ramps, holds, reversals.
+    """
+    Build a reference compression (m) of the air chamber, n samples.
+
+    Steps, ramps, holds, reversals.
 
     `monotone`: only ramps at several speeds and holds, each ramp compressing further (a record in
     which the chamber never reverses, e.g. a slow compression sweep), ending in a hold at `high`.
@@ -68,7 +72,8 @@ def _monotone_programme(rng, n, dt, x0, high, max_speed):
 
 
 def spring_programme(rng, n, dt, amplitude=(0.008, 0.020)):
-    """Spring compression (m), n samples: triangle cycles, holds and fast compressions.
+    """
+    Spring compression (m), n samples: triangle cycles, holds and fast compressions.
 
     `amplitude`: (low, high) m, the range the cycles' peak compressions are drawn from.
     """
@@ -100,14 +105,15 @@ def spring_programme(rng, n, dt, amplitude=(0.008, 0.020)):
 def actuator_record(params, effects=None, noise=None, seed=None, duration=60.0, dt=1e-3,
                     x_c_range=(-0.020, 0.040), gas=None, x_c0=None, monotone=False,
                     spring_range=(0.008, 0.020)):
-    """Simulated measurement: dict of arrays `t, x_c, x_s, p, f` (docs/interfaces.md).
+    """
+    Simulate a measurement: dict of arrays `t, x_c, x_s, p, f` (docs/interfaces.md).
 
     params: ActuatorParams; effects/noise: as `ActuatorPlant`; seed: for the programme and noise;
-    duration s; dt s; x_c_range: the span of chamber targets, m; gas: the sealed gas amount as p_ref,
-    Pa (default the YAML's); x_c0: initial chamber compression, m (default the design point);
-    monotone: the chamber only compresses (ramps and holds, `chamber_programme`);
-    spring_range: (low, high) m of the spring's peak compressions (`spring_programme`).
-    60 s at 1 kHz takes a second or two.
+    duration s; dt s; x_c_range: the span of chamber targets, m; gas: the sealed gas amount as
+    p_ref, Pa (default the YAML's); x_c0: initial chamber compression, m (default the design
+    point); monotone: the chamber only compresses (ramps and holds, `chamber_programme`);
+    spring_range: (low, high) m of the spring's peak compressions (`spring_programme`). 60 s at 1
+    kHz takes a second or two.
     """
     if not (duration > 0.0 and dt > 0.0):
         raise ParameterError(f'duration and dt must be > 0, got {duration}, {dt}')
@@ -137,7 +143,8 @@ def actuator_record(params, effects=None, noise=None, seed=None, duration=60.0, 
 def volume_test_series(params, gases=(0.92, 0.96, 1.0, 1.04, 1.08),
                        effects=('wall_bulging', 'buckling'),
                        noise=None, seed=0, duration=12.0, dt=1e-3):
-    """Paper B's volume test (Fig. 4, 8): sealed runs at several gas amounts, concatenated.
+    """
+    Paper B's volume test (Fig. 4, 8): sealed runs at several gas amounts, concatenated.
 
     Each run seals a different amount of gas (`gases`, as fractions of the YAML's p_ref: the
     paper set them with a syringe), starts at its own chamber compression (spread over -20..40 mm,
@@ -149,8 +156,10 @@ def volume_test_series(params, gases=(0.92, 0.96, 1.0, 1.04, 1.08),
     starts = np.linspace(-0.020, 0.040, len(gases))
     order = np.random.default_rng(seed).permutation(len(gases))
     for index, fraction in enumerate(gases):
-        record = actuator_record(params, effects, noise, None if seed is None else seed + 7 * index,
-                                 duration, dt, gas=fraction * params.p_ref, x_c0=starts[order[index]])
+        record = actuator_record(params, effects, noise,
+                                 None if seed is None else seed + 7 * index,
+                                 duration, dt, gas=fraction * params.p_ref,
+                                 x_c0=starts[order[index]])
         record['run'] = np.full(len(record['t']), float(index))
         parts.append(record)
     out = {name: np.concatenate([part[name] for part in parts]) for name in parts[0]}

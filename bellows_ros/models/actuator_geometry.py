@@ -1,4 +1,5 @@
-"""Geometry and augmented volume of one bellows of paper B (equations 2-6, 10).
+"""
+Geometry and augmented volume of one bellows of paper B (equations 2-6, 10).
 
 A bellows is n identical segments, each two conical frusta of opposite orientation (Table II). The
 per-segment compression is Δh = h0 - h; the bellows' total compression is x = n Δh (positive =
@@ -13,8 +14,8 @@ variables d = Δh / h0 and q = (P - P_atm) / P_atm  **[choice: an affine change 
 leaves the family of full cubics unchanged; it only keeps the 10 coefficients (m³) well scaled]**.
 Coefficient order is the paper's: a00, a10, a01, a20, a11, a02, a30, a21, a12, a03.
 """
-import math
 from dataclasses import dataclass
+import math
 
 P_ATM = 101325.0  # Pa, paper B's atmospheric pressure (8)
 
@@ -24,12 +25,14 @@ E_V_TERMS = ((0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2), (3, 0), (2, 1), (1,
 
 @dataclass(frozen=True)
 class Bellows:
-    """One bellows: Table II geometry (m), travel limits (m) and E_V coefficients (m³).
+    """
+    One bellows: Table II geometry (m), travel limits (m) and E_V coefficients (m³).
 
     r_big: R0, large radius at rest; r_small: r, small radius (constant, (2)); wall: t;
     h0: segment height at rest; n: number of segments; x_min/x_max: admissible total compression
     (extension limit / compression limit); e_v: the 10 coefficients of (5).
     """
+
     r_big: float
     r_small: float
     wall: float
@@ -49,7 +52,8 @@ class Bellows:
 
 
 def frustum_state(b, x):
-    """Large radius R (3), its derivative dR/dΔh, and f = R² + r² + R r at compression x (m).
+    """
+    Large radius R (3), its derivative dR/dΔh, and f = R² + r² + R r at compression x (m).
 
     (3): R(Δh) = sqrt((R0 - r)² - (Δh² - 2 h0 Δh)/4) + r.
     """
@@ -68,7 +72,8 @@ def volume_geo(b, x):
 
 
 def volume_geo_slope(b, x):
-    """dV_geo/dx (m²): the exact derivative of (4) with respect to the total compression x.
+    """
+    dV_geo/dx (m²): the exact derivative of (4) with respect to the total compression x.
 
     Negative while compressing shrinks the volume; it changes sign near full extension, where the
     radius R collapses towards r.
@@ -78,7 +83,8 @@ def volume_geo_slope(b, x):
 
 
 def e_v(b, x, p):
-    """E_V (5), m³, and its partial derivatives: (E, ∂E/∂x, ∂E/∂P, ∂²E/∂x², ∂²E/∂x∂P).
+    """
+    E_V (5), m³, and its partial derivatives: (E, ∂E/∂x, ∂E/∂P, ∂²E/∂x², ∂²E/∂x∂P).
 
     Derivatives are in SI (per m of total compression, per Pa).
     """
@@ -97,9 +103,11 @@ def e_v(b, x, p):
 
 
 def e_v_in_q(b, x):
-    """E_V (5) at fixed x as a cubic in q = (P - P_atm)/P_atm: coefficients (c0, c1, c2, c3), m³.
+    """
+    E_V (5) at fixed x as a cubic in q = (P - P_atm)/P_atm: coefficients (c0, c1, c2, c3), m³.
 
-    The gas-law Newton iteration (17) varies only P, so it evaluates this cubic and not (5) in full.
+    The gas-law Newton iteration (17) varies only P, so it evaluates this cubic and not (5) in
+    full.
     """
     a00, a10, a01, a20, a11, a02, a30, a21, a12, a03 = b.e_v
     d = x / (b.n * b.h0)
@@ -107,7 +115,7 @@ def e_v_in_q(b, x):
 
 
 def e_v_regressors(b, x, p):
-    """The 10 monomials d^i q^j of (5) at (x, P), in coefficient order: E_V = Σ a_k · m_k."""
+    """Return the 10 monomials d^i q^j of (5) at (x, P) in coefficient order: E_V = Σ a_k m_k."""
     d = x / (b.n * b.h0)
     q = (p - P_ATM) / P_ATM
     return [d ** i * q ** j for i, j in E_V_TERMS]

@@ -1,4 +1,5 @@
-"""The simulated dual-bellows actuator: drive dynamics, sensors and switchable physical effects.
+"""
+The simulated dual-bellows actuator: drive dynamics, sensors and switchable physical effects.
 
 What the simulated hardware and the tests run. Underneath is paper B's model (`actuator`); on top:
 
@@ -23,8 +24,9 @@ What the simulated hardware and the tests run. Underneath is paper B's model (`a
       with the YAML's `actuator.buckling` parameters and the stiffness loss times `scale`; without
       it the force is paper B's (7)-(12) alone, the doctor's force baseline.
 
-With no effect the plant is exactly `actuator.evaluate(without_buckling(without_bulging(params)), ...)`
-plus sensor noise; `model_params(params, effects)` returns the parameters the model needs for the same physics.
+With no effect the plant is exactly `actuator.evaluate(without_buckling(without_bulging(params)),
+...)` plus sensor noise; `model_params(params, effects)` returns the parameters the model needs for
+the same physics.
 """
 import math
 import random
@@ -33,7 +35,7 @@ from typing import NamedTuple
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.actuator import (_forward, gas_amount, p_ref_of_amount, scaled_buckling,
                                          scaled_bulging, without_buckling, without_bulging)
-from bellows_ros.models.actuator_geometry import P_ATM, frustum_state, volume
+from bellows_ros.models.actuator_geometry import frustum_state, P_ATM, volume
 
 ACTUATOR_EFFECTS = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash',
                     'buckling')
@@ -41,12 +43,14 @@ NOISE_KEYS = ('pressure_noise', 'pressure_quantum', 'force_noise', 'force_quantu
 
 
 class ActuatorSample(NamedTuple):
-    """One sample of the simulated hardware (SI units).
+    """
+    One sample of the simulated hardware (SI units).
 
     t s; encoder_counts: motor encoder (0 at x_c = 0); x_c: true plate compression m;
     x_s: spring compression m; p: measured pressure Pa abs; f: measured spring force N;
     at_lower_stop / at_upper_stop: the nut is on an end stop.
     """
+
     t: float
     encoder_counts: int
     x_c: float
@@ -58,7 +62,8 @@ class ActuatorSample(NamedTuple):
 
 
 def effect_parameters(params, effects):
-    """Validate `effects` and fill in the YAML defaults.
+    """
+    Validate `effects` and fill in the YAML defaults.
 
     `effects`: None, an iterable of names, or {name: {parameter: value}} (as `--effect` gives).
     Returns {name: {parameter: float}}. An unknown effect or parameter, or a negative or non-finite
@@ -72,7 +77,8 @@ def effect_parameters(params, effects):
     chosen = {}
     for name, overrides in effects.items():
         if name not in ACTUATOR_EFFECTS:
-            raise ParameterError(f"unknown actuator effect '{name}' (known: {', '.join(ACTUATOR_EFFECTS)})")
+            raise ParameterError(f"unknown actuator effect '{name}' (known: "
+                                 f"{', '.join(ACTUATOR_EFFECTS)})")
         values = dict(defaults.get(name, {}))
         for key, value in (overrides or {}).items():
             if key not in values:
@@ -82,7 +88,8 @@ def effect_parameters(params, effects):
         for key, value in values.items():
             value = float(value)
             if not math.isfinite(value) or value < 0.0:
-                raise ParameterError(f"effect '{name}': parameter '{key}' must be finite and >= 0, got {value}")
+                raise ParameterError(
+                    f"effect '{name}': parameter '{key}' must be finite and >= 0, got {value}")
             values[key] = value
         chosen[name] = values
     if 'heat_exchange' in chosen and chosen['heat_exchange']['time_constant'] <= 0.0:
@@ -91,8 +98,11 @@ def effect_parameters(params, effects):
 
 
 def model_params(params, effects=None):
-    """Parameters for which `actuator.evaluate` has the plant's static physics (E_V and buckling
-    on or off)."""
+    """
+    Return parameters for which `actuator.evaluate` has the plant's static physics.
+
+    E_V and buckling on or off.
+    """
     chosen = effect_parameters(params, effects)
     if 'wall_bulging' in chosen:
         params = scaled_bulging(params, chosen['wall_bulging']['scale'])
@@ -107,7 +117,8 @@ def model_params(params, effects=None):
 
 
 class ActuatorPlant:
-    """Simulated actuator stepped at a fixed or varying dt (see module docstring).
+    """
+    Simulated actuator stepped at a fixed or varying dt (see module docstring).
 
     Parameters
     ----------
@@ -118,6 +129,7 @@ class ActuatorPlant:
     seed : int, optional, for the sensor noise
     x_c0, x_s0 : initial chamber and spring compression, m (default: the design point)
     gas : gas amount sealed in, as design-point pressure p_ref (Pa); default the YAML's p_ref
+
     """
 
     def __init__(self, params, effects=None, noise=None, seed=None, x_c0=None, x_s0=0.0, gas=None):
@@ -146,12 +158,14 @@ class ActuatorPlant:
             raise ParameterError(f'initial chamber compression {x_c} m is outside '
                                  f'[{self.x_c_min}, {self.x_c_max}] m')
         self.t = 0.0
-        self._theta = x_c / self._metres_per_rad     # motor angle, rad (nut position through the drive)
+        # motor angle, rad (nut position through the drive)
+        self._theta = x_c / self._metres_per_rad
         self._omega = 0.0
         self._current = 0.0
         self._x_c = x_c                              # plate
         self._x_s = float(x_s0)
-        self._gas = gas_amount(self.params, params.p_ref if gas is None else float(gas))  # N = P V at T_amb
+        self._gas = gas_amount(self.params,
+                               params.p_ref if gas is None else float(gas))  # N = P V at T_amb
         self._temperature = self._t_amb
         self._exp_cache = (None, 0.0, 0.0, 0.0)
         p, force, k = _forward(self.params, self._x_c, self._x_s, self._gas, math.exp)
@@ -167,7 +181,8 @@ class ActuatorPlant:
             return dict.fromkeys(NOISE_KEYS, 0.0)
         for key, value in (noise or {}).items():
             if key not in settings:
-                raise ParameterError(f"unknown noise parameter '{key}' (known: {', '.join(NOISE_KEYS)})")
+                raise ParameterError(f"unknown noise parameter '{key}' (known: "
+                                     f"{', '.join(NOISE_KEYS)})")
             settings[key] = float(value)
         return settings
 
@@ -199,13 +214,15 @@ class ActuatorPlant:
         return p_ref_of_amount(self.params, self._gas)
 
     def travel_time(self, x_from, x_to):
-        """Lower bound on the time (s) the lead screw needs to move the chamber between two points."""
+        """Return a lower bound on the time (s) the lead screw needs between two points."""
         return abs(x_to - x_from) / self.max_speed
 
-    # --- simulation -------------------------------------------------------------------------------
+    # --- simulation
+    # -------------------------------------------------------------------------------
 
     def step(self, dt, duty, x_s_imposed=None, f_load=None):
-        """Advance by `dt` (s) with motor duty in -1..1; the spring is imposed or loaded.
+        """
+        Advance by `dt` (s) with motor duty in -1..1; the spring is imposed or loaded.
 
         Pass `x_s_imposed` (m) to move the spring like a test machine, or `f_load` (N) to load it
         (quasi-static: the spring settles where its force equals the load); neither keeps x_s.
@@ -217,7 +234,8 @@ class ActuatorPlant:
         return self._finish_step(dt, x_s_imposed, f_load)
 
     def step_nut(self, dt, x_nut, x_s_imposed=None, f_load=None):
-        """Advance by `dt` (s) with the lead-screw nut moved to `x_nut` (m) kinematically.
+        """
+        Advance by `dt` (s) with the lead-screw nut moved to `x_nut` (m) kinematically.
 
         For replaying a measured chamber trajectory (`bellows simulate actuator --effect ...`): the
         motor is assumed to follow, the plate still sees the backlash and the end stops.
@@ -233,7 +251,7 @@ class ActuatorPlant:
         return self._finish_step(dt, x_s_imposed, f_load)
 
     def _finish_step(self, dt, x_s_imposed, f_load):
-        """The rest of a step once the plate has moved: spring imposed or loaded, gas, clock."""
+        """Finish a step once the plate has moved: spring imposed or loaded, gas, clock."""
         if x_s_imposed is not None:
             self._x_s = float(x_s_imposed)
         elif f_load is not None:
@@ -282,7 +300,8 @@ class ActuatorPlant:
         else:
             direction = omega if omega != 0.0 else torque
             drag = resist if direction > 0.0 else -resist
-            new = (omega + dt * (torque - drag) / d.rotor_inertia) / (1.0 + dt * d.viscous_friction / d.rotor_inertia)
+            new = ((omega + dt * (torque - drag) / d.rotor_inertia)
+                   / (1.0 + dt * d.viscous_friction / d.rotor_inertia))
             omega = 0.0 if new * direction < 0.0 else new   # friction stops, it does not reverse
         theta = self._theta + omega * dt
         low, high = self.x_c_min / self._metres_per_rad, self.x_c_max / self._metres_per_rad
@@ -316,21 +335,23 @@ class ActuatorPlant:
 
     def _step_gas(self, dt):
         if self._heat_tau:
-            # Volume at the new geometry (E_V at the last pressure; the Newton solve below is exact),
-            # needed only for the adiabatic temperature change.
+            # Volume at the new geometry (E_V at the last pressure; the Newton solve below is
+            # exact), needed only for the adiabatic temperature change.
             volume_new = self._total_volume(self._p)
             t = self._temperature * (self._volume / volume_new) ** (self._gamma - 1.0)
             self._temperature = self._t_amb + (t - self._t_amb) * self._exp_cache[3]
             self._volume = volume_new
         if self._leak:
-            self._gas -= dt * self._p * self._leak * (self._p - P_ATM) * self._t_amb / self._temperature
+            self._gas -= (dt * self._p * self._leak * (self._p - P_ATM) * self._t_amb
+                          / self._temperature)
         amount = self._gas * self._temperature / self._t_amb
         self._p, self._f, self._k = _forward(self.params, self._x_c, self._x_s, amount, math.exp)
 
     def _sample(self, dt):
         n = self._noise
         self._p_sensor += (self._p - self._p_sensor) * self._exp_cache[2]
-        p = self._p_sensor + (self._random.gauss(0.0, n['pressure_noise']) if n['pressure_noise'] else 0.0)
+        p = self._p_sensor + (self._random.gauss(0.0, n['pressure_noise'])
+                              if n['pressure_noise'] else 0.0)
         f = self._f + (self._random.gauss(0.0, n['force_noise']) if n['force_noise'] else 0.0)
         if n['pressure_quantum']:
             p = round(p / n['pressure_quantum']) * n['pressure_quantum']

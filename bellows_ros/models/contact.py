@@ -1,9 +1,12 @@
-"""Two-dimensional no-slip membrane contact between a bellows and its rib (paper A, eqs. 13, 20-28,
-Algorithm 1 of Appendix A).
+"""
+Two-dimensional no-slip membrane contact between a bellows and its rib.
 
-The material lying on the rib keeps the stretch it had when it touched down (no slip); only the free
-arc follows the current pressure and joint angle. That memory is why the same (p, Ψ) reached along two
-paths gives two contact lengths s̃_a and two actuator torques (the hysteresis of paper A, Fig. 10/11).
+Paper A, eqs. 13, 20-28, Algorithm 1 of Appendix A.
+
+The material lying on the rib keeps the stretch it had when it touched down (no slip); only the
+free arc follows the current pressure and joint angle. That memory is why the same (p, Ψ) reached
+along two paths gives two contact lengths s̃_a and two actuator torques (the hysteresis of paper A,
+Fig. 10/11).
 
 Geometry of one chain (docs/equations.md, A(20)-A(28)), lengths in m, angles in rad:
     α = -½ σ_j ψ_4 with ψ_4 = Ψ/4 (13; [choice] sign and equal joints)
@@ -26,15 +29,16 @@ def contact_angle(psi, sign):
 
 
 class StrainMemory:
-    """State of Algorithm 1 for one bellows chain: the sampled strain profile λ_s on the rib.
+    """
+    State of Algorithm 1 for one bellows chain: the sampled strain profile λ_s on the rib.
 
-    Parameters: l0, s0 (m), sa_max (m, rib size: s̃_a is clamped to [0, sa_max]), n_lambda (samples of
-    the profile over ā ∈ [0, 1]), Ogden mu (N/m) and gamma (two terms each, γ_k > 2).
+    Parameters: l0, s0 (m), sa_max (m, rib size: s̃_a is clamped to [0, sa_max]), n_lambda (samples
+    of the profile over ā ∈ [0, 1]), Ogden mu (N/m) and gamma (two terms each, γ_k > 2).
 
-    The contact always covers a prefix of the profile (samples beyond n are released), so the state is
-    the prefix length `n`, the stored values, and their running sum `total` (kept instead of re-summing
-    the profile every step; re-summed exactly whenever the contact empties or every 65536 steps so
-    rounding cannot drift).
+    The contact always covers a prefix of the profile (samples beyond n are released), so the state
+    is the prefix length `n`, the stored values, and their running sum `total` (kept instead of
+    re-summing the profile every step; re-summed exactly whenever the contact empties or every
+    65536 steps so rounding cannot drift).
     """
 
     RESUM_EVERY = 65536
@@ -48,7 +52,7 @@ class StrainMemory:
         self.reset()
 
     def reset(self):
-        """Initial state of Algorithm 1: a = 0, empty profile."""
+        """Reset to the initial state of Algorithm 1: a = 0, empty profile."""
         self.profile = [0.0] * self.n_lambda
         self.n = 0
         self.total = 0.0
@@ -58,7 +62,7 @@ class StrainMemory:
         self._steps = 0
 
     def _touchdown(self, p_rel, alpha):
-        """Steps 1-4 of Algorithm 1 from the stored state: (λ1, a, n), nothing changed."""
+        """Run steps 1-4 of Algorithm 1 from the stored state: (λ1, a, n), nothing changed."""
         s_a = self.sample_length * self.total
         s_a = 0.0 if s_a < 0.0 else (self.sa_max if s_a > self.sa_max else s_a)
         radius = self.l0 + (self.s0 + s_a) * math.tan(alpha)
@@ -68,8 +72,10 @@ class StrainMemory:
         return lam1, a, math.ceil(a * self.n_lambda)
 
     def step(self, p_rel, alpha):
-        """One iteration of Algorithm 1 at relative pressure `p_rel` (Pa) and contact angle `alpha`
-        (rad); returns the contact length s̃_a (m) after the update.
+        """
+        Run one iteration of Algorithm 1 at relative pressure `p_rel` (Pa), contact angle `alpha`.
+
+        `alpha` in rad; returns the contact length s̃_a (m) after the update.
 
         1. s̃_a from the stored profile (28), clamped to [0, sa_max]; 2. R, β (20, 21);
         3. λ1 of the free membrane (22); 4. a (25) and n = ceil(a Nλ) ([choice], 0-based);
@@ -103,7 +109,8 @@ class StrainMemory:
         return s_a
 
     def peek(self, p_rel, alpha):
-        """The s̃_a (m) that `step(p_rel, alpha)` would return, leaving the state untouched.
+        """
+        Return the s̃_a (m) that `step(p_rel, alpha)` would return, leaving the state untouched.
 
         For evaluating candidate pressures (the pressure allocation): the same update as `step`,
         summed instead of stored, O(samples released) like `step`.

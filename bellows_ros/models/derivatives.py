@@ -1,4 +1,5 @@
-"""Rates of sampled signals: Ψ̇ from Ψ and Ψ̈ from Ψ̇, the one estimator of the project [ours].
+"""
+Rates of sampled signals: Ψ̇ from Ψ and Ψ̈ from Ψ̇, the one estimator of the project [ours].
 
 Paper A measures no joint rate, so Ψ̇ and Ψ̈ are estimated from the samples. The driver (Ψ̇ of the
 encoder-less arm), the model node (Ψ̈ of (2)) and identification (Ψ̇, Ψ̈ of a record without those
@@ -24,7 +25,8 @@ import numpy as np
 
 
 def rate(x, x_previous, dt, held=0.0):
-    """Backward difference (x − x_previous)/dt, units of x per s; `held` if dt ≤ 0 or no previous.
+    """
+    Backward difference (x − x_previous)/dt, units of x per s; `held` if dt ≤ 0 or no previous.
 
     The streaming form: call once per sample with the previous sample (None before the second) and
     the last estimate as `held`.
@@ -35,7 +37,8 @@ def rate(x, x_previous, dt, held=0.0):
 
 
 def rates(t, x, initial=0.0):
-    """Backward differences of `x` over the times `t` (s), one per sample, as an array.
+    """
+    Backward differences of `x` over the times `t` (s), one per sample, as an array.
 
     The batch form of `rate`: element k is rate(x[k], x[k−1], t[k] − t[k−1], element k−1), and
     element 0 is `initial`.

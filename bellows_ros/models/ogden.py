@@ -1,9 +1,12 @@
-"""Ogden material of the bellows membrane (paper A, eqs. 11, 14, 15) and the free-membrane strain (22).
+"""
+Ogden material of the bellows membrane (paper A, eqs. 11, 14, 15).
 
-The membrane is incompressible (λ1 λ2 λ3 = 1) with no transverse strain (λ2 = 1), so everything is a
-function of the longitudinal stretch λ1 alone. Paper A uses N = 2 Ogden terms with μ_k > 0 and γ_k > 2
-(the convergence condition of Appendix B); the functions here take the two terms as scalars because
-the solver sits in the 1 kHz loop (docs/equations.md, A(11)-A(15)).
+And the free-membrane strain (22).
+
+The membrane is incompressible (λ1 λ2 λ3 = 1) with no transverse strain (λ2 = 1), so everything is
+a function of the longitudinal stretch λ1 alone. Paper A uses N = 2 Ogden terms with μ_k > 0 and
+γ_k > 2 (the convergence condition of Appendix B); the functions here take the two terms as scalars
+because the solver sits in the 1 kHz loop (docs/equations.md, A(11)-A(15)).
 
 Units: μ_k in N/m (membrane stress resultant per unit width), T in N/m, p_rel in Pa, R in m.
 """
@@ -11,9 +14,11 @@ import math
 
 
 def energy(lam, mu, gamma):
-    """Strain-energy density W(λ1) = Σ_k (μ_k/γ_k)(λ1^γk + λ1^-γk - 2), N/m (14).
+    """
+    Strain-energy density W(λ1) = Σ_k (μ_k/γ_k)(λ1^γk + λ1^-γk - 2), N/m (14).
 
-    The paper writes the constant as -3 for the general case; with λ2 = 1 it is -2 so that W(1) = 0.
+    The paper writes the constant as -3 for the general case; with λ2 = 1 it is -2 so that
+    W(1) = 0.
     """
     return sum(m / g * (lam ** g + lam ** -g - 2.0) for m, g in zip(mu, gamma))
 
@@ -30,16 +35,17 @@ def stress_slope(lam, mu, gamma):
 
 
 def free_strain(load, mu1, mu2, gamma1, gamma2, guess=1.0):
-    """Stretch λ1 ≥ 1 of the free membrane: solve p_rel·R = T(λ1) (22); `load` = p_rel·R in N/m.
+    """
+    Stretch λ1 ≥ 1 of the free membrane: solve p_rel·R = T(λ1) (22); `load` = p_rel·R in N/m.
 
     T is strictly increasing on λ1 ≥ 1 for γ_k > 1 and T(1) = 0, so the root is unique; a load ≤ 0
     (vented or sucked chain) leaves the membrane unstretched, λ1 = 1 (see A(22)). NaN gives NaN.
 
     Solved for u = ln λ1 with expm1 so that λ1 - 1 keeps full relative precision for tiny loads:
     safeguarded Newton inside the bracket [0, u_hi] (a bisection step whenever Newton leaves it).
-    u_hi comes from T(λ) ≥ μ_k(λ^(γk-1) - 1) for each k, which also keeps every exponential finite for
-    any finite load. λ1 (and λ1 - 1) come out to ~1e-15 relative (tested against a 50-digit reference).
-    `guess` (a previous λ1) only speeds it up.
+    u_hi comes from T(λ) ≥ μ_k(λ^(γk-1) - 1) for each k, which also keeps every exponential finite
+    for any finite load. λ1 (and λ1 - 1) come out to ~1e-15 relative (tested against a 50-digit
+    reference). `guess` (a previous λ1) only speeds it up.
     """
     if not load > 0.0:
         return math.nan if load != load else 1.0
@@ -60,7 +66,8 @@ def free_strain(load, mu1, mu2, gamma1, gamma2, guess=1.0):
             hi = u
         else:
             lo = u
-        slope = mu1 * (a1 * (e1 + 1.0) - b1 * (f1 + 1.0)) + mu2 * (a2 * (e2 + 1.0) - b2 * (f2 + 1.0))
+        slope = (mu1 * (a1 * (e1 + 1.0) - b1 * (f1 + 1.0))
+                 + mu2 * (a2 * (e2 + 1.0) - b2 * (f2 + 1.0)))
         new = u - residual / slope
         if not lo <= new <= hi:
             new = 0.5 * (lo + hi)

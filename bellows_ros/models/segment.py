@@ -1,9 +1,10 @@
-"""Driving torque of one arm segment (paper A): parameters, regressors, the stateful 1 kHz evaluator.
+"""
+Driving torque of one arm segment (paper A): parameters, regressors, the stateful 1 kHz evaluator.
 
 τ_drive = τ_a + τ_s + τ_f (2), with
-- τ_a, actuator torque (29): Σ_j σ_j x_a,jᵀ θ_a, x_a,j = p_j [1, s_j, s_j², s_j p_j, s_j Ψ_j, s_j Ψ_j²,
-  p_j Ψ_j, Ψ_j²] ([choice] for the garbled regressor), s_j = s̃_a of chain j from the
-  no-slip strain memory (`bellows_ros.models.contact`, Algorithm 1);
+- τ_a, actuator torque (29): Σ_j σ_j x_a,jᵀ θ_a, x_a,j = p_j [1, s_j, s_j², s_j p_j, s_j Ψ_j, s_j
+  Ψ_j², p_j Ψ_j, Ψ_j²] ([choice] for the garbled regressor), s_j = s̃_a of chain j from the no-slip
+  strain memory (`bellows_ros.models.contact`, Algorithm 1);
 - τ_s, restoring torque (3, 4): Σ_j (Ψ - Ψ_j0)(k_s + k_s,p p_j), Ψ_j0 = σ_j c_Ψ0,p tanh(c_Ψ0 p_j);
 - τ_f, friction torque (5): tanh(c_vel Ψ̇)(c_f + c_f,p Σ_j p_j);
 - τ_prev, the previous model (34): τ_f + τ_s + Σ_j σ_j p_j [1, p_j, Ψ_j, p_j²] θ_prev ([choice]).
@@ -16,15 +17,15 @@ tests use them). `SegmentModel.step` is the 1 kHz fast path, hand-expanded becau
 overhead is larger than the whole step; `test/test_segment_model.py` holds it equal to the
 regressors over random states to 1e-12 relative.
 """
-import math
 from dataclasses import dataclass, fields
+import math
 from typing import NamedTuple
 
 import numpy as np
 
 from bellows_ros import params as parameters
 from bellows_ros.errors import ParameterError
-from bellows_ros.models.contact import ALPHA_PER_PSI, StrainMemory, contact_angle
+from bellows_ros.models.contact import ALPHA_PER_PSI, contact_angle, StrainMemory
 
 SIGNS = (1.0, -1.0)  # σ_j of chains 1 and 2 ([choice], docs/equations.md)
 
@@ -46,10 +47,12 @@ OUTPUTS = SegmentOutput._fields
 
 @dataclass(frozen=True)
 class SegmentParams:
-    """All parameters of `config/segment.yaml` (section `segment.`); field = dotted name with '_'.
+    """
+    All parameters of `config/segment.yaml` (section `segment.`); field = dotted name with '_'.
 
     Units: Pa, m, N/m (Ogden μ), N·m, N·m/rad, rad, s, kg·m². See the YAML for each meaning.
     """
+
     p0: float
     p_max: float
     geometry_l0: float
@@ -84,13 +87,13 @@ class SegmentParams:
     identify_input_cutoff: float
 
     def replace(self, **changes):
-        """A copy with some fields changed (tuples for vectors)."""
+        """Return a copy with some fields changed (tuples for vectors)."""
         values = {f.name: getattr(self, f.name) for f in fields(self)}
         values.update(changes)
         return SegmentParams(**values)
 
     def flat(self):
-        """Flat ROS 2 parameter names (`segment.ogden.mu`, ...) -> values, for `params.write_file`."""
+        """Return flat ROS 2 names (`segment.ogden.mu`, ...) -> values, for `params.write_file`."""
         return {'segment.' + DOTTED[f.name]: _plain(getattr(self, f.name)) for f in fields(self)}
 
 
@@ -98,7 +101,8 @@ def _plain(value):
     return [float(v) for v in value] if isinstance(value, tuple) else value
 
 
-# Field name -> dotted YAML name below `segment.` (the YAML nests one level, see config/segment.yaml).
+# Field name -> dotted YAML name below `segment.` (the YAML nests one level, see
+# config/segment.yaml).
 DOTTED = {name: name for name in ('p0', 'p_max')}
 for _field in fields(SegmentParams):
     if _field.name not in DOTTED:
@@ -111,7 +115,8 @@ UNDOTTED = {dotted: name for name, dotted in DOTTED.items()}
 
 
 def load_segment_params(params_path=None):
-    """`config/segment.yaml` with `params_path` (if any) laid over it -> SegmentParams.
+    """
+    `config/segment.yaml` with `params_path` (if any) laid over it -> SegmentParams.
 
     Unknown or missing names raise ParameterError (via `bellows_ros.params`); so do physically
     inadmissible values (μ_k ≤ 0, γ_k ≤ 2, p_max ≤ p0, non-positive geometry).
@@ -157,12 +162,13 @@ def check_params(p, source='parameters'):
 
 
 def strain_memory(p):
-    """A fresh Algorithm-1 state for one chain of a segment with parameters `p`."""
+    """Return a fresh Algorithm-1 state for one chain of a segment with parameters `p`."""
     return StrainMemory(p.geometry_l0, p.geometry_s0, p.geometry_sa_max, p.geometry_n_lambda,
                         p.ogden_mu, p.ogden_gamma)
 
 
-# --- regressors (NumPy, one row per sample) -------------------------------------------------------
+# --- regressors (NumPy, one row per sample)
+# -------------------------------------------------------
 
 def relative_pressure(p, pressure):
     """p_rel = p - p0, Pa (17): the pressure the membrane of Algorithm 1 carries."""
@@ -175,7 +181,11 @@ def scaled_pressure(p, pressure):
 
 
 def actuator_regressor(psi, ps1, ps2, sa1, sa2):
-    """X_a (29a), shape (N, 8): Σ_j σ_j p_j [1, s_j, s_j², s_j p_j, s_j Ψ_j, s_j Ψ_j², p_j Ψ_j, Ψ_j²]."""
+    """
+    Compute X_a (29a), shape (N, 8).
+
+    Σ_j σ_j p_j [1, s_j, s_j², s_j p_j, s_j Ψ_j, s_j Ψ_j², p_j Ψ_j, Ψ_j²].
+    """
     total = 0.0
     for sign, ps, sa in zip(SIGNS, (ps1, ps2), (sa1, sa2)):
         psi_j = sign * np.asarray(psi, float)
@@ -210,7 +220,8 @@ def previous_regressor(psi, ps1, ps2):
     total = 0.0
     for sign, ps in zip(SIGNS, (ps1, ps2)):
         psi_j = sign * np.asarray(psi, float)
-        total = total + sign * ps[:, None] * np.column_stack([np.ones_like(ps), ps, psi_j, ps * ps])
+        total = total + sign * ps[:,
+                                  None] * np.column_stack([np.ones_like(ps), ps, psi_j, ps * ps])
     return total
 
 
@@ -227,7 +238,8 @@ def contact_lengths(p, psi, pressure1, pressure2):
 
 
 def motion_torque(inertia, damping, gravity, psi, psi_dot, psi_ddot):
-    """τ_motion = M Ψ̈ + C Ψ̇ + N(Ψ), N(Ψ) = gravity·sin Ψ: the left-hand side of (2), N·m.
+    """
+    τ_motion = M Ψ̈ + C Ψ̇ + N(Ψ), N(Ψ) = gravity·sin Ψ: the left-hand side of (2), N·m.
 
     M (kg·m²), C (N·m·s/rad) and the gravity amplitude (N·m) are constants [ours]: the model's
     `segment.dynamics.*` or the plant's `segment.plant.*`. Works on scalars and arrays.
@@ -239,16 +251,22 @@ def motion_torque(inertia, damping, gravity, psi, psi_dot, psi_ddot):
 
 
 def external_torque(p, psi, psi_dot, psi_ddot, tau_drive):
-    """τ_ext = M Ψ̈ + C Ψ̇ + N(Ψ) - τ_drive from (2), N·m; M, C, N of `segment.dynamics`
-    (quasi-static by default: M = C = N = 0, so τ_ext = -τ_drive). Works on scalars and arrays."""
+    """
+    Compute τ_ext = M Ψ̈ + C Ψ̇ + N(Ψ) - τ_drive from (2), N·m.
+
+    M, C, N of `segment.dynamics` (quasi-static by default: M = C = N = 0, so τ_ext = -τ_drive).
+    Works on scalars and arrays.
+    """
     return (motion_torque(p.dynamics_inertia, p.dynamics_damping, p.dynamics_gravity,
                           psi, psi_dot, psi_ddot) - tau_drive)
 
 
-# --- the 1 kHz evaluator ---------------------------------------------------------------------------
+# --- the 1 kHz evaluator
+# ---------------------------------------------------------------------------
 
 class SegmentModel:
-    """Stateful driving-torque model of one segment: one `step` per sample, both chains.
+    """
+    Stateful driving-torque model of one segment: one `step` per sample, both chains.
 
     `step(psi, psi_dot, p1, p2)` (rad, rad/s, Pa abs, Pa abs) returns a `SegmentOutput`
     (sa1, sa2, tau_a, tau_s, tau_f, tau_drive, tau_prev) in m and N·m. It validates nothing: the
@@ -265,7 +283,8 @@ class SegmentModel:
         self._pressure = (p.p0, 1.0 / (p.p_max - p.p0))
         self._theta_a = tuple(float(v) for v in p.actuator_theta)
         self._theta_prev = tuple(float(v) for v in p.previous_theta)
-        self._spring = (p.restoring_k_s, p.restoring_k_sp, p.restoring_c_psi0, p.restoring_c_psi0_p)
+        self._spring = (p.restoring_k_s, p.restoring_k_sp, p.restoring_c_psi0,
+                        p.restoring_c_psi0_p)
         self._friction = (p.friction_c_f, p.friction_c_fp, p.friction_c_vel)
 
     def reset(self):
@@ -273,7 +292,8 @@ class SegmentModel:
         self.memory2.reset()
 
     def step(self, psi, psi_dot, p1, p2):
-        """One sample of both chains: the strain memories advance (Algorithm 1), then `torques`.
+        """
+        One sample of both chains: the strain memories advance (Algorithm 1), then `torques`.
 
         Contact state of chain j from p_rel (17) and α_j = ALPHA_PER_PSI σ_j Ψ (13).
         `test_fast_step_equals_the_reference_functions` in test/test_segment_model.py holds the
@@ -287,7 +307,7 @@ class SegmentModel:
         return _output(_SegmentOutput, (s1, s2) + self.torques(psi, psi_dot, p1, p2, s1, s2))
 
     def peek(self, psi, psi_dot, p1, p2):
-        """What `step` would return, the strain memories left untouched (candidate pressures)."""
+        """Return what `step` would, the strain memories left untouched (candidate pressures)."""
         p0 = self._pressure[0]
         alpha = ALPHA_PER_PSI * psi
         s1 = self.memory1.peek(p1 - p0, alpha)
@@ -295,7 +315,8 @@ class SegmentModel:
         return _output(_SegmentOutput, (s1, s2) + self.torques(psi, psi_dot, p1, p2, s1, s2))
 
     def torques(self, psi, psi_dot, p1, p2, s1, s2):
-        """(τ_a, τ_s, τ_f, τ_drive, τ_prev), N·m, at given contact lengths s1, s2 (m); no state.
+        """
+        (τ_a, τ_s, τ_f, τ_drive, τ_prev), N·m, at given contact lengths s1, s2 (m); no state.
 
         The fast form of (3)-(5), (17), (29), (34), hand-expanded for speed (see `step`).
         """
@@ -331,7 +352,8 @@ _output, _SegmentOutput = tuple.__new__, SegmentOutput
 
 
 def simulate_model(params, psi, p1, p2, psi_dot):
-    """Run `SegmentModel` over a record (state carried from row to row, starting from reset).
+    """
+    Run `SegmentModel` over a record (state carried from row to row, starting from reset).
 
     Arrays in SI (rad, Pa abs, Pa abs, rad/s); returns {name: array} for the 7 `OUTPUTS`.
     """

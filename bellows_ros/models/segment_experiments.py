@@ -1,9 +1,12 @@
-"""Experiments on the simulated segment, like paper A's test-bench measurements (angle imposed by an
-external force, pressures set by a pressure controller, torque from a force-torque sensor).
+"""
+Experiments on the simulated segment, like paper A's test-bench measurements.
+
+The angle is imposed by an external force, the pressures set by a pressure controller, the
+torque read from a force-torque sensor.
 
 Each returns the segment data columns `t, psi, p1, p2, tau_ext, psi_dot` plus `tau_motion`
-(M Ψ̈ + C Ψ̇ + N of the plant, which a bench computes from the known mechanics) as a dict of arrays of
-*measured* values. Deterministic for a given seed.
+(M Ψ̈ + C Ψ̇ + N of the plant, which a bench computes from the known mechanics) as a dict of arrays
+of *measured* values. Deterministic for a given seed.
 """
 import math
 
@@ -20,8 +23,9 @@ def run_plant(plant, dt, p_cmd1, p_cmd2, psi_path):
     """Drive `plant` with command arrays and an imposed angle path; returns the measured record."""
     names = ('t', 'psi', 'psi_dot', 'p1', 'p2', 'tau_ext')
     rows = [plant.step(dt, a, b, psi_imposed=c) + (plant.tau_motion,)
-            for a, b, c in zip(np.asarray(p_cmd1, float).tolist(), np.asarray(p_cmd2, float).tolist(),
-                                np.asarray(psi_path, float).tolist())]
+            for a, b, c in zip(np.asarray(p_cmd1, float).tolist(),
+                               np.asarray(p_cmd2, float).tolist(),
+                               np.asarray(psi_path, float).tolist())]
     table = np.array(rows, float)
     record = {name: table[:, k] for k, name in enumerate(names)}
     record['tau_motion'] = table[:, len(names)]
@@ -40,9 +44,13 @@ def _smooth_moves(times, levels, t):
 
 
 def _programme(rng, duration, move_range, hold_range, params):
-    """Random angle/pressure programme like paper A's identification runs: angle moves anywhere in
-    |Ψ| ≤ 1.4 rad with holds; at most holds new chain pressures (one chain up to 7 bar abs, the other
-    lower, sometimes both vented), ramped so that some ramps overlap the next move."""
+    """
+    Build a random angle/pressure programme like paper A's identification runs.
+
+    The angle moves anywhere in |Ψ| ≤ 1.4 rad with holds; at most holds new chain pressures (one
+    chain up to 7 bar abs, the other lower, sometimes both vented), ramped so that some ramps
+    overlap the next move.
+    """
     p0, top = params.p0, 7.0e5
     angle_times, angles = [], [0.0]
     pressure_times, pressures1, pressures2 = [], [p0], [p0]
@@ -67,11 +75,14 @@ def _programme(rng, duration, move_range, hold_range, params):
 
 
 def _pressure_schedule(rng, duration, hold_range, params):
-    """Chain pressures on their own clock, like paper A's "simultaneous variation of the angle of
-    curvature and pressure": after each hold (`hold_range`, s) new levels are reached by a step or a
-    ramp at one of several speeds (0.05-1 s). Levels cover the whole range p0..p_max: one chain
-    pressurised and the other vented or lower (as in Fig. 10), both pressurised at once, or both
-    vented; so every chain holds many pressures, low ones included."""
+    """
+    Build chain pressures on their own clock, like paper A's "simultaneous variation".
+
+    ("... of the angle of curvature and pressure".) After each hold (`hold_range`, s) new levels
+    are reached by a step or a ramp at one of several speeds (0.05-1 s). Levels cover the whole
+    range p0..p_max: one chain pressurised and the other vented or lower (as in Fig. 10), both
+    pressurised at once, or both vented; so every chain holds many pressures, low ones included.
+    """
     p0, top = params.p0, params.p_max
     times, pressures1, pressures2 = [], [p0], [p0]
     now = 0.5
@@ -84,7 +95,8 @@ def _pressure_schedule(rng, duration, hold_range, params):
         elif kind < 0.4:
             high, low = rng.uniform(p0, top), rng.uniform(p0, top)
         else:
-            high, low = rng.uniform(p0, top), rng.choice([p0, rng.uniform(p0, p0 + 0.5 * (top - p0))])
+            high, low = rng.uniform(p0,
+                                    top), rng.choice([p0, rng.uniform(p0, p0 + 0.5 * (top - p0))])
         first = rng.integers(2) == 0
         pressures1.append(high if first else low)
         pressures2.append(low if first else high)
@@ -92,10 +104,12 @@ def _pressure_schedule(rng, duration, hold_range, params):
     return times, pressures1, pressures2
 
 
-def _record(params, effects, noise, seed, duration, dt, move_range, hold_range, pressure_hold=None):
+def _record(params, effects, noise, seed, duration, dt, move_range, hold_range,
+            pressure_hold=None):
     rng = np.random.default_rng(seed)
     t = np.arange(1, int(round(duration / dt)) + 1) * dt
-    angle_times, angles, pressure_times, p1, p2 = _programme(rng, duration, move_range, hold_range, params)
+    angle_times, angles, pressure_times, p1, p2 = _programme(rng, duration, move_range,
+                                                             hold_range, params)
     if pressure_hold is not None:
         pressure_times, p1, p2 = _pressure_schedule(rng, duration, pressure_hold, params)
     psi = _smooth_moves(angle_times, angles, t)
@@ -107,29 +121,36 @@ def _record(params, effects, noise, seed, duration, dt, move_range, hold_range, 
 
 def quasi_static_record(params, effects=None, noise=None, seed=None, duration=60.0, dt=1e-3,
                         pressure_hold=None):
-    """Slow excursions (2-5 s per move, |Ψ| ≤ 1.4 rad) with reversals, holds, and pressure steps and
-    ramps on both chains (up to 7 bar abs) — like paper A's identification measurements.
+    """
+    Run slow excursions (2-5 s per move, |Ψ| ≤ 1.4 rad) like paper A's identification runs.
+
+    With reversals, holds, and pressure steps and ramps on both chains (up to 7 bar abs).
 
     By default the pressures change only between angle moves (a few levels in 30 s). With
     `pressure_hold` = (shortest, longest) hold in s, they follow their own schedule instead
     (`_pressure_schedule`: many levels over p0..p_max, steps and ramps at several speeds), which is
     what a pressure-dependent effect needs to be told from a smooth function of the pressure.
     """
-    return _record(params, effects, noise, seed, duration, dt, (2.0, 5.0), (0.5, 2.0), pressure_hold)
+    return _record(params, effects, noise, seed, duration, dt, (2.0, 5.0), (0.5, 2.0),
+                   pressure_hold)
 
 
 def dynamic_record(params, effects=None, noise=None, seed=None, duration=30.0, dt=1e-3):
-    """Faster motion at several speeds (0.3-1.5 s per move, short holds) with changing pressures,
-    like paper A's dynamic validation (Fig. 12)."""
+    """
+    Run faster motion at several speeds (0.3-1.5 s per move, short holds), changing pressures.
+
+    Like paper A's dynamic validation (Fig. 12).
+    """
     return _record(params, effects, noise, seed, duration, dt, (0.3, 1.5), (0.0, 0.5))
 
 
 def fig10_record(params, effects=('contact_hysteresis', 'pressure_friction', 'natural_curvature'),
                  noise=None, seed=None, dt=1e-3, excursion=FIG10_EXCURSION):
-    """Paper A's Fig. 10 scenario on the bench, returns (record, before_index, after_index).
+    """
+    Paper A's Fig. 10 scenario on the bench, returns (record, before_index, after_index).
 
-    Vented segment moved from 0 to Ψ = 74.5° (2 s), hold; chain 1 ramped to 4 bar abs (1 s), chain 2
-    vented; hold to t = 6 s ("before"); external excursion down to `excursion` (default -30°, our
+    Vented segment moved from 0 to Ψ = 74.5° (2 s), hold; chain 1 ramped to 4 bar abs (1 s), chain
+    2 vented; hold to t = 6 s ("before"); external excursion down to `excursion` (default -30°, our
     choice) in 4 s and back to 74.5° in 4 s; hold to t = 18 s ("after"). `effects` is a tuple of
     names or a mapping (see `SegmentPlant`); default: the full paper-A physics.
     """

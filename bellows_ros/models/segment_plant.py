@@ -1,31 +1,36 @@
-"""Simulated arm segment: the driving-torque physics plus dynamics, valves, sensors and switchable
-effects. The simulated hardware and the tests use it as "the real segment".
+"""
+Simulated arm segment: the driving-torque physics plus dynamics, valves, sensors, effects.
+
+The effects are switchable. The simulated hardware and the tests use it as "the real
+segment".
 
 With no effects the plant *is* the doctor's baseline (docs/doctor.md): the previous model (34) with
-constant friction (c_f only) and no natural curvature (Ψ_j0 = 0, k_s,p = 0). Each effect switches on
-one piece of missing physics (the doctor's segment vocabulary, `SEGMENT_EFFECTS`):
+constant friction (c_f only) and no natural curvature (Ψ_j0 = 0, k_s,p = 0). Each effect switches
+on one piece of missing physics (the doctor's segment vocabulary, `SEGMENT_EFFECTS`):
 
-- `contact_hysteresis`: the actuator torque is paper A's membrane-contact torque (29) with the no-slip
-  strain memory (Algorithm 1) instead of the pressure polynomial of (34). No parameters.
+- `contact_hysteresis`: the actuator torque is paper A's membrane-contact torque (29) with the
+  no-slip strain memory (Algorithm 1) instead of the pressure polynomial of (34). No parameters.
 - `pressure_friction`: friction grows with the bearing load, c_f,p (5). Parameter `c_fp` (N·m).
-- `natural_curvature`: Ψ_j0(p) (4) and k_s,p (3). Parameters `c_psi0`, `c_psi0_p` (rad), `k_sp` (N·m/rad).
+- `natural_curvature`: Ψ_j0(p) (4) and k_s,p (3). Parameters `c_psi0`, `c_psi0_p` (rad), `k_sp`
+  (N·m/rad).
 - `sensor_lag`: first-order lag of the measured pressures. Parameter `tau` (s).
 The full paper-A physics is the first three together. Unset effect parameters take the YAML values.
 
 Pressures follow the commands through a first-order valve/chamber lag (`segment.plant.valve_tau`).
-With an imposed angle (test bench) the force-torque sensor reads τ_ext = M Ψ̈ + C Ψ̇ + N(Ψ) - τ_drive
-(2); otherwise (2) is integrated (semi-implicit Euler) with `tau_load` as τ_ext, using the plant's own
-M, C, N (`segment.plant.inertia/damping/gravity`) and end stops at |Ψ| = `segment.plant.psi_limit`. Measured values carry Gaussian noise with the
+With an imposed angle (test bench) the force-torque sensor reads
+τ_ext = M Ψ̈ + C Ψ̇ + N(Ψ) - τ_drive (2); otherwise (2) is integrated (semi-implicit Euler) with
+`tau_load` as τ_ext, using the plant's own M, C, N (`segment.plant.inertia/damping/gravity`) and
+end stops at |Ψ| = `segment.plant.psi_limit`. Measured values carry Gaussian noise with the
 standard deviations of `segment.plant.noise` unless `noise` overrides them.
 """
-import math
 from collections import namedtuple
+import math
 
 import numpy as np
 
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.derivatives import rate
-from bellows_ros.models.segment import SegmentModel, SegmentOutput, motion_torque
+from bellows_ros.models.segment import motion_torque, SegmentModel, SegmentOutput
 
 SEGMENT_EFFECTS = ('contact_hysteresis', 'pressure_friction', 'natural_curvature', 'sensor_lag')
 FULL_MODEL = ('contact_hysteresis', 'pressure_friction', 'natural_curvature')
@@ -39,7 +44,7 @@ EFFECT_PARAMETERS = {
     'sensor_lag': {'tau': 'plant_sensor_lag_tau'},
 }
 NOISE_KEYS = ('p', 'psi', 'psi_dot', 'tau')
-NO_NOISE = {key: 0.0 for key in NOISE_KEYS}
+NO_NOISE = dict.fromkeys(NOISE_KEYS, 0.0)
 # Longest step of the free-motion integration, s (a numerical setting, not physics: see `step`).
 MAX_STEP = 1e-3
 
@@ -48,20 +53,25 @@ SegmentSample.__doc__ = 'One sample: time s, Ψ rad, Ψ̇ rad/s, chain pressures
 
 
 def check_effects(effects):
-    """Validate an effects mapping {name: {param: float}} (or a sequence of names, all parameters
-    from the YAML); returns a normalised dict. Unknown names or parameters raise ParameterError.
+    """
+    Validate an effects mapping {name: {param: float}}; return a normalised dict.
+
+    A sequence of names takes all parameters from the YAML. Unknown names or parameters raise
+    ParameterError.
     """
     if not isinstance(effects, dict):
         effects = {name: {} for name in (effects or ())}
     checked = {}
     for name, options in effects.items():
         if name not in EFFECT_PARAMETERS:
-            raise ParameterError(f"unknown segment effect '{name}' (known: {', '.join(SEGMENT_EFFECTS)})")
+            raise ParameterError(f"unknown segment effect '{name}' (known: "
+                                 f"{', '.join(SEGMENT_EFFECTS)})")
         options = dict(options or {})
         for key, value in options.items():
             if key not in EFFECT_PARAMETERS[name]:
                 known = ', '.join(EFFECT_PARAMETERS[name]) or 'none'
-                raise ParameterError(f"segment effect '{name}': unknown parameter '{key}' (known: {known})")
+                raise ParameterError(f"segment effect '{name}': unknown parameter '{key}' (known: "
+                                     f'{known})')
             if not math.isfinite(float(value)):
                 raise ParameterError(f"segment effect '{name}': parameter '{key}' is not finite")
         checked[name] = {key: float(value) for key, value in options.items()}
@@ -71,7 +81,8 @@ def check_effects(effects):
 
 
 def plant_physics(params, effects):
-    """SegmentParams of the true physics for the switched-on `effects` (validated mapping).
+    """
+    Return SegmentParams of the true physics for the switched-on `effects` (validated mapping).
 
     Missing physics is switched off: c_f,p = 0 without `pressure_friction`; c_Ψ0,p = k_s,p = 0
     without `natural_curvature`. Effect parameters override the YAML values.
@@ -88,7 +99,8 @@ def plant_physics(params, effects):
 
 
 class SegmentPlant:
-    """The simulated segment. `step(...)` advances it by `dt` and returns the measured SegmentSample.
+    """
+    The simulated segment. `step(...)` advances it by `dt` and returns the measured SegmentSample.
 
     True state: `t`, `psi`, `psi_dot`, `psi_ddot`, `p1`, `p2` (chamber pressures), `tau_ext`,
     `tau_drive`, `tau_motion` (= M Ψ̈ + C Ψ̇ + N, true) and `outputs` (the model's
@@ -106,11 +118,13 @@ class SegmentPlant:
                  'psi_dot': params.plant_noise_psi_dot, 'tau': params.plant_noise_tau}
         for key, value in (noise or {}).items():
             if key not in sigma:
-                raise ParameterError(f"segment plant noise: unknown key '{key}' (known: {', '.join(NOISE_KEYS)})")
+                raise ParameterError(f"segment plant noise: unknown key '{key}' (known: "
+                                     f"{', '.join(NOISE_KEYS)})")
             if not value >= 0:
                 raise ParameterError(f"segment plant noise: '{key}' must be >= 0")
             sigma[key] = float(value)
-        self.sigma = np.array([sigma['psi'], sigma['psi_dot'], sigma['p'], sigma['p'], sigma['tau']])
+        self.sigma = np.array([sigma['psi'], sigma['psi_dot'], sigma['p'], sigma['p'],
+                               sigma['tau']])
         self.rng = np.random.default_rng(seed)
         self.model = SegmentModel(self.physics)
         self.reset(psi0)
@@ -139,10 +153,12 @@ class SegmentPlant:
         return self.outputs.tau_drive if self.hysteresis else self.outputs.tau_prev
 
     def _end_stop(self):
-        """Torque of the end stops beyond |Ψ| = psi_limit: stiff spring, damping ratio 0.8, N·m.
+        """
+        Torque of the end stops beyond |Ψ| = psi_limit: stiff spring, damping ratio 0.8, N·m.
 
-        Needed because one pressurised chain alone has no equilibrium inside the range: its actuator
-        torque grows with Ψ faster than the restoring torque falls."""
+        Needed because one pressurised chain alone has no equilibrium inside the range: its
+        actuator torque grows with Ψ faster than the restoring torque falls.
+        """
         p = self.physics
         over = abs(self.psi) - p.plant_psi_limit
         if over <= 0.0:
@@ -151,11 +167,14 @@ class SegmentPlant:
         return -math.copysign(p.plant_stop_stiffness * over, self.psi) - damping * self.psi_dot
 
     def step(self, dt, p_cmd1, p_cmd2, psi_imposed=None, tau_load=None):
-        """Advance by `dt` s with pressure commands (Pa abs); impose Ψ (rad) or apply `tau_load` (N·m).
+        """
+        Advance by `dt` s with pressure commands (Pa abs).
+
+        Impose Ψ (rad) or apply `tau_load` (N·m).
 
         A real-time caller that falls behind passes a long `dt`; the free motion is then integrated
-        in equal sub-steps of at most MAX_STEP, because the explicit update of the stiff, damped end
-        stop is stable only for steps well under 7 ms. An imposed angle is reached in one step.
+        in equal sub-steps of at most MAX_STEP, because the explicit update of the stiff, damped
+        end stop is stable only for steps well under 7 ms. An imposed angle is reached in one step.
         """
         substeps = 1 if psi_imposed is not None else max(1, math.ceil(dt / MAX_STEP - 1e-9))
         for _ in range(substeps):

@@ -1,4 +1,7 @@
-"""Inverse map for the stiffness controller: target stiffness (or pressure) -> air-chamber compression.
+"""
+Inverse map for the stiffness controller.
+
+Target stiffness (or pressure) -> air-chamber compression.
 
 The stiffness K(x_c) of `actuator.stiffness` (paper B's average slope over spring 0-12 mm) rises
 with the chamber compression because the pressure does, until the spring starts to buckle
@@ -29,7 +32,8 @@ BRANCH = 'rising'           # the branch of K(x_c) the map inverts (module docst
 
 
 class StiffnessMap:
-    """Precomputed K(p_ref, x_c) table with exact-model polishing (see module docstring).
+    """
+    Precomputed K(p_ref, x_c) table with exact-model polishing (see module docstring).
 
     Building costs about _GAS_NODES x _X_NODES x 2 model evaluations (a few tens of ms), plus a
     peak search per gas node when the stiffness is not monotone.
@@ -95,15 +99,22 @@ class StiffnessMap:
         """(x_low, x_high), m: the rising branch of K(x_c) the map uses for gas amount `gas`."""
         return self.x_min, self._peak_near(gas)[0]
 
-    def range(self, gas=None):
-        """(k_min, k_max), N/m, on the rising branch for gas amount `gas` (p_ref, Pa): the
-        stiffness at the elongated end stop and at the peak."""
+    def range(self, gas=None):  # noqa: A003 (the public name; a method cannot shadow it)
+        """
+        Return (k_min, k_max), N/m, on the rising branch for gas amount `gas` (p_ref, Pa).
+
+        The stiffness at the elongated end stop and at the peak.
+        """
         g = self.params.p_ref if gas is None else gas
         return stiffness(self.params, self.x_min, g), self._peak_near(g)[1]
 
     def reachable(self, gas=None):
-        """What the actuator can give with gas `gas`, for reports: a dict with the branch used
-        (x_low, x_high, k_low, k_high) and the stiffness at the compressed end stop (k_end)."""
+        """
+        Tell what the actuator can give with gas `gas`, for reports.
+
+        A dict with the branch used (x_low, x_high, k_low, k_high) and the stiffness at the
+        compressed end stop (k_end).
+        """
         g = self.params.p_ref if gas is None else gas
         x_low, x_high = self.branch(g)
         k_low, k_high = self.range(g)
@@ -160,7 +171,7 @@ _maps = {}
 
 
 def stiffness_map(params):
-    """The cached `StiffnessMap` of `params` (built on first use)."""
+    """Return the cached `StiffnessMap` of `params` (built on first use)."""
     entry = _maps.get(id(params))
     if entry is None or entry[0] is not params:
         if len(_maps) >= 8:
@@ -171,7 +182,8 @@ def stiffness_map(params):
 
 
 def compression_for_stiffness(params, k_target, gas=None):
-    """Air-chamber compression x_c (m) on the rising branch giving stiffness `k_target` (N/m).
+    """
+    Air-chamber compression x_c (m) on the rising branch giving stiffness `k_target` (N/m).
 
     `gas` is the gas amount as p_ref (Pa; default the YAML's), e.g. from `actuator.estimate_gas`.
     Monotone in `k_target`. Raises ParameterError naming the achievable range when outside it.

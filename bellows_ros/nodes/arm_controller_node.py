@@ -1,4 +1,5 @@
-"""arm_controller_node: angle tracking of the arm's segments, PID plus model-based feedforward.
+"""
+arm_controller_node: angle tracking of the arm's segments, PID plus model-based feedforward.
 
 Wiring only; the logic is in `control.angle_tracking` (PID, feedforward through the pressure
 allocation of `control.pressure_allocation`) and `control.angle_trajectory` (built-in set-points).
@@ -31,7 +32,7 @@ import math
 import time
 
 from bellows_ros.control import angle_trajectory
-from bellows_ros.control.angle_tracking import AngleTracker, TrackingGains, check_feedforward
+from bellows_ros.control.angle_tracking import AngleTracker, check_feedforward, TrackingGains
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware import arm_bus
 from bellows_ros.hardware.loop_timing import LoopStats
@@ -58,8 +59,11 @@ class SegmentLoop:
         self.squares, self.count, self.largest, self.saturated = 0.0, 0, 0.0, 0
 
     def desired(self, t, later=0.0):
-        """(Ψ_d, Ψ̇_d, Ψ̈_d) at `t` s on the trajectory clock, or `later` s after it (a topic
-        set-point is extrapolated with its velocity)."""
+        """
+        Return (Ψ_d, Ψ̇_d, Ψ̈_d) at `t` s on the trajectory clock, or `later` s after it.
+
+        A topic set-point is extrapolated with its velocity.
+        """
         t += later
         if self.topic_setpoint is not None:
             psi, psi_dot = self.topic_setpoint
@@ -235,7 +239,8 @@ class ArmControllerNode(Node):
             level = diagnostics.WARN if stale or mine['saturated'] != '0' else diagnostics.OK
             message = ('no samples (stale)' if stale else
                        'saturated' if level != diagnostics.OK else 'OK')
-            statuses.append(diagnostics.status(self, f'arm_controller_node: {loop.name}', mine, level,
+            statuses.append(diagnostics.status(self, f'arm_controller_node: {loop.name}', mine,
+                                               level,
                                                message))
         diagnostics.publish(self, self.diag_pub, statuses)
 

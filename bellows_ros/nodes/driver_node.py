@@ -1,4 +1,5 @@
-"""driver_node: the arm on CAN and/or the actuator on serial, wired to the topic contract.
+"""
+driver_node: the arm on CAN and/or the actuator on serial, wired to the topic contract.
 
 One message per device sample and group (docs/interfaces.md): `/joint_states`, `/bellows/chambers`,
 and for the actuator's load cell `/bellows/wrench` (frame `actuator`, force.z = spring force). The
@@ -35,7 +36,6 @@ from bellows_ros.models.derivatives import rate
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime, run
 from bellows_ros.runtime.topics import ACTUATOR_FRAME, SAMPLE_DEPTH
-
 
 _DISCOVERY_SETTLE = 0.5  # s, see DriverNode._wait_for_subscribers
 
@@ -106,9 +106,11 @@ class DriverNode(Node):
         self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
         self.get_logger().info(
             'driving ' + ' and '.join(name for name, on in (('arm', self.use_arm),
-                                                            ('actuator', self.use_actuator)) if on))
+                                                            ('actuator', self.use_actuator))
+                                      if on))
 
-    # --- devices -----------------------------------------------------------------------------------
+    # --- devices
+    # -----------------------------------------------------------------------------------
     def _open_actuator(self, config, port):
         if port:
             config = dataclasses.replace(config, port=port)
@@ -142,7 +144,7 @@ class DriverNode(Node):
     def _wait_for_samples(self):
         end = time.monotonic() + self.startup_timeout
         waiting = [(name, device) for name, device in (('actuator', self.actuator),
-                                                        ('arm', self.arm)) if device]
+                                                       ('arm', self.arm)) if device]
         while waiting and time.monotonic() < end:
             waiting = [(name, device) for name, device in waiting if device.latest() is None]
             time.sleep(0.01)
@@ -190,7 +192,7 @@ class DriverNode(Node):
         start = time.monotonic()
         stamp = self.get_clock().now().to_msg()
         state = self._header(self.msg.JointState(name=['air_chamber', 'spring'],
-                                               position=[sample.x_c, sample.x_s]), stamp)
+                                                 position=[sample.x_c, sample.x_s]), stamp)
         chambers = self._header(self.msg.JointState(name=['actuator'], effort=[sample.p]), stamp)
         wrench = self._header(self.msg.WrenchStamped(), stamp, ACTUATOR_FRAME)
         wrench.wrench.force.z = sample.f
@@ -212,18 +214,20 @@ class DriverNode(Node):
                              for a, b, held in zip(sample.psi, previous.psi, self._psi_dot)]
         self._last_arm = sample
         state = self._header(self.msg.JointState(name=list(self.arm_names),
-                                               position=[float(v) for v in sample.psi],
-                                               velocity=list(self._psi_dot)), stamp)
-        chambers = self._header(self.msg.JointState(name=list(self.chain_names),
-                                                  effort=[float(v) for v in sample.pressures]),
-                                stamp)
+                                                 position=[float(v) for v in sample.psi],
+                                                 velocity=list(self._psi_dot)), stamp)
+        chambers = self._header(
+            self.msg.JointState(name=list(self.chain_names),
+                                effort=[float(v) for v in sample.pressures]),
+            stamp)
         with self._publish_lock:
             self.state_pub.publish(state)
             self.chamber_pub.publish(chambers)
             self.published['arm'] += 1
         self.arm_clock.tick(sample.index, sample.t_receive, time.monotonic() - start)
 
-    # --- commands ------------------------------------------------------------------------------------
+    # --- commands
+    # ------------------------------------------------------------------------------------
     def on_pressure_command(self, msg):
         if self.arm is None:
             return
@@ -255,7 +259,8 @@ class DriverNode(Node):
                 level, message = diagnostics.ERROR, 'no data (link down or device stopped)'
             elif new_misses:
                 level, message = diagnostics.WARN, f'{new_misses} samples missed'
-            statuses.append(diagnostics.status(self, f'driver_node: {name}', values, level, message,
+            statuses.append(diagnostics.status(self, f'driver_node: {name}', values, level,
+                                               message,
                                                hardware_id=link))
         diagnostics.publish(self, self.diag_pub, statuses)
 

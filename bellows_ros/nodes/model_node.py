@@ -1,9 +1,10 @@
-"""model_node: paper A's driving torque for every sample of every configured segment.
+"""
+model_node: paper A's driving torque for every sample of every configured segment.
 
-Event-driven (no timer): the driver publishes each sample as a `/joint_states` message (Ψ, Ψ̇) and a
-`/bellows/chambers` message (chain pressures) with the same stamp; when both halves of a stamp have
-arrived, every segment's `SegmentModel.step(psi, psi_dot, p1, p2)` runs once (its strain memory
-carries from sample to sample, Algorithm 1) and the node publishes
+Event-driven (no timer): the driver publishes each sample as a `/joint_states` message (Ψ, Ψ̇) and
+a `/bellows/chambers` message (chain pressures) with the same stamp; when both halves of a stamp
+have arrived, every segment's `SegmentModel.step(psi, psi_dot, p1, p2)` runs once (its strain
+memory carries from sample to sample, Algorithm 1) and the node publishes
 
   /bellows/driving_torque   effort = τ_drive per segment (2), N·m, stamped with the sample's stamp
   /bellows/external_torque  effort = τ_ext = M Ψ̈ + C Ψ̇ + N(Ψ) − τ_drive (2), N·m (quasi-static
@@ -24,7 +25,7 @@ import time
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.models.derivatives import rate
-from bellows_ros.models.segment import SegmentModel, external_torque, load_segment_params
+from bellows_ros.models.segment import external_torque, load_segment_params, SegmentModel
 from bellows_ros.nodes import diagnostics
 from bellows_ros.nodes.sample_pairing import CHAMBERS, JOINTS, SamplePairs
 from bellows_ros.runtime import Node, realtime, run
@@ -86,7 +87,8 @@ class ModelNode(Node):
         if sample is not None:
             self.evaluate(*sample)
 
-    # --- the model ---------------------------------------------------------------------------------
+    # --- the model
+    # ---------------------------------------------------------------------------------
     def evaluate(self, stamp, joints, chambers):
         start = time.perf_counter()
         position = dict(zip(joints.name, joints.position))

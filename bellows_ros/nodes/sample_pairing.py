@@ -1,9 +1,10 @@
-"""Pairs the two halves of an arm sample: `/joint_states` and `/bellows/chambers` with one stamp.
+"""
+Pairs the two halves of an arm sample: `/joint_states` and `/bellows/chambers` with one stamp.
 
-The driver publishes each 1 kHz sample as two messages with the same header stamp (docs/interfaces.md
-topic contract); a node that needs Ψ and the chain pressures of the same instant (the model node,
-the arm controller) waits until both have arrived. Halves that never find their partner are kept up
-to `max_pending` stamps, then the oldest is dropped and counted.
+The driver publishes each 1 kHz sample as two messages with the same header stamp
+(docs/interfaces.md topic contract); a node that needs Ψ and the chain pressures of the same
+instant (the model node, the arm controller) waits until both have arrived. Halves that never find
+their partner are kept up to `max_pending` stamps, then the oldest is dropped and counted.
 """
 from collections import OrderedDict
 
@@ -13,8 +14,12 @@ JOINTS, CHAMBERS = 0, 1
 
 
 class SamplePairs:
-    """`add(msg, slot)` -> (stamp_ns, joint_states, chambers) when `msg` completes a sample, else
-    None; slot is JOINTS or CHAMBERS. `dropped` counts halves given up on."""
+    """
+    Pair the two halves of each sample (joint states, chambers).
+
+    `add(msg, slot)` -> (stamp_ns, joint_states, chambers) when `msg` completes a sample, else
+    None; slot is JOINTS or CHAMBERS. `dropped` counts halves given up on.
+    """
 
     def __init__(self, max_pending):
         self.max_pending = max_pending

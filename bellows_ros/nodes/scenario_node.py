@@ -1,4 +1,5 @@
-"""scenario_node: a short scripted scenario on the running graph, printed and plotted.
+"""
+scenario_node: a short scripted scenario on the running graph, printed and plotted.
 
 1. Stiffness step: set-point `stiffness_low` (1400 N/m; raised to 1 % above the bottom of the
    actuator model's range when that is higher), then at `step_time` `stiffness_high` (1900 N/m).
@@ -21,15 +22,14 @@ negative = off; runtime/realtime.py).
 """
 import csv
 import math
-import time
 from pathlib import Path
+import time
 
 from bellows_ros.control import angle_trajectory, closed_loop
 from bellows_ros.errors import BellowsError
 from bellows_ros.models.actuator import load_actuator_params
 from bellows_ros.models.stiffness_map import stiffness_range
 from bellows_ros.runtime import Node, realtime, run
-
 
 
 class ScenarioNode(Node):
@@ -56,7 +56,8 @@ class ScenarioNode(Node):
             raise BellowsError(f'scenario_node: stiffness_high {self.k_high:.0f} N/m is outside '
                                f'the actuator range [{k_min:.0f}, {k_max:.0f}] N/m')
         self.output_dir.mkdir(parents=True, exist_ok=True)
-        self.setpoint_pub = self.create_publisher(self.msg.Float64, '/actuator/stiffness_setpoint', 10)
+        self.setpoint_pub = self.create_publisher(self.msg.Float64, '/actuator/stiffness_setpoint',
+                                                  10)
         self.angle_pub = self.create_publisher(self.msg.JointState, '/arm/psi_setpoint', 10)
         self.series = {name: [] for name in ('stiffness', 'x_c', 'psi', 'psi_setpoint', 'p1', 'p2',
                                              'tau_drive')}
@@ -64,7 +65,8 @@ class ScenarioNode(Node):
                                  lambda m: self._add('stiffness', m.data), 10)
         self.create_subscription(self.msg.JointState, '/joint_states', self.on_joint_states, 200)
         self.create_subscription(self.msg.JointState, '/bellows/chambers', self.on_chambers, 200)
-        self.create_subscription(self.msg.JointState, '/bellows/driving_torque', self.on_torque, 200)
+        self.create_subscription(self.msg.JointState, '/bellows/driving_torque', self.on_torque,
+                                 200)
         self.start = time.monotonic()
         self.done = False
         self._last_setpoint, self._ticks = None, 0
@@ -94,14 +96,14 @@ class ScenarioNode(Node):
     def stiffness_setpoint(self, t):
         return self.k_low if t < self.step_time else self.k_high
 
-
     def command(self):
         t = self.elapsed()
         if t >= self.duration:
             self.done = True
             return
         k = self.stiffness_setpoint(t)
-        if k != self._last_setpoint or self._ticks % 50 == 0:  # on change, and 1 Hz for late joiners
+        # on change, and at 1 Hz for late joiners
+        if k != self._last_setpoint or self._ticks % 50 == 0:
             self.setpoint_pub.publish(self.msg.Float64(data=k))
             self._last_setpoint = k
         self._ticks += 1
@@ -109,12 +111,13 @@ class ScenarioNode(Node):
             psi_d, psi_dot_d, _ = angle_trajectory.setpoint(self.trajectory,
                                                             t - self.trajectory_start)
             setpoint = self.msg.JointState(name=['segment_1'], position=[psi_d],
-                                         velocity=[psi_dot_d])
+                                           velocity=[psi_dot_d])
             setpoint.header.stamp = self.get_clock().now().to_msg()
             self.angle_pub.publish(setpoint)
             self._add('psi_setpoint', psi_d)
 
-    # --- results -----------------------------------------------------------------------------------
+    # --- results
+    # -----------------------------------------------------------------------------------
     def finish(self):
         """Print the summary, write the CSV and the plot."""
         for line in self.summary():
@@ -125,7 +128,8 @@ class ScenarioNode(Node):
 
     def summary(self):
         lines = []
-        after = [(t - self.step_time, k) for t, k in self.series['stiffness'] if t >= self.step_time]
+        after = [(t - self.step_time,
+                  k) for t, k in self.series['stiffness'] if t >= self.step_time]
         if after:
             band = 0.02 * self.k_high
             outside = [t for t, k in after if abs(k - self.k_high) > band]
@@ -133,7 +137,8 @@ class ScenarioNode(Node):
             if abs(after[-1][1] - self.k_high) <= band:
                 settled = f'within 2 % after {outside[-1] if outside else 0.0:.2f} s'
             else:  # e.g. a run shorter than the lead screw's travel time
-                settled = f'not within 2 % by the end of the run ({after[-1][0]:.1f} s after the step)'
+                settled = (f'not within 2 % by the end of the run ({after[-1][0]:.1f} s after '
+                           'the step)')
             lines.append(f'stiffness step {self.k_low:.0f} -> {self.k_high:.0f} N/m: {settled}, '
                          f'overshoot {max(0.0, overshoot):.1f} N/m, final {after[-1][1]:.1f} N/m')
         else:
@@ -161,7 +166,7 @@ class ScenarioNode(Node):
                 for t, psi in self.series['psi'] if self.trajectory_start <= t <= end]
 
     def feedback_only(self):
-        """The feedback-only controller on the same trajectory, in process (cached)."""
+        """Return the feedback-only controller on the same trajectory, in process (cached)."""
         if not hasattr(self, '_feedback_only'):
             self._feedback_only = closed_loop.track('none', self.trajectory)
         return self._feedback_only

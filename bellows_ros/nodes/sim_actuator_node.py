@@ -1,10 +1,11 @@
-"""sim_actuator_node: the simulated actuator board behind a pseudo-terminal.
+"""
+sim_actuator_node: the simulated actuator board behind a pseudo-terminal.
 
 Runs paper B's actuator plant (`models.actuator_plant.ActuatorPlant`) inside the simulated board
 (`hardware.sim_actuator_board`), which speaks the board's serial protocol on a pty whose symlink is
 `port`. The driver opens that path exactly as it opens the real board's /dev/serial/by-id link.
 
-Parameters:
+Node parameters:
   port (str): the symlink to create (the driver's actuator.port).
   actuator_params (str): YAML laid over config/actuator.yaml ('' = defaults); also holds the
       effects' parameters (actuator.effects.*).
@@ -60,7 +61,8 @@ class SimActuatorNode(Node):
         self._ticks = 0
         self.end_stop_hits = 0
         self.x_c_seen = [math.inf, -math.inf]
-        self.board = SimActuatorBoard(self.step, config=actuator_board.load_config(hardware_params),
+        self.board = SimActuatorBoard(self.step,
+                                      config=actuator_board.load_config(hardware_params),
                                       link_path=port)
         self.board.start()
         self.diag_pub = self.create_publisher(self.msg.DiagnosticArray, '/diagnostics', 10)
@@ -70,7 +72,7 @@ class SimActuatorNode(Node):
                                f"{', '.join(effects) or 'none'}")
 
     def step(self, dt, duty):
-        """One plant step (called by the board's 1 kHz loop)."""
+        """Step the plant once (called by the board's 1 kHz loop)."""
         x_s = None
         if self.amplitude > 0:
             phase = 2 * math.pi * self.plant.t / self.spring_period
@@ -80,7 +82,8 @@ class SimActuatorNode(Node):
         self.x_c_seen = [min(self.x_c_seen[0], sample.x_c), max(self.x_c_seen[1], sample.x_c)]
         self._ticks += 1
         if self.sim_time and self._ticks % self._clock_every == 0:
-            self.clock_pub.publish(self.msg.Clock(clock=self.runtime.Time(seconds=self.plant.t).to_msg()))
+            now = self.runtime.Time(seconds=self.plant.t).to_msg()
+            self.clock_pub.publish(self.msg.Clock(clock=now))
         return sample
 
     def publish_diagnostics(self):
@@ -88,11 +91,12 @@ class SimActuatorNode(Node):
         values.update(self.board.counters())
         values.update(x_c=f'{self.plant.x_nut:.6f}', gas_p_ref=f'{self.plant.gas:.1f}',
                       pressure=f'{self.plant.pressure:.1f}', duty=f'{self.board.duty:.3f}',
-                      x_c_min_seen=f'{self.x_c_seen[0]:.6f}', x_c_max_seen=f'{self.x_c_seen[1]:.6f}',
+                      x_c_min_seen=f'{self.x_c_seen[0]:.6f}',
+                      x_c_max_seen=f'{self.x_c_seen[1]:.6f}',
                       end_stop_hits=str(self.end_stop_hits), t_plant=f'{self.plant.t:.3f}')
         level = diagnostics.WARN if new_misses else diagnostics.OK
-        diagnostics.publish(self, self.diag_pub, [diagnostics.status(self,
-            'sim_actuator_node: plant', values, level,
+        diagnostics.publish(self, self.diag_pub, [diagnostics.status(
+            self, 'sim_actuator_node: plant', values, level,
             f'{new_misses} ticks missed' if new_misses else 'OK', hardware_id=self.board.port)])
 
     def close(self):

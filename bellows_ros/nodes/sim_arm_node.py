@@ -1,10 +1,11 @@
-"""sim_arm_node: the simulated soft arm on a CAN bus (python-can; udp_multicast between processes).
+"""
+sim_arm_node: the simulated soft arm on a CAN bus (python-can; udp_multicast between processes).
 
 Runs one paper-A segment plant per segment (`models.segment_plant.SegmentPlant`) inside the
 simulated arm (`hardware.sim_arm_bus`), which speaks the arm's CAN protocol (config/arm.dbc). The
 driver joins the same bus exactly as it joins the robot's.
 
-Parameters:
+Node parameters:
   can.interface, can.channel (str): the python-can bus (udp_multicast + an IPv4 group for a
       simulation across processes).
   n_segments (int), segment_params (str: YAML over config/segment.yaml),
@@ -52,8 +53,8 @@ class SimArmNode(Node):
         try:
             bus = open_can(interface, channel)
         except Exception as exc:  # python-can raises interface-specific errors
-            raise BellowsError(f'sim_arm_node: cannot open CAN bus {interface}:{channel} ({exc})') \
-                from None
+            raise BellowsError(
+                f'sim_arm_node: cannot open CAN bus {interface}:{channel} ({exc})') from None
         self.sim = SimArmBus(bus, self.step, n_segments=n_segments, vent_pressure=params.p0)
         self.sim.start()
         self.link = f'{interface}:{channel}'
@@ -72,7 +73,8 @@ class SimArmNode(Node):
             measured.append((sample.p1, sample.p2, sample.psi))
         self._ticks += 1
         if self.sim_time and self._ticks % self._clock_every == 0:
-            self.clock_pub.publish(self.msg.Clock(clock=self.runtime.Time(seconds=self.plants[0].t).to_msg()))
+            now = self.runtime.Time(seconds=self.plants[0].t).to_msg()
+            self.clock_pub.publish(self.msg.Clock(clock=now))
         return measured
 
     def publish_diagnostics(self):
@@ -81,8 +83,8 @@ class SimArmNode(Node):
         for i, plant in enumerate(self.plants):
             values[f'segment_{i + 1}.psi'] = f'{plant.psi:.4f}'
         level = diagnostics.WARN if new_misses else diagnostics.OK
-        diagnostics.publish(self, self.diag_pub, [diagnostics.status(self,
-            'sim_arm_node: plant', values, level,
+        diagnostics.publish(self, self.diag_pub, [diagnostics.status(
+            self, 'sim_arm_node: plant', values, level,
             f'{new_misses} ticks missed' if new_misses else 'OK', hardware_id=self.link)])
 
     def close(self):

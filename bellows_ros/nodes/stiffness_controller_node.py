@@ -1,4 +1,5 @@
-"""stiffness_controller_node: stiffness set-point -> chamber compression -> motor duty.
+"""
+stiffness_controller_node: stiffness set-point -> chamber compression -> motor duty.
 
 Wiring only; the logic is in `control.stiffness` (set-point, gas-amount correction from the
 measured pressure) and `control.pd` (PD on the encoder position).
@@ -26,9 +27,9 @@ latency held while the node runs, 0 = idle CPUs poll, negative = off; runtime/re
 """
 import time
 
-from bellows_ros.errors import BellowsError
 from bellows_ros.control.pd import PDController, PDGains
 from bellows_ros.control.stiffness import StiffnessSetpoint
+from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.models.actuator import load_actuator_params
 from bellows_ros.nodes import diagnostics
@@ -95,7 +96,8 @@ class StiffnessControllerNode(Node):
             self.get_logger().error(str(exc))
             return
         self.target = self.setpoint.target()
-        self.get_logger().info(f'stiffness set-point {msg.data:.1f} N/m -> x_c {self.target:.5f} m')
+        self.get_logger().info(
+            f'stiffness set-point {msg.data:.1f} N/m -> x_c {self.target:.5f} m')
 
     def on_chambers(self, msg):
         if 'actuator' in msg.name:
@@ -148,8 +150,8 @@ class StiffnessControllerNode(Node):
         level = diagnostics.WARN if stale or self.setpoint.warning else diagnostics.OK
         message = ('no samples (stale)' if stale else
                    'set-point out of reach' if self.setpoint.warning else 'OK')
-        diagnostics.publish(self, self.diag_pub, [diagnostics.status(self,
-            'stiffness_controller_node: control', values, level, message)])
+        diagnostics.publish(self, self.diag_pub, [diagnostics.status(
+            self, 'stiffness_controller_node: control', values, level, message)])
 
 
 def main(args=None):

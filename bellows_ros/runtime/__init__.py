@@ -1,4 +1,5 @@
-"""The runtime the nodes run on: rclpy, or plain Cyclone DDS with ROS 2's wire conventions.
+"""
+The runtime the nodes run on: rclpy, or plain Cyclone DDS with ROS 2's wire conventions.
 
 Nodes are written once against `Node` (runtime/node.py, the narrow interface) and started with
 `run(NodeClass, args)`, which picks the implementation once: `rclpy_runtime` where rclpy imports,

@@ -1,4 +1,5 @@
-"""A node on plain Cyclone DDS with rclpy's interface, for machines without ROS 2.
+"""
+A node on plain Cyclone DDS with rclpy's interface, for machines without ROS 2.
 
 Only what the bellows nodes use: parameters (declared up front, from `--params-file` / `-p`),
 publishers and subscriptions with ROS 2's wire conventions, timers for low-rate work, a logger, and
@@ -10,34 +11,36 @@ Wire conventions (what `rmw_cyclonedds_cpp` in Jazzy does, so ROS 2 nodes intero
 - participant USER_DATA `enclave=/;`; every reader and writer carries USER_DATA
   `typehash=RIHS01_<sha256>;` (rmw_dds_common's `encode_type_hash_for_user_data_qos`);
 - default QoS: reliable, keep-last 10, volatile (rclpy's default profile);
-- the ROS graph: every participant publishes rmw_dds_common/ParticipantEntitiesInfo on the DDS topic
-  `ros_discovery_info` (reliable, transient local, keep-last 1): its GUID and, per node, the name,
-  namespace and the GUIDs of the node's readers and writers, again whenever one is added. This is
-  how `ros2 node list` and `ros2 topic info -v` on a ROS 2 machine attribute endpoints to nodes.
+- the ROS graph: every participant publishes rmw_dds_common/ParticipantEntitiesInfo on the DDS
+  topic `ros_discovery_info` (reliable, transient local, keep-last 1): its GUID and, per node, the
+  name, namespace and the GUIDs of the node's readers and writers, again whenever one is added.
+  This is how `ros2 node list` and `ros2 topic info -v` on a ROS 2 machine attribute endpoints to
+  nodes.
 
 Execution model, like rclpy's single-threaded executor: subscription and timer callbacks run in
 the thread that calls `spin`/`spin_once`, one at a time. Publishing is allowed from any thread (the
 driver's 1 kHz sampling loop publishes from its own thread).
 """
+from dataclasses import dataclass
 import math
 import os
 import sys
 import threading
 import time
-from dataclasses import dataclass
 
-from cyclonedds.core import DDSException, GuardCondition, InstanceState, Policy, Qos, ReadCondition, \
-    SampleState, ViewState, WaitSet
+from cyclonedds.core import (DDSException, GuardCondition, InstanceState, Policy, Qos,
+                             ReadCondition, SampleState, ViewState, WaitSet)
 from cyclonedds.domain import Domain, DomainParticipant
+from cyclonedds.internal import InvalidSample
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
-from cyclonedds.internal import InvalidSample
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
 from bellows_ros.errors import ParameterError
 from bellows_ros.runtime import ros_args
-from bellows_ros.runtime.messages import message_class, msg, type_hash  # noqa: F401 (msg: the interface)
+from bellows_ros.runtime.messages import (message_class, msg,  # noqa: F401 (msg: the interface)
+                                          type_hash)
 from bellows_ros.runtime.node import check_override
 
 NAME = 'dds'
@@ -52,8 +55,11 @@ _MAX_ROUNDS = 64
 
 
 class _Context:
-    """Process-wide state: the DDS participant, the parsed `--ros-args`, the nodes (for the ROS
-    graph)."""
+    """
+    Process-wide state.
+
+    The DDS participant, the parsed `--ros-args`, the nodes (for the ROS graph).
+    """
 
     def __init__(self):
         self.participant = None
@@ -62,14 +68,16 @@ class _Context:
         self.topics = {}
         self.nodes = []
         self.graph_writer = None
-        self.domains = {}  # domain id -> its configured Cyclone domain, kept for the process's life
+        # domain id -> its configured Cyclone domain, kept for the process's life
+        self.domains = {}
 
 
 _context = _Context()
 
 
 def init(args=None):
-    """Parse `--ros-args` from `args` (default `sys.argv`) and join the DDS domain.
+    """
+    Parse `--ros-args` from `args` (default `sys.argv`) and join the DDS domain.
 
     The domain is `$ROS_DOMAIN_ID` (default 0), as in ROS 2, configured for
     `$ROS_AUTOMATIC_DISCOVERY_RANGE` and `$ROS_STATIC_PEERS` as rmw_cyclonedds_cpp does
@@ -114,7 +122,8 @@ LOOPBACK_ENVIRONMENT = {
 
 
 def discovery_config(discovery_range, static_peers):
-    """The Cyclone XML fragment rmw_cyclonedds_cpp (Jazzy) puts before `$CYCLONEDDS_URI`.
+    """
+    Return the Cyclone XML fragment rmw_cyclonedds_cpp (Jazzy) puts before `$CYCLONEDDS_URI`.
 
     `discovery_range` is `$ROS_AUTOMATIC_DISCOVERY_RANGE`: LOCALHOST (multicast off, this host
     as the peer), OFF (no discovery beyond the process), SUBNET (the default: multicast), or
@@ -175,11 +184,13 @@ def _publish_graph():
         gid=_gid(_context.participant), node_entities_info_seq=nodes))
 
 
-# --- QoS -------------------------------------------------------------------------------------------
+# --- QoS
+# -------------------------------------------------------------------------------------------
 
 @dataclass(frozen=True)
 class QoSProfile:
     """The QoS settings the nodes choose between (reliable or best effort, keep-last depth)."""
+
     depth: int = 10
     reliable: bool = True
 
@@ -197,7 +208,8 @@ def _qos(profile, ros_type):
                Policy.Userdata(data=f'typehash={type_hash(ros_type)};'.encode()))
 
 
-# --- time ------------------------------------------------------------------------------------------
+# --- time
+# ------------------------------------------------------------------------------------------
 
 class Time:
     """A point in time, in nanoseconds (rclpy.time.Time's interface)."""
@@ -236,10 +248,12 @@ class Clock:
         return Time(nanoseconds=time.time_ns())
 
 
-# --- logging ---------------------------------------------------------------------------------------
+# --- logging
+# ---------------------------------------------------------------------------------------
 
 class Logger:
     """ROS 2's console format: `[LEVEL] [time] [node]: message`, on stderr."""
+
     _ORDER = {level: i for i, level in enumerate(ros_args.LOG_LEVELS)}
 
     def __init__(self, name, level):
@@ -269,7 +283,8 @@ class Logger:
         self._log('fatal', message)
 
 
-# --- parameters ------------------------------------------------------------------------------------
+# --- parameters
+# ------------------------------------------------------------------------------------
 
 @dataclass
 class Parameter:
@@ -277,18 +292,22 @@ class Parameter:
     value: object
 
 
-# --- entities --------------------------------------------------------------------------------------
+# --- entities
+# --------------------------------------------------------------------------------------
 
 class Publisher:
     def __init__(self, writer, topic_name):
         self._writer, self.topic_name = writer, topic_name
 
-    def publish(self, msg):
+    def publish(self, msg):  # noqa: F811 (rclpy's parameter name)
         self._writer.write(msg)
 
     def wait_for_all_acked(self, timeout=Duration(seconds=-1)):
-        """Block until every matched reliable reader acknowledged all samples, or `timeout`
-        (Duration; negative = forever) passes; True when all were acknowledged."""
+        """
+        Block until every matched reliable reader acknowledged all samples, or `timeout` passes.
+
+        `timeout` is a Duration, negative = forever; True when all were acknowledged.
+        """
         wait = duration(infinite=True) if timeout.nanoseconds < 0 else timeout.nanoseconds
         # DataWriter.wait_for_acks of cyclonedds 11.0.1 raises AttributeError on a timeout (it
         # names `Exception.DDS_RETCODE_TIMEOUT`); the C call's return code is unambiguous.
@@ -348,7 +367,7 @@ class Node:
             self.create_subscription(message_class('rosgraph_msgs/msg/Clock'), '/clock',
                                      self._on_clock, QoSProfile(depth=1, reliable=False))
 
-    def _on_clock(self, msg):
+    def _on_clock(self, msg):  # noqa: F811 (the callback's message, as in rclpy)
         self._clock.sim_time = Time.from_msg(msg.clock).nanoseconds
 
     # names

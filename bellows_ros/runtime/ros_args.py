@@ -1,12 +1,13 @@
-"""`--ros-args` on the DDS runtime: the subset of rcl's syntax the nodes use, with rcl's meaning.
+"""
+`--ros-args` on the DDS runtime: the subset of rcl's syntax the nodes use, with rcl's meaning.
 
     node --ros-args --params-file F.yaml -p [node:]name:=value -r [node:]from:=to
          -r __node:=name -r __ns:=/ns --log-level LEVEL [--]
 
 Everything outside `--ros-args ... [--]` is handed back untouched, as rclpy does. Values after `-p`
 are YAML (`-p gain:=2.5`, `-p names:="[a, b]"`), scalars typed as rcl types them
-(`params.parse_yaml`: `yes` is a bool, `012` an integer, `1e-3` a double). Mistakes raise `ParameterError` with one line
-naming the argument.
+(`params.parse_yaml`: `yes` is a bool, `012` an integer, `1e-3` a double). Mistakes raise
+`ParameterError` with one line naming the argument.
 
 What rcl does, and this module does the same (test_runtime_parameters.py runs the same cases on
 rclpy and on the DDS runtime):
@@ -40,7 +41,8 @@ LOG_LEVELS = ('debug', 'info', 'warn', 'error', 'fatal')
 
 @dataclass
 class RosArgs:
-    """What `--ros-args` said, in order.
+    """
+    What `--ros-args` said, in order.
 
     `parameter_rules` holds ('file', path, {section: flat parameters}) and
     ('param', node or None, name, value); `remaps` holds
@@ -54,7 +56,8 @@ class RosArgs:
 
 
 def parse(argv, strict=True):
-    """Split `argv` into (RosArgs, the other arguments); ParameterError on a malformed argument.
+    """
+    Split `argv` into (RosArgs, the other arguments); ParameterError on a malformed argument.
 
     Parameter files are read here, so a bad one is reported before any node starts. With
     `strict=False` an argument this parser does not know is passed over (rclpy checks the
@@ -111,7 +114,7 @@ def _parse(argv, strict):
 
 
 def _check_array(where, name, value):
-    """rcl's arrays: not empty (it could not tell the type), all elements of one type."""
+    """Check an array as rcl does: not empty (it could not tell the type), one element type."""
     if not isinstance(value, list):
         return
     if not value:
@@ -130,7 +133,7 @@ def _value(items, flag):
 
 
 def _is_name_token(text):
-    """rcl's name token: letters, digits and underscores, not starting with a digit."""
+    """Check rcl's name token: letters, digits and underscores, not starting with a digit."""
     return bool(text) and text.replace('_', 'a').isalnum() and text.isascii() \
         and not text[0].isdigit()
 
@@ -183,7 +186,8 @@ def _remap(ros, text):
 
 
 def node_identity(ros, name, namespace='/'):
-    """(name, namespace) of a node created as `name` in `namespace`, after `__node` / `__ns`.
+    """
+    (name, namespace) of a node created as `name` in `namespace`, after `__node` / `__ns`.
 
     As rcl: the first matching rule of each kind wins, and `__ns` rules see the new name.
     """
@@ -197,7 +201,7 @@ def _first_rename(ros, kind, name):
 
 
 def expand(topic, node_name, namespace):
-    """A topic name made fully qualified in the node's namespace (`~` is the node's own name)."""
+    """Qualify a topic name fully in the node's namespace (`~` is the node's own name)."""
     base = namespace.rstrip('/')
     if topic.startswith('~'):
         return f'{base}/{node_name}' + topic[1:]
@@ -205,7 +209,7 @@ def expand(topic, node_name, namespace):
 
 
 def resolve_topic(ros, topic, node_name, namespace):
-    """The fully qualified topic a node (named as after `__node`) uses, after remapping."""
+    """Return the fully qualified topic a node (named as after `__node`) uses, after remapping."""
     resolved = expand(topic, node_name, namespace)
     for node, source, target in ros.remaps:
         if node is not None and node != node_name:
