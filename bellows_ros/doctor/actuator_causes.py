@@ -104,8 +104,11 @@ def _onset_width(params):
 
 def noise_floors(record):
     """White-noise floor of each output at the record's rate: {column: sigma}. The force is ramped
-    fast by the test machine, so its floor comes from second differences."""
-    return {'p': noise_floor(record['p']), 'f': noise_floor_ramps(record['f'])}
+    fast by the test machine, so its floor comes from second differences. A noise-free column
+    (simulated) gets a floor of 1e-6 of its span, so that dividing by it stays finite."""
+    floors = {'p': noise_floor(record['p']), 'f': noise_floor_ramps(record['f'])}
+    return {name: max(value, 1e-6 * float(np.ptp(record[name])), 1e-12)
+            for name, value in floors.items()}
 
 
 def measured(record, scales):
