@@ -20,6 +20,7 @@ A sample with a non-finite value or a pressure outside [0, 2 p_max] is rejected 
 """
 import math
 import time
+from array import array
 
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.loop_timing import LoopStats
@@ -112,8 +113,9 @@ class ModelNode(Node):
             self.previous_psi_dot[i] = psi_dot
             drive.append(tau_drive)
             external.append(float(external_torque(self.params, psi, psi_dot, psi_ddot, tau_drive)))
-        out_drive = self.msg.JointState(name=list(self.names), effort=drive)
-        out_external = self.msg.JointState(name=list(self.names), effort=external)
+        # float64[] as array('d'): rclpy takes it without a per-element check.
+        out_drive = self.msg.JointState(name=list(self.names), effort=array('d', drive))
+        out_external = self.msg.JointState(name=list(self.names), effort=array('d', external))
         out_drive.header = joints.header
         out_external.header = joints.header
         self.drive_pub.publish(out_drive)
