@@ -182,10 +182,11 @@ def test_backlash_not_identifiable_without_reversals(tmp_path):
     t = np.arange(0, 20.0, 1e-3)
     x_c = np.linspace(-0.01, 0.03, len(t))          # one slow ramp: never reverses
     x_s = 0.01 * np.abs(np.sin(0.5 * t))
-    p, f, _ = evaluate_array(dataclasses.replace(
-        params, chamber=dataclasses.replace(params.chamber, e_v=(0.0,) * 10),
-        spring=dataclasses.replace(params.spring, e_v=(0.0,) * 10)), x_c, x_s)
+    # the plant's physics with no effect: geometric volumes, no buckling (`model_params`)
+    from bellows_ros.models.actuator_plant import model_params
+    p, f, _ = evaluate_array(model_params(params), x_c, x_s)
     p = p + rng.normal(0, 15.0, len(t))
+    f = f + rng.normal(0, 0.03, len(t))
     data = write_csv(tmp_path / 'ramp.csv', {'t': t, 'x_c': x_c, 'x_s': x_s, 'p': p, 'f': f})
     report, directory = diagnose(tmp_path, data)
     details = json.loads((directory / 'details.json').read_text())

@@ -123,9 +123,13 @@ def noise_floors(record):
     """
     Return the white-noise floor of each output at the record's rate: {column: sigma}.
 
-    The force is ramped fast by the test machine, so its floor comes from second differences.
+    The force is ramped fast by the test machine, so its floor comes from second differences. A
+    noise-free column (simulated) gets a floor of 1e-6 of its span, so that dividing by it stays
+    finite.
     """
-    return {'p': noise_floor(record['p']), 'f': noise_floor_ramps(record['f'])}
+    floors = {'p': noise_floor(record['p']), 'f': noise_floor_ramps(record['f'])}
+    return {name: max(value, 1e-6 * float(np.ptp(record[name])), 1e-12)
+            for name, value in floors.items()}
 
 
 def measured(record, scales):

@@ -95,9 +95,9 @@ class ArmControllerNode(Node):
         feedforward = self.declare_parameter('feedforward', 'paper_a').value
         trajectory = self.declare_parameter('trajectory', '').value
         self.delay = self.declare_parameter('trajectory_delay', 1.0).value
-        kp = self.declare_parameter('pid.kp', 40.0).value
-        ki = self.declare_parameter('pid.ki', 640.0).value
-        kd = self.declare_parameter('pid.kd', 2.0).value
+        kp = self.declare_parameter('pid.kp', 20.0).value
+        ki = self.declare_parameter('pid.ki', 200.0).value
+        kd = self.declare_parameter('pid.kd', 1.0).value
         cutoff = self.declare_parameter('pid.velocity_cutoff', 20.0).value
         integral_limit = self.declare_parameter('pid.integral_limit', 20.0).value
         lead = self.declare_parameter('feedforward_lead', 0.05).value

@@ -33,6 +33,7 @@ cpu_latency_limit (s: CPU wake-up latency held while the node runs, 0 = idle CPU
 off; runtime/realtime.py).
 A sample with a non-finite value or a pressure outside [0, 2 p_max] is rejected and counted.
 """
+from array import array
 import math
 import time
 
@@ -128,8 +129,9 @@ class ModelNode(Node):
             self.previous_psi_dot[i] = psi_dot
             drive.append(tau_drive)
             external.append(float(external_torque(self.params, psi, psi_dot, psi_ddot, tau_drive)))
-        out_drive = self.msg.JointState(name=list(self.names), effort=drive)
-        out_external = self.msg.JointState(name=list(self.names), effort=external)
+        # float64[] as array('d'): rclpy takes it without a per-element check.
+        out_drive = self.msg.JointState(name=list(self.names), effort=array('d', drive))
+        out_external = self.msg.JointState(name=list(self.names), effort=array('d', external))
         out_drive.header = joints.header
         out_external.header = joints.header
         self.drive_pub.publish(out_drive)
