@@ -20,8 +20,9 @@ The whole bellows graph on simulated hardware, with the scripted scenario.
         [params_file:=FILE] [discovery_range:=LOCALHOST]
 
 Starts sim_arm_node (CAN over udp_multicast on loopback), sim_actuator_node (serial on a pty),
-driver_node, model_node and stiffness_controller_node. With scenario:=true (the default)
-scenario_node runs the stiffness step and the segment_1 pressure excursion for `duration` s,
+driver_node, model_node, stiffness_controller_node and arm_controller_node. With scenario:=true
+(the default) scenario_node runs the stiffness step and segment_1's angle trajectory (through
+the arm controller) for `duration` s,
 prints its summary, writes scenario.png and scenario.csv into `output_dir`, and the launch shuts
 down; with scenario:=false the graph runs until Ctrl-C. Every node is required: if one exits, the
 launch stops, and exits 1 when that was not a clean end (`ros2 launch` returns 1 on an exception).
@@ -101,6 +102,7 @@ def _nodes(context):
         node('driver_node', {'arm.channel': channel, 'actuator.port': port}),
         node('model_node'),
         node('stiffness_controller_node'),
+        node('arm_controller_node'),
     ]
     if arg('scenario').lower() in ('true', '1', 'yes'):
         output_dir = os.path.abspath(os.path.expanduser(arg('output_dir')))
