@@ -148,6 +148,17 @@ def _construct_plain(loader, node):
 _RosLoader.add_constructor('tag:yaml.org,2002:str', _construct_plain)
 
 
+def _construct_python_sequence(loader, suffix, node):
+    """Read a `!!python/tuple` (launch_ros writes a list argument so) as rcl does: a sequence."""
+    if suffix != 'tuple' or not isinstance(node, yaml.SequenceNode):
+        raise yaml.constructor.ConstructorError(
+            None, None, f"unsupported tag 'tag:yaml.org,2002:python/{suffix}'", node.start_mark)
+    return loader.construct_sequence(node, deep=True)
+
+
+_RosLoader.add_multi_constructor('tag:yaml.org,2002:python/', _construct_python_sequence)
+
+
 def parse_yaml(text):
     """Parse YAML text with rcl's reading of scalars (`yaml.YAMLError` on a syntax error)."""
     return yaml.load(text, Loader=_RosLoader)

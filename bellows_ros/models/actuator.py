@@ -120,11 +120,11 @@ class Buckling:
             object.__setattr__(self, name, value)
             low, high = bounds.get(name, (-math.inf, math.inf))
             if not (math.isfinite(value) and low <= value <= high):
-                raise ParameterError(f'actuator.buckling.{name}: {value:g} is outside its '
-                                     f'physical range [{low:g}, {high:g}]')
+                raise ParameterError(f"parameter 'actuator.buckling.{name}': {value:g} is outside "
+                                     f'its physical range [{low:g}, {high:g}]')
         if min(self.critical_pressure, self.critical_compression, self.onset_width) <= 0.0:
-            raise ParameterError('actuator.buckling: critical_pressure, critical_compression and '
-                                 'onset_width must be > 0')
+            raise ParameterError("parameter 'actuator.buckling.critical_pressure' (and "
+                                 'critical_compression, onset_width) must be > 0')
 
     def bound(self, name):
         """(low, high) of parameter `name`."""
@@ -163,14 +163,15 @@ class ActuatorParams:
 
     def __post_init__(self):
         if len(self.e_f) != 4:
-            raise ParameterError('actuator.force.e_f: expected 4 coefficients C1..C4, got '
-                                 f'{len(self.e_f)}')
+            raise ParameterError("parameter 'actuator.force.e_f': expected 4 coefficients "
+                                 f'C1..C4, got {len(self.e_f)}')
         if not self.f_mts:
-            raise ParameterError('actuator.force.f_mts: expected at least one coefficient')
+            raise ParameterError("parameter 'actuator.force.f_mts': expected at least one "
+                                 'coefficient')
         for bellows, name in ((self.chamber, 'air_chamber'), (self.spring, 'spring')):
             if len(bellows.e_v) != 10:
-                raise ParameterError(f'actuator.{name}.e_v: expected 10 coefficients, got '
-                                     f'{len(bellows.e_v)}')
+                raise ParameterError(f"parameter 'actuator.{name}.e_v': expected 10 "
+                                     f'coefficients, got {len(bellows.e_v)}')
         object.__setattr__(self, '_gas_nominal', gas_amount(self, self.p_ref))
 
     def effect_defaults(self):
@@ -219,6 +220,11 @@ def params_from_flat(flat, source='parameters'):
         )
     except TypeError as exc:  # a list where a number belongs, or the reverse
         raise ParameterError(f'{source}: {exc}') from None
+    except ParameterError as exc:  # from a parameter object's own checks, which know no file
+        message = str(exc)
+        if message.startswith(f'{source}:'):
+            raise
+        raise ParameterError(f'{source}: {message}') from None
 
 
 def _check_admissible(parts, source):
