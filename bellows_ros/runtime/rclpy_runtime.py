@@ -19,6 +19,7 @@ The same names as the DDS runtime (`dds_node`), so `runtime.node.run` uses eithe
 fails with ImportError where rclpy or the message packages are absent.
 """
 import sys
+import time
 import types
 
 from builtin_interfaces.msg import Time as TimeMsg
@@ -61,6 +62,7 @@ USER_ERRORS = (rclpy.exceptions.ParameterException, rclpy.exceptions.InvalidNode
                rclpy.exceptions.InvalidTopicNameException)
 
 _MAX_WAIT_S = 0.1  # longest wait in C, so SIGINT/SIGTERM are acted on promptly
+_SLOW_PERIOD = 0.02  # s between waits that include services, guard conditions and waitables
 # Messages taken per ready subscription per round, and rounds per wait (then timers get a turn).
 _BATCH = 4
 _MAX_ROUNDS = 64
@@ -114,54 +116,70 @@ class WaitLoop:
         self.node = node
         self._shape = None
         self._wait_set = None
+        self._entities = ((), (), (), (), ())
+        self._next_slow = 0.0
 
-    def _entities(self):
+    def _refresh(self):
+        """Read the node's entities again; a new wait set only when they changed."""
         node = self.node
-        return (list(node.subscriptions), list(node.timers), list(node.services),
-                list(node.guards), list(node.waitables))
-
-    def _build(self, entities):
-        subscriptions, timers, services, guards, waitables = entities
-        counts = NumberOfEntities(len(subscriptions), len(guards), len(timers), 0,
-                                  len(services))
-        for waitable in waitables:
-            counts += waitable.get_num_entities()
-        self._wait_set = _rclpy.WaitSet(
-            counts.num_subscriptions, counts.num_guard_conditions, counts.num_timers,
-            counts.num_clients, counts.num_services, counts.num_events,
-            self.node.context.handle)
-
-    def once(self, timeout_sec):
-        """Wait up to `timeout_sec` (None: _MAX_WAIT_S) and serve whatever is ready."""
-        entities = self._entities()
+        entities = (list(node.subscriptions), list(node.timers), list(node.services),
+                    list(node.guards), list(node.waitables))
         shape = tuple(tuple(id(e) for e in group) for group in entities)
         if shape != self._shape:
-            self._build(entities)
+            subscriptions, timers, services, guards, waitables = entities
+            counts = NumberOfEntities(len(subscriptions), len(guards), len(timers), 0,
+                                      len(services))
+            for waitable in waitables:
+                counts += waitable.get_num_entities()
+            self._wait_set = _rclpy.WaitSet(
+                counts.num_subscriptions, counts.num_guard_conditions, counts.num_timers,
+                counts.num_clients, counts.num_services, counts.num_events,
+                node.context.handle)
             self._shape = shape
-        subscriptions, timers, services, guards, waitables = entities
+        self._entities = entities
+
+    def once(self, timeout_sec):
+        """
+        Wait up to `timeout_sec` (None: _MAX_WAIT_S) and serve whatever is ready.
+
+        Subscriptions and timers are waited on every time; services, guard conditions and
+        waitables (and the list of entities itself) only every `_SLOW_PERIOD`, which keeps the
+        1 kHz cycle short: a `ros2 param` request is answered within that period (or the next
+        wait's end on an idle node).
+        """
+        now = time.monotonic()
+        slow = now >= self._next_slow
+        if slow:
+            self._refresh()
+            self._next_slow = now + _SLOW_PERIOD
+        subscriptions, timers, services, guards, waitables = self._entities
         wait_set = self._wait_set
         wait_set.clear_entities()
         for subscription in subscriptions:
             wait_set.add_subscription(subscription.handle)
         for timer in timers:
             wait_set.add_timer(timer.handle)
-        for service in services:
-            wait_set.add_service(service.handle)
-        for guard in guards:
-            wait_set.add_guard_condition(guard.handle)
-        for waitable in waitables:
-            waitable.add_to_wait_set(wait_set)
+        if slow:
+            for service in services:
+                wait_set.add_service(service.handle)
+            for guard in guards:
+                wait_set.add_guard_condition(guard.handle)
+            for waitable in waitables:
+                waitable.add_to_wait_set(wait_set)
         timeout = _MAX_WAIT_S if timeout_sec is None else min(timeout_sec, _MAX_WAIT_S)
         wait_set.wait(round(timeout * 1e9))
         if not self.node.context.ok():
             raise rclpy.executors.ExternalShutdownException()
         ready = set(wait_set.get_ready_entities('subscription'))
-        self._serve_subscriptions([s for s in subscriptions if s.handle.pointer in ready])
+        if ready:
+            self._serve_subscriptions([s for s in subscriptions if s.handle.pointer in ready])
         ready = set(wait_set.get_ready_entities('timer'))
         for timer in timers:
             if timer.handle.pointer in ready and timer.handle.is_timer_ready():
                 timer.handle.call_timer()
                 timer.callback()
+        if not slow:
+            return
         ready = set(wait_set.get_ready_entities('service'))
         for service in services:
             if service.handle.pointer in ready:
