@@ -46,8 +46,8 @@ import numpy as np
 from bellows_ros.bench import Result
 from bellows_ros.control import angle_trajectory, closed_loop
 from bellows_ros.models.contact import contact_angle
-from bellows_ros.models.segment import (load_segment_params, SegmentModel, simulate_model,
-                                        strain_memory)
+from bellows_ros.models.segment import (load_segment_params, SegmentModel, SegmentOutput,
+                                        simulate_model, strain_memory)
 
 MODES = (('feedback_only', 'none'), ('previous_model', 'previous'), ('paper_a_model', 'paper_a'))
 TARGET_RATIO = 0.5
@@ -97,7 +97,7 @@ class FrictionlessContact:
         p0 = self.params.p0
         s1 = self._contact(p1 - p0, contact_angle(psi, 1.0))
         s2 = self._contact(p2 - p0, contact_angle(psi, -1.0))
-        return (s1, s2) + self._model.torques(psi, psi_dot, p1, p2, s1, s2)
+        return SegmentOutput(s1, s2, *self._model.torques(psi, psi_dot, p1, p2, s1, s2))
 
     step = peek  # nothing to remember
 

@@ -29,7 +29,8 @@ Two pressures, one torque: the pair is taken on the antagonistic path through a 
 
 which runs from (p0, p_max) (chain 2 alone, most negative torque) through (p_b, p_b) to
 (p_max, p0) (chain 1 alone, most positive torque). Along it the torque grows with u (chain 1 has
-σ_1 = +1), so a bracketing search (bisection) finds the u whose torque is the desired one. A
+σ_1 = +1), so a bracketing search (regula falsi, Illinois variant) finds the u whose torque is
+the desired one. A
 desired torque outside [τ(u_min), τ(u_max)] gives the nearest end of the path, flagged saturated.
 
 Paper A's model is continuous in the pressures except for the sampling of the strain profile
@@ -42,8 +43,13 @@ Allocation = namedtuple('Allocation', 'p1 p2 tau saturated')
 Allocation.__doc__ = ('Chain pressures (Pa abs), the model torque they give (N·m) and whether the '
                       'desired torque was outside the reachable range (then the nearest end).')
 
-# Bisection steps: the path is 2 (p_max - p0) ≈ 1.3 MPa long, 2^-22 of it is 0.3 Pa.
-STEPS = 22
+# The search stops when the bracket is narrower than U_TOL (Pa) or the torque is within TAU_TOL
+# (N·m) of the desired one: 10 Pa moves the torque by about 2e-4 N·m at full pressure, below the
+# model's own step in s_a (about 0.05 N·m, above). MAX_STEPS bounds the torque evaluations, each a
+# `peek` of the strain memories; on this nearly linear path the Illinois steps need 3-6.
+U_TOL = 10.0
+TAU_TOL = 1e-3
+MAX_STEPS = 30
 
 
 def chain_pressures(params, u, p_base):
@@ -62,17 +68,30 @@ def invert(torque, params, tau, p_base):
         return Allocation(p_lo[0], p_lo[1], t_lo, tau < t_lo)
     if tau >= t_hi:
         return Allocation(p_hi[0], p_hi[1], t_hi, tau > t_hi)
-    for _ in range(STEPS):
-        mid = 0.5 * (lo + hi)
+    true_lo, true_hi = t_lo, t_hi  # t_lo, t_hi below are the Illinois rule's scaled values
+    side = 0  # which end the last step moved: moving it again halves the other end's weight
+    for _ in range(MAX_STEPS):
+        if hi - lo < U_TOL:
+            break
+        mid = hi - (t_hi - tau) * (hi - lo) / (t_hi - t_lo) if t_hi > t_lo else 0.5 * (lo + hi)
+        mid = min(max(mid, lo + 0.01 * (hi - lo)), hi - 0.01 * (hi - lo))
         p_mid = chain_pressures(params, mid, p_base)
         t_mid = torque(*p_mid)
+        if abs(t_mid - tau) <= TAU_TOL:
+            return Allocation(p_mid[0], p_mid[1], t_mid, False)
         if t_mid < tau:
-            lo, p_lo, t_lo = mid, p_mid, t_mid
+            lo, p_lo, t_lo, true_lo = mid, p_mid, t_mid, t_mid
+            if side == -1:
+                t_hi = tau + 0.5 * (t_hi - tau)
+            side = -1
         else:
-            hi, p_hi, t_hi = mid, p_mid, t_mid
-    if tau - t_lo <= t_hi - tau:
-        return Allocation(p_lo[0], p_lo[1], t_lo, False)
-    return Allocation(p_hi[0], p_hi[1], t_hi, False)
+            hi, p_hi, t_hi, true_hi = mid, p_mid, t_mid, t_mid
+            if side == 1:
+                t_lo = tau - 0.5 * (tau - t_lo)
+            side = 1
+    if tau - true_lo <= true_hi - tau:
+        return Allocation(p_lo[0], p_lo[1], true_lo, False)
+    return Allocation(p_hi[0], p_hi[1], true_hi, False)
 
 
 def allocate_paper_a(model, psi, psi_dot, tau, p_base):
