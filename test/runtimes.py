@@ -20,6 +20,7 @@ Where rclpy does not import, tests on it are skipped with the reason, unless
 """
 import functools
 import os
+import signal
 import subprocess
 import sys
 
@@ -59,3 +60,16 @@ def node_env(runtime, **extra):
 def override(node, name, value):
     """`-p node:name:=value`: wins over the node's own section of a params file (rcl's rule)."""
     return ['-p', f'{node}:{name}:={value}']
+
+
+def stop_all(processes, timeout=10.0):
+    """SIGINT every node process (as Ctrl-C or `ros2 launch` does), then wait; kill a hung one."""
+    for process in processes:
+        if process.poll() is None:
+            process.send_signal(signal.SIGINT)
+    for process in processes:
+        try:
+            process.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()

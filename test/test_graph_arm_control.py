@@ -34,7 +34,7 @@ import sys
 import time
 
 import pytest
-from runtimes import node_env, override
+from runtimes import node_env, override, stop_all
 
 from bellows_ros.control import angle_trajectory
 from bellows_ros.runtime import dds_node
@@ -113,13 +113,7 @@ def test_arm_controller_tracks_on_the_simulated_arm(runtime, tmp_path, monkeypat
             dds_node.spin_once(node, timeout_sec=0.005)
     finally:
         stopping = time.monotonic()
-        for process in processes:
-            process.send_signal(2)
-        for process in processes:
-            try:
-                process.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                process.kill()
+        stop_all(processes)
         dds_node.shutdown()
     logs = '\n'.join(p.read_text()[-800:] for p in tmp_path.glob('*.log'))
 

@@ -39,7 +39,7 @@ import sys
 import time
 
 import pytest
-from runtimes import node_env, override
+from runtimes import node_env, override, stop_all
 
 from bellows_ros.hardware.actuator_board import load_config
 from bellows_ros.models.actuator import load_actuator_params, stiffness
@@ -111,13 +111,7 @@ def test_stiffness_step_and_leak_hold(runtime, tmp_path, monkeypatch):
         while time.monotonic() < end:
             dds_node.spin_once(node, timeout_sec=0.05)
     finally:
-        for process in processes:
-            process.send_signal(2)
-        for process in processes:
-            try:
-                process.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                process.kill()
+        stop_all(processes)
         dds_node.shutdown()
     logs = '\n'.join(p.read_text()[-800:] for p in tmp_path.glob('*.log'))
     assert abs(k_before - k_low) < 0.02 * k_low, (k_before, k_low, logs)

@@ -26,13 +26,12 @@ from pathlib import Path
 import random
 import select
 import shutil
-import signal
 import subprocess
 import sys
 import time
 
 import pytest
-from runtimes import node_env, require_rclpy
+from runtimes import node_env, require_rclpy, stop_all
 
 from bellows_ros import params
 from bellows_ros.runtime.topics import TOPICS
@@ -64,15 +63,7 @@ def start(domain):
         processes.append(process)
         return process
     yield start_process
-    for process in processes:
-        if process.poll() is None:
-            process.send_signal(signal.SIGINT)
-    for process in processes:
-        try:
-            process.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait()
+    stop_all(processes)
 
 
 def ros2(domain, *args):

@@ -52,7 +52,7 @@ from bellows_ros.hardware import arm_bus
 from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.models.segment import load_segment_params
 from bellows_ros.nodes import diagnostics
-from bellows_ros.nodes.sample_pairing import CHAMBERS, JOINTS, SamplePairs
+from bellows_ros.nodes.sample_pairing import CHAMBERS, JOINTS, SamplePairs, segment_rows
 from bellows_ros.runtime import Node, realtime, run
 from bellows_ros.runtime.topics import SAMPLE_DEPTH
 
@@ -180,17 +180,9 @@ class ArmControllerNode(Node):
     # --- the loop -------------------------------------------------------------------------------
     def control(self, stamp, joints, chambers):
         start = time.perf_counter()
-        position = dict(zip(joints.name, joints.position))
-        velocity = dict(zip(joints.name, joints.velocity))
-        pressure = dict(zip(chambers.name, chambers.effort))
-        try:
-            inputs = [(position[loop.name], velocity.get(loop.name, 0.0),
-                       pressure[loop.chains[0]], pressure[loop.chains[1]]) for loop in self.loops]
-        except KeyError:
-            self.counts['rejected_samples'] += 1
-            return
-        if not all(math.isfinite(v) for row in inputs for v in row) or \
-                not all(0.0 <= p <= self._p_limit for row in inputs for p in row[2:]):
+        inputs = segment_rows(joints, chambers, ((loop.name, loop.chains) for loop in self.loops),
+                              self._p_limit)
+        if inputs is None:
             self.counts['rejected_samples'] += 1
             return
         if self.first_stamp is None:

@@ -34,7 +34,6 @@ off; runtime/realtime.py).
 A sample with a non-finite value or a pressure outside [0, 2 p_max] is rejected and counted.
 """
 from array import array
-import math
 import time
 
 from bellows_ros.errors import BellowsError
@@ -42,7 +41,7 @@ from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.models.derivatives import rate
 from bellows_ros.models.segment import external_torque, load_segment_params, SegmentModel
 from bellows_ros.nodes import diagnostics
-from bellows_ros.nodes.sample_pairing import CHAMBERS, JOINTS, SamplePairs
+from bellows_ros.nodes.sample_pairing import CHAMBERS, JOINTS, SamplePairs, segment_rows
 from bellows_ros.runtime import Node, realtime, run
 from bellows_ros.runtime.topics import SAMPLE_DEPTH
 
@@ -106,17 +105,8 @@ class ModelNode(Node):
     # ---------------------------------------------------------------------------------
     def evaluate(self, stamp, joints, chambers):
         start = time.perf_counter()
-        position = dict(zip(joints.name, joints.position))
-        velocity = dict(zip(joints.name, joints.velocity))
-        pressure = dict(zip(chambers.name, chambers.effort))
-        try:
-            inputs = [(position[n], velocity.get(n, 0.0), pressure[c1], pressure[c2])
-                      for n, (c1, c2) in zip(self.names, self.chains)]
-        except KeyError:
-            self.counts['rejected'] += 1
-            return
-        if not all(math.isfinite(v) for row in inputs for v in row) or \
-                not all(0.0 <= p <= self._p_limit for row in inputs for p in row[2:]):
+        inputs = segment_rows(joints, chambers, zip(self.names, self.chains), self._p_limit)
+        if inputs is None:
             self.counts['rejected'] += 1
             return
         dt = None if self._last_stamp is None else (stamp - self._last_stamp) * 1e-9

@@ -19,8 +19,10 @@ The driver publishes each 1 kHz sample as two messages with the same header stam
 (docs/interfaces.md topic contract); a node that needs Ψ and the chain pressures of the same
 instant (the model node, the arm controller) waits until both have arrived. Halves that never find
 their partner are kept up to `max_pending` stamps, then the oldest is dropped and counted.
+`segment_rows` reads a paired sample as (Ψ, Ψ̇, p1, p2) per segment, checked.
 """
 from collections import OrderedDict
+import math
 
 from bellows_ros.runtime import stamp_ns
 
@@ -53,3 +55,25 @@ class SamplePairs:
             return None
         del self.pending[stamp]
         return stamp, entry[0], entry[1]
+
+
+def segment_rows(joints, chambers, segments, p_limit):
+    """
+    Read (Ψ rad, Ψ̇ rad/s, p1 Pa, p2 Pa) per segment from a paired sample; None rejects it.
+
+    segments: (name, (chain_1, chain_2)) per segment. A sample that misses a name, holds a
+    non-finite value or a pressure outside [0, p_limit] Pa is rejected (the caller counts it).
+    A missing Ψ̇ is 0 (a driver without a rate estimate).
+    """
+    position = dict(zip(joints.name, joints.position))
+    velocity = dict(zip(joints.name, joints.velocity))
+    pressure = dict(zip(chambers.name, chambers.effort))
+    try:
+        rows = [(position[name], velocity.get(name, 0.0), pressure[c1], pressure[c2])
+                for name, (c1, c2) in segments]
+    except KeyError:
+        return None
+    if not all(math.isfinite(v) for row in rows for v in row) or \
+            not all(0.0 <= p <= p_limit for row in rows for p in row[2:]):
+        return None
+    return rows
