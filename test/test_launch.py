@@ -31,6 +31,7 @@ import sys
 import threading
 
 import pytest
+from runtimes import require_rclpy
 import yaml
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -55,14 +56,20 @@ def _ros_env(**extra):
 
 @pytest.fixture(scope='module')
 def ros():
-    """Skip (with the reason) where rclpy or the ros2 CLI is not usable."""
-    probe = subprocess.run([sys.executable, '-c', 'import rclpy, launch_ros'], env=_ros_env(),
+    """
+    Skip (with the reason) where rclpy or the ros2 CLI is not usable.
+
+    Fail instead where ROS 2 was installed for the run (runtimes.require_rclpy).
+    """
+    require_rclpy()
+    probe = subprocess.run([sys.executable, '-c', 'import launch_ros'], env=_ros_env(),
                            capture_output=True, text=True)
-    if probe.returncode != 0:
-        reason = (probe.stderr.strip().splitlines() or ['?'])[-1]
-        pytest.skip(f'rclpy not importable: {reason} (source your ROS 2 setup.bash)')
-    if shutil.which('ros2') is None:
-        pytest.skip('rclpy not importable: the ros2 CLI is not on PATH (source setup.bash)')
+    if probe.returncode != 0 or shutil.which('ros2') is None:
+        reason = (probe.stderr.strip().splitlines() or ['the ros2 CLI is not on PATH'])[-1]
+        message = f'ros2 launch not usable: {reason} (source your ROS 2 setup.bash)'
+        if os.environ.get('BELLOWS_REQUIRE_RCLPY') == '1':
+            pytest.fail(message + ' (BELLOWS_REQUIRE_RCLPY=1: ROS 2 was installed for this run)')
+        pytest.skip(message)
 
 
 @pytest.fixture(scope='module')
