@@ -269,6 +269,16 @@ def test_a_byte_order_mark_is_not_part_of_the_first_column_name(tmp_path):
 
 # --- parameter files ----------------------------------------------------------------------------
 
+def _check_named(tmp_path, capsys, system, body, needle):
+    """`bellows simulate SYSTEM --params` with `body` under `SYSTEM:`: one line naming it."""
+    user = tmp_path / 'u.yaml'
+    user.write_text('/**:\n  ros__parameters:\n    ' + system + ': {' + body + '}\n')
+    status, err = run_cli(['simulate', system, '--input', str(tmp_path / 'none.csv'),
+                           '--output', str(tmp_path / 'o.csv'), '--params', str(user)], capsys)
+    assert status == 2
+    assert_one_line(err, f'{user}: parameter {needle}')
+
+
 @pytest.mark.parametrize('body, needle', [
     ('p_max: high', "'segment.p_max' expects a number (like 750000.0), got 'high'"),
     ('p_max: true', "'segment.p_max' expects a number (like 750000.0), got True"),
@@ -280,12 +290,7 @@ def test_a_byte_order_mark_is_not_part_of_the_first_column_name(tmp_path):
     ('dynamics: {inertia: -1.0}', "'segment.dynamics.inertia' must be >= 0"),
 ])
 def test_a_parameter_of_the_wrong_kind_is_named(tmp_path, capsys, body, needle):
-    user = tmp_path / 'u.yaml'
-    user.write_text('/**:\n  ros__parameters:\n    segment: {' + body + '}\n')
-    status, err = run_cli(['simulate', 'segment', '--input', str(tmp_path / 'none.csv'),
-                           '--output', str(tmp_path / 'o.csv'), '--params', str(user)], capsys)
-    assert status == 2
-    assert_one_line(err, f'{user}: parameter {needle}')
+    _check_named(tmp_path, capsys, 'segment', body, needle)
 
 
 @pytest.mark.parametrize('body, needle', [
@@ -301,12 +306,7 @@ def test_a_parameter_of_the_wrong_kind_is_named(tmp_path, capsys, body, needle):
     ('drive: {gear_ratio: 0.0}', "'actuator.drive.gear_ratio' must be > 0"),
 ])
 def test_an_inadmissible_actuator_parameter_is_named(tmp_path, capsys, body, needle):
-    user = tmp_path / 'u.yaml'
-    user.write_text('/**:\n  ros__parameters:\n    actuator: {' + body + '}\n')
-    status, err = run_cli(['simulate', 'actuator', '--input', str(tmp_path / 'none.csv'),
-                           '--output', str(tmp_path / 'o.csv'), '--params', str(user)], capsys)
-    assert status == 2
-    assert_one_line(err, f'{user}: parameter {needle}')
+    _check_named(tmp_path, capsys, 'actuator', body, needle)
 
 
 def test_a_parameter_of_the_right_kind_is_laid_over_the_defaults(tmp_path):

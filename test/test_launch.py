@@ -31,13 +31,10 @@ import sys
 import threading
 
 import pytest
-from runtimes import require_rclpy
+from runtimes import LOOPBACK_ENVIRONMENT, require_rclpy
 import yaml
 
 ROOT = Path(__file__).resolve().parent.parent
-LOOPBACK_URI = ('<CycloneDDS><Domain><General><Interfaces><NetworkInterface name="lo"/>'
-                '</Interfaces><AllowMulticast>false</AllowMulticast></General></Domain>'
-                '</CycloneDDS>')
 GUARD = 300  # s; a hang guard for a whole launch, not a timing assertion
 
 pytestmark = pytest.mark.slow
@@ -47,7 +44,7 @@ def _ros_env(**extra):
     env = dict(os.environ)
     env.setdefault('ROS_DOMAIN_ID', '57')
     env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    env.setdefault('CYCLONEDDS_URI', LOOPBACK_URI)
+    env.setdefault('CYCLONEDDS_URI', LOOPBACK_ENVIRONMENT['CYCLONEDDS_URI'])
     env.pop('BELLOWS_RUNTIME', None)  # under ROS the nodes pick rclpy, as a user's would
     env['PYTHONUNBUFFERED'] = '1'
     env.update(extra)

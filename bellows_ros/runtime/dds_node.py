@@ -32,7 +32,7 @@ Wire conventions (what `rmw_cyclonedds_cpp` in Jazzy does, so ROS 2 nodes intero
   nodes.
 
 Execution model, like rclpy's single-threaded executor: subscription and timer callbacks run in
-the thread that calls `spin`/`spin_once`, one at a time. Publishing is allowed from any thread (the
+the thread that calls `spin_once`, one at a time. Publishing is allowed from any thread (the
 driver's 1 kHz sampling loop publishes from its own thread).
 """
 from dataclasses import dataclass
@@ -503,12 +503,6 @@ class Node:
 
 def spin_once(node, timeout_sec=None):
     node._spin_once(timeout_sec)
-
-
-def spin(node):
-    """Run callbacks until `shutdown()` (or KeyboardInterrupt on SIGINT, as in rclpy)."""
-    while ok():
-        node._spin_once(None)
 
 
 def create_node(name):

@@ -33,7 +33,7 @@ subscriptions, timers, loggers and clocks are the runtime's own objects with rcl
 (`publish`, `wait_for_all_acked`, `get_subscription_count`, `now`, ...).
 
 A runtime is a module with the same names in both implementations (`rclpy_runtime`, `dds_node`):
-`NAME`, `msg`, `Time`, `Duration`, `SENSOR_DATA`, `init(args)`, `create_node(name)`, `spin(node)`,
+`NAME`, `msg`, `Time`, `Duration`, `SENSOR_DATA`, `init(args)`, `create_node(name)`,
 `spin_once(node, timeout_sec)`, `ok()`, `shutdown()`, `parameter_overrides(node)` and the
 exception tuples `INTERRUPTED` and `USER_ERRORS`. `select_runtime` picks one, once, in `run`:
 `$BELLOWS_RUNTIME` = `rclpy` or `dds`, else rclpy when it imports.

@@ -234,15 +234,6 @@ def _loop(node):
     return _loops[node]
 
 
-def spin(node):
-    loop = _loop(node)
-    try:
-        while rclpy.ok():
-            loop.once(None)
-    finally:
-        _loops.pop(node, None)
-
-
 def spin_once(node, timeout_sec=None):
     _loop(node).once(timeout_sec)
 
