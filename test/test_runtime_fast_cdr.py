@@ -45,9 +45,11 @@ def test_other_fast_types_and_the_generic_fallbacks():
     data = wrench.serialize(use_version_2=False)
     assert data == IdlStruct.serialize(wrench, use_version_2=False)
     assert msg.WrenchStamped.deserialize(data) == wrench
-    # XCDR2 and sequences of structs go through cyclonedds unchanged.
+    # XCDR2 goes through cyclonedds unchanged.
     assert wrench.serialize(use_version_2=True) == IdlStruct.serialize(wrench, use_version_2=True)
     assert msg.WrenchStamped.deserialize(wrench.serialize(use_version_2=True)) == wrench
     array = msg.DiagnosticArray(status=[msg.DiagnosticStatus(name='n', values=[
         msg.KeyValue(key='k', value='v')])])
-    assert msg.DiagnosticArray.deserialize(array.serialize(use_version_2=False)) == array
+    data = array.serialize(use_version_2=False)  # a sequence of messages: the struct path too
+    assert data == IdlStruct.serialize(array, use_version_2=False)
+    assert msg.DiagnosticArray.deserialize(data) == array

@@ -25,28 +25,13 @@ defaults for every field (`JointState(name=[...], effort=[...])`), attribute acc
 (`msg.header.stamp.sec`), and the constants of the .msg file (`DiagnosticStatus.OK`).
 """
 import dataclasses
-import struct
-import sys
 
 from cyclonedds.idl import IdlMeta, IdlStruct
 from cyclonedds.idl import types as idl
-from rosbags.typesys import get_typestore, Stores
 from rosbags.typesys.base import Nodetype
 
-# The message types the nodes publish or subscribe to (ROS names), and the short names they go by.
-USED_TYPES = {
-    'Time': 'builtin_interfaces/msg/Time',
-    'Header': 'std_msgs/msg/Header',
-    'Float64': 'std_msgs/msg/Float64',
-    'JointState': 'sensor_msgs/msg/JointState',
-    'Vector3': 'geometry_msgs/msg/Vector3',
-    'Wrench': 'geometry_msgs/msg/Wrench',
-    'WrenchStamped': 'geometry_msgs/msg/WrenchStamped',
-    'KeyValue': 'diagnostic_msgs/msg/KeyValue',
-    'DiagnosticStatus': 'diagnostic_msgs/msg/DiagnosticStatus',
-    'DiagnosticArray': 'diagnostic_msgs/msg/DiagnosticArray',
-    'Clock': 'rosgraph_msgs/msg/Clock',
-}
+from bellows_ros.runtime import cdr
+from bellows_ros.runtime.cdr import TYPESTORE, USED_TYPES  # noqa: F401 (this module's interface)
 
 # ROS 2 .msg primitive -> IDL type. In ROS 2's IDL mapping `byte` is an octet and `char` a uint8.
 _BASE = {
@@ -56,8 +41,6 @@ _BASE = {
     'float32': idl.float32, 'float64': idl.float64, 'string': str,
 }
 _ZERO = {bool: False, str: '', idl.float32: 0.0, idl.float64: 0.0}
-
-TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
 
 
 def dds_type_name(ros_name):
@@ -100,130 +83,16 @@ def _build(ros_name):
 # --- fast plain-CDR path
 # ----------------------------------------------------------------------------- cyclonedds' generic
 # serializer walks a tree of "machines" per field and costs ~40 us per JointState to write and ~60
-# us to read: at 1 kHz x 2 topics that was a fifth of a core per node. For the types built only
-# from primitives, unbounded strings, nested structs and unbounded sequences of those, the same
-# XCDR1 little-endian bytes (what the writers use, `use_cdrv0_representation`) are produced here
-# with `struct`, compiled once per type from the same type-store definition. Anything else (XCDR2,
-# big endian, arrays, bounded types, sequences of structs) goes through cyclonedds.
-
-_STRUCT = {'bool': '?', 'byte': 'B', 'char': 'B', 'int8': 'b', 'uint8': 'B', 'int16': 'h',
-           'uint16': 'H', 'int32': 'i', 'uint32': 'I', 'int64': 'q', 'uint64': 'Q',
-           'float32': 'f', 'float64': 'd'}
-_CDR_LE_HEADER = b'\x00\x01\x00\x00'  # plain CDR (XCDR1), little endian, no options
-_U32 = struct.Struct('<I')
-
-
-def _plan(ros_name):
-    """Flat list of (field path, kind, struct code) for a type, or None when not supported."""
-    plan = []
-    for field_name, (kind, detail) in TYPESTORE.fielddefs[ros_name][1]:
-        if kind == Nodetype.BASE:
-            base, bound = detail
-            if bound:
-                return None
-            plan.append((field_name, 'str', None) if base == 'string' else
-                        (field_name, 'prim', _primitive(base)))
-        elif kind == Nodetype.NAME:
-            inner = _plan(detail)
-            if inner is None:
-                return None
-            plan.append((field_name, 'struct', (message_class(detail), inner)))
-        elif kind == Nodetype.SEQUENCE and detail[0][0] == Nodetype.BASE and not detail[1]:
-            base, bound = detail[0][1]
-            if bound:
-                return None
-            plan.append((field_name, 'strseq', None) if base == 'string' else
-                        (field_name, 'seq', _primitive(base)))
-        else:
-            return None
-    return plan
-
-
-def _primitive(base):
-    """(struct code, compiled little-endian Struct, size, CDR alignment) of a primitive type."""
-    code = _STRUCT[base]
-    packer = struct.Struct('<' + code)
-    return code, packer, packer.size, min(packer.size, 8)
-
-
-def _write(plan, obj, out):
-    """
-    Append `obj`'s CDR to `out`.
-
-    `out` is a bytearray whose first 4 bytes are the encapsulation header; alignment counts from
-    after it, as in XCDR1.
-    """
-    # Strings are written inline in both places below, as _read reads them: a helper call per
-    # string measured 1-3 us more per JointState, on a path that runs 4000 times a second.
-    for name, kind, code in plan:
-        value = getattr(obj, name)
-        if kind == 'prim':
-            out += bytes(-(len(out) - 4) % code[3])
-            out += code[1].pack(value)
-        elif kind == 'str':
-            data = value.encode()
-            out += bytes(-(len(out) - 4) % 4)
-            out += _U32.pack(len(data) + 1) + data + b'\0'
-        elif kind == 'struct':
-            _write(code[1], value, out)
-        elif kind == 'seq':
-            out += bytes(-(len(out) - 4) % 4)
-            out += _U32.pack(len(value))
-            if value:
-                out += bytes(-(len(out) - 4) % code[3])
-                out += struct.pack(f'<{len(value)}{code[0]}', *value)
-        else:  # sequence of strings
-            out += bytes(-(len(out) - 4) % 4)
-            out += _U32.pack(len(value))
-            for item in value:
-                data = item.encode()
-                out += bytes(-(len(out) - 4) % 4)
-                out += _U32.pack(len(data) + 1) + data + b'\0'
-
-
-def _read(plan, cls, data, pos):
-    """Read an instance of `cls` from CDR `data` at `pos`; return it and the position after it."""
-    values = {}
-    for name, kind, code in plan:
-        if kind == 'prim':
-            pos += -(pos - 4) % code[3]
-            values[name] = code[1].unpack_from(data, pos)[0]
-            pos += code[2]
-        elif kind == 'str':
-            pos += -(pos - 4) % 4
-            length = _U32.unpack_from(data, pos)[0]
-            values[name] = data[pos + 4:pos + 3 + length].decode()
-            pos += 4 + length
-        elif kind == 'struct':
-            values[name], pos = _read(code[1], code[0], data, pos)
-        elif kind == 'seq':
-            pos += -(pos - 4) % 4
-            count = _U32.unpack_from(data, pos)[0]
-            pos += 4
-            if count:
-                pos += -(pos - 4) % code[3]
-                values[name] = list(struct.unpack_from(f'<{count}{code[0]}', data, pos))
-                pos += count * code[2]
-            else:
-                values[name] = []
-        else:
-            pos += -(pos - 4) % 4
-            count = _U32.unpack_from(data, pos)[0]
-            pos += 4
-            items = []
-            for _ in range(count):
-                pos += -(pos - 4) % 4
-                length = _U32.unpack_from(data, pos)[0]
-                items.append(data[pos + 4:pos + 3 + length].decode())
-                pos += 4 + length
-            values[name] = items
-    return cls(**values), pos
+# us to read: at 1 kHz x 2 topics that was a fifth of a core per node. For the types runtime/cdr.py
+# can carry, the same XCDR1 little-endian bytes (what the writers use, `use_cdrv0_representation`)
+# come from its struct-based codec, compiled once per type from the same type-store definition.
+# Anything else (XCDR2, big endian, types without a plan) goes through cyclonedds.
 
 
 def _add_fast_cdr(cls, ros_name):
     """Give `cls` the struct-based XCDR1 little-endian path where its type allows it."""
-    plan = _plan(ros_name)
-    if plan is None or sys.byteorder != 'little':
+    steps = cdr.plan(ros_name, message_class)
+    if steps is None or not cdr.LITTLE_ENDIAN:
         return
     generic_serialize, generic_deserialize = cls.serialize, cls.deserialize
 
@@ -231,14 +100,12 @@ def _add_fast_cdr(cls, ros_name):
         if buffer is not None or endianness is not None or use_version_2 is not False:
             return generic_serialize(self, buffer=buffer, endianness=endianness,
                                      use_version_2=use_version_2)
-        out = bytearray(_CDR_LE_HEADER)
-        _write(plan, self, out)
-        return bytes(out)
+        return cdr.encode(steps, self)
 
     def deserialize(klass, data, has_header=True, use_version_2=None):
         if has_header and use_version_2 is None and isinstance(data, (bytes, bytearray)) \
-                and data[:4] == _CDR_LE_HEADER:
-            return _read(plan, klass, bytes(data), 4)[0]
+                and data[:4] == cdr.HEADER:
+            return cdr.decode(steps, klass, data)
         return generic_deserialize(data, has_header=has_header, use_version_2=use_version_2)
 
     cls.serialize = serialize

@@ -17,14 +17,19 @@ The rclpy runtime: the nodes on ROS 2 itself (what `ros2 run` and `ros2 launch` 
 
 The same names as the DDS runtime (`dds_node`), so `runtime.node.run` uses either unchanged. Import
 fails with ImportError where rclpy or the message packages are absent.
+
+The nodes' messages travel as serialized CDR: publishers and subscriptions are rclpy's own (same
+types, type hashes, QoS and graph entries as any rclpy node), but a message is encoded and decoded
+by runtime/cdr.py and handed to rclpy as bytes (`publish(bytes)`, `raw=True` subscriptions).
+`msg` holds cdr's plain classes. rclpy's conversion of each message between Python objects and C
+structs, then rmw_cyclonedds_cpp's introspection serializer, cost the model node more CPU per
+sample than its model (docs/nodes.md, "rclpy beside the DDS runtime").
 """
+import importlib
 import sys
 import time
 import types
 
-from builtin_interfaces.msg import Time as TimeMsg
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import Vector3, Wrench, WrenchStamped
 import rclpy
 import rclpy.duration
 import rclpy.exceptions
@@ -32,23 +37,19 @@ import rclpy.executors
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 import rclpy.node
 import rclpy.qos
+import rclpy.serialization
 import rclpy.signals
 from rclpy.subscription import Subscription
 import rclpy.time
 from rclpy.waitable import NumberOfEntities
-from rosgraph_msgs.msg import Clock
-from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64, Header
 
 from bellows_ros.errors import ParameterError
-from bellows_ros.runtime import ros_args
+from bellows_ros.runtime import cdr, ros_args
 
 NAME = 'rclpy'
 
-msg = types.SimpleNamespace(
-    Time=TimeMsg, Header=Header, Float64=Float64, JointState=JointState, Vector3=Vector3,
-    Wrench=Wrench, WrenchStamped=WrenchStamped, KeyValue=KeyValue,
-    DiagnosticStatus=DiagnosticStatus, DiagnosticArray=DiagnosticArray, Clock=Clock)
+msg = types.SimpleNamespace(**{short: cdr.plain_class(ros_name)
+                               for short, ros_name in cdr.USED_TYPES.items()})
 
 Time = rclpy.time.Time
 Duration = rclpy.duration.Duration
@@ -88,7 +89,68 @@ def init(args=None):
 
 
 def create_node(name):
-    return rclpy.node.Node(name)
+    return CdrNode(name)
+
+
+class CdrNode(rclpy.node.Node):
+    """
+    rclpy's Node, moving messages of cdr's plain classes as serialized bytes.
+
+    Any other message class (rclpy's own) takes rclpy's usual path.
+    """
+
+    def create_publisher(self, msg_type, topic, qos_profile, **kwargs):
+        if not hasattr(msg_type, '__ros_type__'):
+            return super().create_publisher(msg_type, topic, qos_profile, **kwargs)
+        publisher = super().create_publisher(rclpy_type(msg_type), topic, qos_profile, **kwargs)
+        return CdrPublisher(publisher, _steps(msg_type))
+
+    def create_subscription(self, msg_type, topic, callback, qos_profile, **kwargs):
+        if not hasattr(msg_type, '__ros_type__'):
+            return super().create_subscription(msg_type, topic, callback, qos_profile, **kwargs)
+        steps, ros_type = _steps(msg_type), rclpy_type(msg_type)
+
+        def on_bytes(data):
+            try:
+                message = cdr.decode(steps, msg_type, data)
+            except ValueError:  # another encapsulation (big endian): rclpy re-encodes it
+                message = cdr.decode(steps, msg_type, rclpy.serialization.serialize_message(
+                    rclpy.serialization.deserialize_message(data, ros_type)))
+            callback(message)
+        return super().create_subscription(ros_type, topic, on_bytes, qos_profile, raw=True,
+                                           **kwargs)
+
+
+class CdrPublisher:
+    """An rclpy publisher that takes cdr's plain messages (the rest of its API unchanged)."""
+
+    def __init__(self, publisher, steps):
+        self.publisher = publisher
+        self._steps = steps
+
+    def publish(self, message):
+        self.publisher.publish(cdr.encode(self._steps, message))
+
+    def __getattr__(self, name):
+        return getattr(self.publisher, name)
+
+
+def rclpy_type(plain_type):
+    """Return the rclpy class of a plain message class (`sensor_msgs/msg/JointState`)."""
+    package, kind, name = plain_type.__ros_type__.split('/')
+    return getattr(importlib.import_module(f'{package}.{kind}'), name)
+
+
+_plans = {}
+
+
+def _steps(plain_type):
+    if plain_type not in _plans:
+        steps = cdr.plan(plain_type.__ros_type__, cdr.plain_class)
+        if steps is None:
+            raise TypeError(f'{plain_type.__ros_type__}: no CDR plan (runtime/cdr.py)')
+        _plans[plain_type] = steps
+    return _plans[plain_type]
 
 
 def parameter_overrides(node):
