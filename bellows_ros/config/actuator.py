@@ -51,12 +51,12 @@ def load_actuator(params_path=None):
 
 
 def load_actuator_params(params_path=None):
-    """Paper B's model, `ActuatorParams`, of `load_actuator(params_path)`."""
+    """Return paper B's model, `ActuatorParams`, of `load_actuator(params_path)`."""
     return load_actuator(params_path).model
 
 
 def load_actuator_plant_params(params_path=None):
-    """The simulated actuator's `ActuatorPlantParams` of `load_actuator(params_path)`."""
+    """Return the simulated actuator's `ActuatorPlantParams` of `load_actuator(params_path)`."""
     return load_actuator(params_path).plant
 
 

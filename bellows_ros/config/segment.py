@@ -91,15 +91,15 @@ def segment_from_flat(flat, source='parameters'):
 
 
 def load_segment_params(params_path=None):
-    """The driving-torque model's `SegmentParams` of `load_segment(params_path)`."""
+    """Return the driving-torque model's `SegmentParams` of `load_segment(params_path)`."""
     return load_segment(params_path).model
 
 
 def load_segment_plant_params(params_path=None):
-    """The simulated segment's `SegmentPlantParams` of `load_segment(params_path)`."""
+    """Return the simulated segment's `SegmentPlantParams` of `load_segment(params_path)`."""
     return load_segment(params_path).plant
 
 
 def load_segment_identify_params(params_path=None):
-    """Identification's `SegmentIdentifyParams` of `load_segment(params_path)`."""
+    """Return identification's `SegmentIdentifyParams` of `load_segment(params_path)`."""
     return load_segment(params_path).identify

@@ -146,7 +146,7 @@ def system_module(system):
 
 
 def load_params(system, params_path):
-    """The system's parameter objects (`SegmentConfig` or `ActuatorConfig`) of `params_path`."""
+    """Return the system's parameter objects (`SegmentConfig`, `ActuatorConfig`) of a file."""
     if system == 'actuator':
         from bellows_ros.config.actuator import load_actuator
         return load_actuator(params_path)
