@@ -54,18 +54,25 @@ def test_the_driver_configuration_builds_no_physics_object(monkeypatch):
 
 
 def test_the_driver_configuration_follows_the_users_files(tmp_path):
+    hardware = write(tmp_path / 'h.yaml', '/**:\n  ros__parameters:\n    hardware:\n'
+                     '      actuator_board: {drive: {counts_per_rev: 128}}\n')
     actuator = write(tmp_path / 'a.yaml', '/**:\n  ros__parameters:\n    actuator:\n'
-                     '      drive: {counts_per_rev: 128}\n      air_chamber: {x_max: 0.04}\n')
+                     '      air_chamber: {x_max: 0.04}\n')
     segment = write(tmp_path / 's.yaml', '/**:\n  ros__parameters:\n    segment: {p_max: 6.0e5}\n')
     default = actuator_board_config()
-    board = actuator_board_config(actuator_params_path=actuator)
+    board = actuator_board_config(hardware, actuator)
     assert board.metres_per_count == pytest.approx(default.metres_per_count / 2)
     assert board.x_c_max == pytest.approx(default.x_c_max - 0.008)
+    # the simulated actuator's encoder is the same drive train, from the same file
+    assert load_actuator(hardware_params_path=hardware).plant.drive.metres_per_count == \
+        board.metres_per_count
     assert arm_bus_config(segment_params_path=segment).pressure_max == 6.0e5
 
 
 @pytest.mark.parametrize('name, body, needle', [
-    ('a.yaml', 'actuator: {drive: {lead: 0.0}}', "'actuator.drive.lead' must be > 0"),
+    ('h.yaml', 'hardware: {actuator_board: {drive: {lead: 0.0}}}',
+     "'hardware.actuator_board.drive.lead' must be > 0"),
+    ('a.yaml', 'actuator: {air_chamber: {x_min: true}}', "'actuator.air_chamber.x_min'"),
     ('s.yaml', 'segment: {p_max: 9.0e4}', "'segment.p_max' must exceed p0"),
     ('h.yaml', 'hardware: {actuator_board: {end_stop_margin: 0.05}}', 'leaves no travel'),
 ])

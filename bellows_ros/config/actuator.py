@@ -15,18 +15,19 @@
 """
 Actuator parameters: config/actuator.yaml (and a user's file over it) -> one object per layer.
 
-The one file keeps its layout; its `actuator.` section splits into paper B's model,
-`ActuatorParams` (air_chamber, spring, gas, force, buckling, stiffness), and the simulated
-actuator's `ActuatorPlantParams` (drive, sensors, effects). Values the equations cannot use are
-refused here, naming the parameter, before any object is built.
+The file's `actuator.` section splits into paper B's model, `ActuatorParams` (air_chamber, spring,
+gas, force, buckling, stiffness), and the simulated actuator's `ActuatorPlantParams` (sensors,
+effects, and the drive train, which is hardware: config/hardware.yaml,
+`hardware.actuator_board.drive`, its one home, shared with the driver). Values the equations cannot
+use are refused here, naming the parameter, before any object is built.
 """
 import dataclasses
 from typing import NamedTuple
 
 from bellows_ros import params as param_files
+from bellows_ros.config.hardware import load_drive
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.actuator import ActuatorParams, Buckling, NO_BUCKLING
-from bellows_ros.models.actuator_drive import Drive
 from bellows_ros.models.actuator_geometry import Bellows
 from bellows_ros.models.actuator_plant import ActuatorPlantParams, Sensors
 
@@ -40,14 +41,19 @@ class ActuatorConfig(NamedTuple):
     plant: ActuatorPlantParams
 
     def flat(self):
-        """Both as flat ROS 2 names, for `params.write_file` (a complete actuator file)."""
+        """All names of a complete actuator file (not the drive: hardware.yaml's), for writing."""
         return params_to_flat(self.model, self.plant)
 
 
-def load_actuator(params_path=None):
-    """`config/actuator.yaml` with the user's file (if any) laid over it -> `ActuatorConfig`."""
+def load_actuator(params_path=None, hardware_params_path=None):
+    """
+    `config/actuator.yaml` with the user's file (if any) laid over it -> `ActuatorConfig`.
+
+    The plant's drive train comes from config/hardware.yaml (`hardware_params_path` over it).
+    """
     flat = param_files.load('actuator', params_path)
-    return actuator_from_flat(flat, params_path or DEFAULT_SOURCE)
+    return actuator_from_flat(flat, load_drive(hardware_params_path),
+                              params_path or DEFAULT_SOURCE)
 
 
 def load_actuator_params(params_path=None):
@@ -55,18 +61,18 @@ def load_actuator_params(params_path=None):
     return load_actuator(params_path).model
 
 
-def load_actuator_plant_params(params_path=None):
-    """Return the simulated actuator's `ActuatorPlantParams` of `load_actuator(params_path)`."""
-    return load_actuator(params_path).plant
+def load_actuator_plant_params(params_path=None, hardware_params_path=None):
+    """Return the simulated actuator's `ActuatorPlantParams` of `load_actuator(...)`."""
+    return load_actuator(params_path, hardware_params_path).plant
 
 
-def actuator_from_flat(flat, source='parameters'):
-    """Build `ActuatorConfig` from flat dotted names (`actuator.gas.v_tube`, ...)."""
+def actuator_from_flat(flat, drive, source='parameters'):
+    """Build `ActuatorConfig` from flat dotted names (`actuator.gas.v_tube`, ...) and a `Drive`."""
     values = param_files.section(flat, 'actuator')
     build = param_files.build
     parts = {}
-    for prefix in ('air_chamber', 'spring', 'gas', 'force', 'stiffness', 'drive', 'sensors',
-                   'effects', 'buckling'):
+    for prefix in ('air_chamber', 'spring', 'gas', 'force', 'stiffness', 'sensors', 'effects',
+                   'buckling'):
         parts[prefix] = param_files.section(values, prefix)
     known = {name.split('.')[0] for name in values}
     unknown = sorted(known - set(parts))
@@ -91,7 +97,7 @@ def actuator_from_flat(flat, source='parameters'):
             buckling=_buckling(parts['buckling'], source),
         )
         plant = ActuatorPlantParams(
-            drive=build(Drive, parts['drive'], f'{source}: actuator.drive'),
+            drive=drive,
             sensors=build(Sensors, parts['sensors'], f'{source}: actuator.sensors'),
             effects=tuple(sorted((k, tuple(sorted(v.items()))) for k, v in effects.items())),
         )
@@ -149,13 +155,6 @@ def _check_admissible(parts, source):
         fail('gas.x_c_ref', 'must lie within the air chamber travel [x_min, x_max]')
     if not number('stiffness', 'x_s_low') < number('stiffness', 'x_s_high'):
         fail('stiffness.x_s_high', 'must exceed x_s_low')
-    for name in ('supply_voltage', 'resistance', 'torque_constant', 'rotor_inertia', 'gear_ratio',
-                 'counts_per_rev', 'lead', 'efficiency'):
-        if not number('drive', name) > 0:
-            fail(f'drive.{name}', 'must be > 0')
-    for name in ('inductance', 'viscous_friction'):
-        if number('drive', name) < 0:
-            fail(f'drive.{name}', 'must be >= 0')
     for name, value in parts['sensors'].items():
         if number('sensors', name) < 0:
             fail(f'sensors.{name}', 'must be >= 0')
@@ -185,7 +184,8 @@ def params_to_flat(params, plant=None):
     """
     Flat dotted names of `params` (ActuatorParams), ready for `params.write_file`.
 
-    With `plant` (ActuatorPlantParams) its names too: the inverse of `actuator_from_flat`.
+    With `plant` (ActuatorPlantParams) its sensors and effects too: the inverse of
+    `actuator_from_flat` (the drive is config/hardware.yaml's).
     """
     flat = {}
     for name, bellows in (('air_chamber', params.chamber), ('spring', params.spring)):
@@ -206,9 +206,8 @@ def params_to_flat(params, plant=None):
         for name, (low, high) in params.buckling.bounds:
             flat[f'actuator.buckling.bounds.{name}'] = [low, high]
     if plant is not None:
-        for group, obj in (('drive', plant.drive), ('sensors', plant.sensors)):
-            for field in dataclasses.fields(obj):
-                flat[f'actuator.{group}.{field.name}'] = getattr(obj, field.name)
+        for field in dataclasses.fields(plant.sensors):
+            flat[f'actuator.sensors.{field.name}'] = getattr(plant.sensors, field.name)
         for effect, items in plant.effects:
             for key, value in items:
                 flat[f'actuator.effects.{effect}.{key}'] = value

@@ -15,11 +15,13 @@
 """
 The drivers' configuration: config/hardware.yaml -> `ActuatorBoardConfig`, `ArmBusConfig`.
 
-Built without any physics object (no `ActuatorParams`, no `SegmentParams`, no gas law): the few
-values the drivers share with the physics keep their one home and are read here as plain keys —
-the encoder scale from the drive train (`actuator.drive`, through `Drive.metres_per_count`), the
-chamber's travel (`actuator.air_chamber.x_min/x_max`) and the set-point range (`segment.p0`,
-`segment.p_max`).
+Built without any physics object (no `ActuatorParams`, no `SegmentParams`, no gas law). The drive
+train (`hardware.actuator_board.drive`: motor, gearbox, lead screw, encoder) lives here and gives
+the encoder scale (`Drive.metres_per_count`); the simulated actuator reads its drive from here too
+(`load_drive`). Two limits belong to the physics, which needs them as much, and are read from
+their one home as plain keys: the chamber's travel (`actuator.air_chamber.x_min/x_max` of
+config/actuator.yaml) and the set-point range (`segment.p0`, `segment.p_max` of
+config/segment.yaml).
 """
 import dataclasses
 
@@ -79,25 +81,50 @@ def _number(flat, name, source):
     return value
 
 
+def drive_from_flat(values, source='parameters'):
+    """
+    Build `Drive` from the names below `hardware.actuator_board.drive.`; refuse unusable values.
+
+    Without the checks a zero gear ratio or count divides by zero in the encoder scale.
+    """
+    def fail(name, why):
+        raise ParameterError(f"{source}: parameter 'hardware.actuator_board.drive.{name}' {why}")
+    for name in ('supply_voltage', 'resistance', 'torque_constant', 'rotor_inertia', 'gear_ratio',
+                 'counts_per_rev', 'lead', 'efficiency'):
+        if name in values and not _number(values, name, source) > 0:
+            fail(name, 'must be > 0')
+    for name in ('inductance', 'viscous_friction'):
+        if name in values and _number(values, name, source) < 0:
+            fail(name, 'must be >= 0')
+    counts = values.get('counts_per_rev')
+    if isinstance(counts, float) and counts != int(counts):
+        fail('counts_per_rev', f'must be a whole number, got {counts!r}')
+    return param_files.build(Drive, values, f'{source}: hardware.actuator_board.drive')
+
+
+def load_drive(params_path=None):
+    """Return the actuator's `Drive` of config/hardware.yaml with the user's file laid over it."""
+    flat = param_files.load('hardware', params_path)
+    return drive_from_flat(param_files.section(flat, 'hardware.actuator_board.drive'),
+                           params_path or HARDWARE_SOURCE)
+
+
 def actuator_board_config(params_path=None, actuator_params_path=None):
     """
     `ActuatorBoardConfig` from config/hardware.yaml with the user's file laid over it.
 
-    The encoder scale and the end stops are not repeated in hardware.yaml: they come from the
-    drive train and the chamber's travel of config/actuator.yaml (or `actuator_params_path` over
-    it), their one source. The soft end stops lie `end_stop_margin` (m) inside the mechanical ones.
+    The encoder scale comes from the drive train (`hardware.actuator_board.drive`). The end stops
+    are not repeated in hardware.yaml: they are the chamber's travel of config/actuator.yaml (or
+    `actuator_params_path` over it), their one source, and the soft end stops lie
+    `end_stop_margin` (m) inside them.
     """
     flat = param_files.section(param_files.load('hardware', params_path),
                                'hardware.actuator_board')
     source = params_path or HARDWARE_SOURCE
+    drive = drive_from_flat(param_files.section(flat, 'drive'), source)
+    flat = {name: value for name, value in flat.items() if not name.startswith('drive.')}
     actuator = param_files.load('actuator', actuator_params_path)
     actuator_source = actuator_params_path or 'config/actuator.yaml'
-    drive_values = param_files.section(actuator, 'actuator.drive')
-    drive = param_files.build(Drive, drive_values, f'{actuator_source}: actuator.drive')
-    for name in ('lead', 'gear_ratio', 'counts_per_rev'):
-        if not _number(drive_values, name, actuator_source) > 0:
-            raise ParameterError(f"{actuator_source}: parameter 'actuator.drive.{name}' must be "
-                                 '> 0')
     x_min, x_max = (_number(actuator, f'actuator.air_chamber.{end}', actuator_source)
                     for end in ('x_min', 'x_max'))
     margin = _number(flat, 'end_stop_margin', source)

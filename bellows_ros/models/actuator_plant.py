@@ -72,10 +72,11 @@ class Sensors:
 @dataclass(frozen=True)
 class ActuatorPlantParams:
     """
-    The simulated actuator's own parameters of `config/actuator.yaml`, SI units.
+    The simulated actuator's own parameters, SI units.
 
-    drive: `Drive` (`actuator.drive.*`); sensors: `Sensors` (`actuator.sensors.*`); effects:
-    ((effect, ((parameter, value), ...)), ...), the defaults of `actuator.effects.*`.
+    drive: `Drive` (config/hardware.yaml, `hardware.actuator_board.drive.*`: the hardware's drive
+    train, shared with the driver); sensors: `Sensors` (config/actuator.yaml, `actuator.sensors.*`);
+    effects: ((effect, ((parameter, value), ...)), ...), the defaults of `actuator.effects.*`.
     """
 
     drive: Drive

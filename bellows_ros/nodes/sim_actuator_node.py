@@ -23,7 +23,8 @@ Node parameters:
   port (str): the symlink to create (the driver's actuator.port).
   actuator_params (str): YAML laid over config/actuator.yaml ('' = defaults); also holds the
       effects' parameters (actuator.effects.*).
-  hardware_params (str): YAML laid over config/hardware.yaml (encoder, end stops).
+  hardware_params (str): YAML laid over config/hardware.yaml (the drive train: motor, gearbox,
+      lead screw, encoder; the board's end-stop margin).
   effects (string array): plant effects to switch on (air_leak, heat_exchange, wall_bulging,
       sensor_lag, backlash, buckling); [''] = none.
   seed (int): sensor noise seed.
@@ -65,7 +66,7 @@ class SimActuatorNode(Node):
         self.check_parameters()
         if not port:
             raise BellowsError('sim_actuator_node: parameter port is empty')
-        params, plant = load_actuator(actuator_params)
+        params, plant = load_actuator(actuator_params, hardware_params)
         self.plant = ActuatorPlant(params, plant, effects=effects, seed=seed,
                                    x_c0=None if math.isnan(x_c0) else x_c0)
         self.sim_time = self.get_parameter('use_sim_time').value
