@@ -75,8 +75,8 @@ class ActuatorPlantParams:
     The simulated actuator's own parameters, SI units.
 
     drive: `Drive` (config/hardware.yaml, `hardware.actuator_board.drive.*`: the hardware's drive
-    train, shared with the driver); sensors: `Sensors` (config/actuator.yaml, `actuator.sensors.*`);
-    effects: ((effect, ((parameter, value), ...)), ...), the defaults of `actuator.effects.*`.
+    train, shared with the driver); sensors: `Sensors` (config/actuator.yaml,
+    `actuator.sensors.*`); effects: ((effect, ((parameter, value), ...)), ...), the defaults of `actuator.effects.*`.
     """
 
     drive: Drive
