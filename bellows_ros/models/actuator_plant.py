@@ -76,7 +76,8 @@ class ActuatorPlantParams:
 
     drive: `Drive` (config/hardware.yaml, `hardware.actuator_board.drive.*`: the hardware's drive
     train, shared with the driver); sensors: `Sensors` (config/actuator.yaml,
-    `actuator.sensors.*`); effects: ((effect, ((parameter, value), ...)), ...), the defaults of `actuator.effects.*`.
+    `actuator.sensors.*`); effects: ((effect, ((parameter, value), ...)), ...), the defaults of
+    `actuator.effects.*`.
     """
 
     drive: Drive
