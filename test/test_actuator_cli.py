@@ -21,8 +21,11 @@ import numpy as np
 import pytest
 
 from bellows_ros.cli import main
-from bellows_ros.models.actuator import evaluate_array, load_actuator_params
+from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
+from bellows_ros.models.actuator import evaluate_array
 from bellows_ros.models.actuator_experiments import actuator_record, volume_test_series
+
+PLANT = load_actuator_plant_params()
 
 PARAMS = load_actuator_params()
 
@@ -44,7 +47,7 @@ def read(path):
 
 @pytest.fixture(scope='module')
 def record(tmp_path_factory):
-    data = actuator_record(PARAMS, seed=5, duration=4.0)
+    data = actuator_record(PARAMS, PLANT, seed=5, duration=4.0)
     return write(tmp_path_factory.mktemp('rec') / 'in.csv', data), data
 
 
@@ -82,7 +85,7 @@ def test_simulate_with_effects_runs_the_plant(record, tmp_path):
     (lambda d: d['x_s'].__setitem__(2, -0.2), "in.csv:4: column 'x_s'"),
 ])
 def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, change, needle):
-    data = {k: v.copy() for k, v in actuator_record(PARAMS, seed=1, duration=0.02).items()}
+    data = {k: v.copy() for k, v in actuator_record(PARAMS, PLANT, seed=1, duration=0.02).items()}
     change(data)
     path = write(tmp_path / 'in.csv', data)
     code = main(['simulate', 'actuator', '--input', path, '--output', str(tmp_path / 'o.csv')])
@@ -113,7 +116,7 @@ def test_exit_status_of_the_real_command(tmp_path):
 
 
 def test_identify_writes_loadable_parameters(tmp_path, capsys):
-    data = volume_test_series(PARAMS, gases=(0.95, 1.05), effects=('wall_bulging',), seed=3,
+    data = volume_test_series(PARAMS, PLANT, gases=(0.95, 1.05), effects=('wall_bulging',), seed=3,
                               duration=6.0)
     path = write(tmp_path / 'series.csv', data)
     out = tmp_path / 'fit.yaml'

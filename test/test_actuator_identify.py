@@ -18,10 +18,13 @@ import dataclasses
 import numpy as np
 import pytest
 
+from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.identify.actuator import calibrate_stiffness, fit_actuator
-from bellows_ros.models.actuator import load_actuator_params, stiffness, without_bulging
+from bellows_ros.models.actuator import stiffness, without_bulging
 from bellows_ros.models.actuator_experiments import volume_test_series
 from bellows_ros.models.actuator_geometry import e_v
+
+PLANT = load_actuator_plant_params()
 
 TRUTH = load_actuator_params()
 
@@ -33,7 +36,7 @@ def bulge_volume(params, x_c, x_s, p):
 
 @pytest.fixture(scope='module')
 def series():
-    return volume_test_series(TRUTH, seed=21, duration=8.0)
+    return volume_test_series(TRUTH, PLANT, seed=21, duration=8.0)
 
 
 @pytest.fixture(scope='module')

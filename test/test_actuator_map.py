@@ -16,8 +16,9 @@
 import numpy as np
 import pytest
 
+from bellows_ros.config.actuator import load_actuator_params
 from bellows_ros.errors import ParameterError
-from bellows_ros.models.actuator import load_actuator_params, pressure, stiffness
+from bellows_ros.models.actuator import pressure, stiffness
 from bellows_ros.models.stiffness_map import (compression_for_pressure, compression_for_stiffness,
                                               stiffness_branch, stiffness_range)
 

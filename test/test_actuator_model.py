@@ -18,12 +18,12 @@ import math
 import numpy as np
 import pytest
 
+from bellows_ros.config.actuator import load_actuator_params
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.actuator import (buckling_force, estimate_gas, evaluate, evaluate_array,
-                                         gas_amount, load_actuator_params, pressure,
-                                         rest_compression, rest_length_change, stiffness,
-                                         stiffness_from_rest, total_volume, without_buckling,
-                                         without_bulging)
+                                         gas_amount, pressure, rest_compression,
+                                         rest_length_change, stiffness, stiffness_from_rest,
+                                         total_volume, without_buckling, without_bulging)
 from bellows_ros.models.actuator_geometry import P_ATM, volume_geo
 
 PARAMS = load_actuator_params()

@@ -16,14 +16,18 @@
 import numpy as np
 import pytest
 
+from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.errors import ParameterError
-from bellows_ros.models.actuator import evaluate, load_actuator_params
+from bellows_ros.models.actuator import evaluate
 from bellows_ros.models.actuator_experiments import actuator_record
 from bellows_ros.models.actuator_geometry import P_ATM
-from bellows_ros.models.actuator_plant import ACTUATOR_EFFECTS, ActuatorPlant, model_params
+from bellows_ros.models.actuator_plant import (ACTUATOR_EFFECTS, ActuatorPlant, effect_parameters,
+                                               model_params)
+
+PLANT = load_actuator_plant_params()
 
 PARAMS = load_actuator_params()
-SIGMA_P = PARAMS.sensors.pressure_noise
+SIGMA_P = PLANT.sensors.pressure_noise
 DT = 1e-3
 
 
@@ -48,17 +52,17 @@ def test_effect_names():
 
 def test_unknown_effect_or_parameter_is_named():
     with pytest.raises(ParameterError, match="'air_leek'"):
-        ActuatorPlant(PARAMS, {'air_leek': {}})
+        ActuatorPlant(PARAMS, PLANT, {'air_leek': {}})
     with pytest.raises(ParameterError, match="'tau'"):
-        ActuatorPlant(PARAMS, {'sensor_lag': {'tau': 0.1}})
+        ActuatorPlant(PARAMS, PLANT, {'sensor_lag': {'tau': 0.1}})
     with pytest.raises(ParameterError, match="'conductance'"):
-        ActuatorPlant(PARAMS, {'air_leak': {'conductance': -1.0}})
+        ActuatorPlant(PARAMS, PLANT, {'air_leak': {'conductance': -1.0}})
     with pytest.raises(ParameterError, match="'pressure_nois'"):
-        ActuatorPlant(PARAMS, noise={'pressure_nois': 1.0})
+        ActuatorPlant(PARAMS, PLANT, noise={'pressure_nois': 1.0})
 
 
 def test_no_effects_plant_agrees_with_model_to_the_noise():
-    plant = ActuatorPlant(PARAMS, seed=3, x_c0=0.0)
+    plant = ActuatorPlant(PARAMS, PLANT, seed=3, x_c0=0.0)
     model = model_params(PARAMS)
     samples = []
     for duty in (1.0, -0.6, 0.8, 0.0):
@@ -69,7 +73,7 @@ def test_no_effects_plant_agrees_with_model_to_the_noise():
     f_res = np.array([s.f for s in samples]) - f_model
     assert 0.8 * SIGMA_P < p_res.std() < 1.3 * SIGMA_P
     assert abs(p_res.mean()) < 1.0
-    sigma_f = PARAMS.sensors.force_noise
+    sigma_f = PLANT.sensors.force_noise
     assert 0.8 * sigma_f < f_res.std() < 1.3 * sigma_f
     # The pressure really moved: the comparison is not between two constants.
     assert np.ptp(p_model) > 5000.0
@@ -77,8 +81,8 @@ def test_no_effects_plant_agrees_with_model_to_the_noise():
 
 @pytest.mark.parametrize('x_c0', [0.040, -0.020])
 def test_air_leak_decays_pressure_towards_ambient(x_c0):
-    plant = ActuatorPlant(PARAMS, {'air_leak': {'conductance': 2e-10}}, seed=1, x_c0=x_c0)
-    sealed = ActuatorPlant(PARAMS, seed=1, x_c0=x_c0)
+    plant = ActuatorPlant(PARAMS, PLANT, {'air_leak': {'conductance': 2e-10}}, seed=1, x_c0=x_c0)
+    sealed = ActuatorPlant(PARAMS, PLANT, seed=1, x_c0=x_c0)
     p_start = plant.pressure
     samples = run(plant, 8.0, x_s=0.0)
     reference = run(sealed, 8.0, x_s=0.0)
@@ -92,7 +96,7 @@ def test_air_leak_decays_pressure_towards_ambient(x_c0):
 
 def test_heat_exchange_overshoots_on_fast_compression_then_relaxes():
     tau = 0.5
-    plant = ActuatorPlant(PARAMS, {'heat_exchange': {'time_constant': tau}}, seed=2)
+    plant = ActuatorPlant(PARAMS, PLANT, {'heat_exchange': {'time_constant': tau}}, seed=2)
     samples = run(plant, 0.5 + 0.05 + 8 * tau, x_s=fast_spring_step)
     model = model_params(PARAMS)
     excess = np.array([s.p - evaluate(model, s.x_c, s.x_s)[0] for s in samples])
@@ -106,8 +110,8 @@ def test_heat_exchange_overshoots_on_fast_compression_then_relaxes():
 
 def test_sensor_lag_delays_the_pressure_reading():
     tau = 0.05
-    lagged = ActuatorPlant(PARAMS, {'sensor_lag': {'time_constant': tau}}, noise=False)
-    direct = ActuatorPlant(PARAMS, noise=False)
+    lagged = ActuatorPlant(PARAMS, PLANT, {'sensor_lag': {'time_constant': tau}}, noise=False)
+    direct = ActuatorPlant(PARAMS, PLANT, noise=False)
     a = run(lagged, 1.0, x_s=lambda t: fast_spring_step(t, rise=0.002))
     b = run(direct, 1.0, x_s=lambda t: fast_spring_step(t, rise=0.002))
     t = np.array([s.t for s in a])
@@ -124,13 +128,13 @@ def test_backlash_leaves_a_dead_band_at_reversals():
     width = 0.001
     results = {}
     for name, effects in (('backlash', {'backlash': {'width': width}}), ('tight', None)):
-        plant = ActuatorPlant(PARAMS, effects, noise=False, x_c0=0.0)
+        plant = ActuatorPlant(PARAMS, PLANT, effects, noise=False, x_c0=0.0)
         run(plant, 2.0, 1.0, x_s=0.0)                     # compress, stop, then reverse briefly
         run(plant, 0.3, 0.0, x_s=0.0)
         counts_before, p_before = plant.step(DT, 0.0, 0.0).encoder_counts, plant.pressure
         run(plant, 0.25, -1.0, x_s=0.0)
         sample = plant.step(DT, 0.0, 0.0)
-        travel = (counts_before - sample.encoder_counts) * PARAMS.drive.metres_per_count
+        travel = (counts_before - sample.encoder_counts) * PLANT.drive.metres_per_count
         results[name] = (travel, plant.pressure - p_before)
     travel, dp = results['backlash']
     assert 0.2 * width < travel < 0.9 * width     # the nut did move back ...
@@ -141,15 +145,15 @@ def test_backlash_leaves_a_dead_band_at_reversals():
 
 
 def test_wall_bulging_adds_volume_under_pressure():
-    bulging = ActuatorPlant(PARAMS, ['wall_bulging'], noise=False, x_c0=0.045)
-    rigid = ActuatorPlant(PARAMS, noise=False, x_c0=0.045)
+    bulging = ActuatorPlant(PARAMS, PLANT, ['wall_bulging'], noise=False, x_c0=0.045)
+    rigid = ActuatorPlant(PARAMS, PLANT, noise=False, x_c0=0.045)
     assert bulging.pressure < rigid.pressure - 500.0
     # With the effect on, the plant is the YAML's augmented model.
     assert bulging.pressure == pytest.approx(evaluate(PARAMS, 0.045, 0.0)[0], rel=1e-9)
 
 
 def test_drive_speed_encoder_end_stops_and_self_locking():
-    plant = ActuatorPlant(PARAMS, noise=False, x_c0=0.036)
+    plant = ActuatorPlant(PARAMS, PLANT, noise=False, x_c0=0.036)
     run(plant, 1.0, 1.0, x_s=0.0)
     x1 = plant.x_nut
     run(plant, 1.0, 1.0, x_s=0.0)
@@ -157,7 +161,7 @@ def test_drive_speed_encoder_end_stops_and_self_locking():
     assert 0.85 * plant.max_speed < speed <= plant.max_speed
     sample = plant.step(DT, 0.0, 0.0)
     assert (abs(plant.x_from_counts(sample.encoder_counts) - plant.x_nut)
-            <= PARAMS.drive.metres_per_count)
+            <= PLANT.drive.metres_per_count)
     # Not back-drivable: once the rotor has coasted to rest, the gas load (here well above
     # ambient) cannot push the nut back at zero duty.
     run(plant, 0.5, 0.0, x_s=0.0)
@@ -166,22 +170,22 @@ def test_drive_speed_encoder_end_stops_and_self_locking():
     run(plant, 1.0, 0.0, x_s=0.0)
     assert plant.x_nut == held
     # End stop.
-    top = ActuatorPlant(PARAMS, noise=False, x_c0=PARAMS.chamber.x_max - 0.001)
+    top = ActuatorPlant(PARAMS, PLANT, noise=False, x_c0=PARAMS.chamber.x_max - 0.001)
     samples = run(top, 1.0, 1.0, x_s=0.0)
     assert samples[-1].at_upper_stop and not samples[0].at_upper_stop
     assert samples[-1].x_c == PARAMS.chamber.x_max
 
 
 def test_experiment_record_is_seeded_and_shaped_like_the_paper():
-    a = actuator_record(PARAMS, seed=11, duration=6.0)
-    b = actuator_record(PARAMS, seed=11, duration=6.0)
-    c = actuator_record(PARAMS, seed=12, duration=6.0)
+    a = actuator_record(PARAMS, PLANT, seed=11, duration=6.0)
+    b = actuator_record(PARAMS, PLANT, seed=11, duration=6.0)
+    c = actuator_record(PARAMS, PLANT, seed=12, duration=6.0)
     assert list(a) == ['t', 'x_c', 'x_s', 'p', 'f']
     assert all(np.array_equal(a[k], b[k]) for k in a)
     assert not np.array_equal(a['p'], c['p'])
     assert len(a['t']) == 6000 and np.all(np.diff(a['t']) > 0)
     # x_c is the encoder reading: a whole number of counts.
-    counts = a['x_c'] / PARAMS.drive.metres_per_count
+    counts = a['x_c'] / PLANT.drive.metres_per_count
     assert np.allclose(counts, np.round(counts), atol=1e-6)
     assert np.ptp(a['x_s']) > 0.005 and np.ptp(a['x_c']) > 0.001
 
@@ -190,10 +194,11 @@ def test_buckling_effect_is_the_models_buckling_term():
     from bellows_ros.models.actuator import without_buckling
     forces = {}
     for effects in ((), ('buckling',), {'buckling': {'scale': 0.5}}):
-        plant = ActuatorPlant(PARAMS, effects, noise=False, x_c0=0.045)
+        plant = ActuatorPlant(PARAMS, PLANT, effects, noise=False, x_c0=0.045)
         sample = plant.step(1e-3, 0.0, x_s_imposed=0.012)
         forces[str(effects)] = sample.f
-        expected = evaluate(model_params(PARAMS, effects), sample.x_c, 0.012)[1]
+        expected = evaluate(model_params(PARAMS, effect_parameters(PLANT, effects)), sample.x_c,
+                            0.012)[1]
         assert sample.f == pytest.approx(expected, abs=1e-9)
     plain, full, half = forces.values()
     assert full < half < plain - 1.0          # the buckled spring pushes back less

@@ -18,9 +18,10 @@ import math
 
 import pytest
 
+from bellows_ros.config.segment import load_segment_params
 from bellows_ros.control.pressure_allocation import (allocate_paper_a, allocate_previous,
                                                      chain_pressures)
-from bellows_ros.models.segment import load_segment_params, SegmentModel
+from bellows_ros.models.segment import SegmentModel
 
 P = load_segment_params()
 # One sample of the strain profile moves s~_a by (l0 π/2)/Nλ·λ1 (28); with λ1 < 2 that moves τ_a

@@ -15,9 +15,11 @@
 """PD position control of the lead screw, against the actuator plant's own drive (no ROS)."""
 import pytest
 
+from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.control.pd import PDController, PDGains
-from bellows_ros.models.actuator import load_actuator_params
 from bellows_ros.models.actuator_plant import ActuatorPlant
+
+PLANT = load_actuator_plant_params()
 
 GAINS = PDGains(kp=400.0, kd=0.0, velocity_cutoff=50.0, duty_max=0.8, deadband=2e-5)
 
@@ -39,7 +41,7 @@ def test_derivative_acts_on_measurement_only():
 
 def test_closed_loop_on_the_plant_reaches_target_without_overshoot():
     params = load_actuator_params()
-    plant = ActuatorPlant(params, noise=False, x_c0=-0.01)
+    plant = ActuatorPlant(params, PLANT, noise=False, x_c0=-0.01)
     pd = PDController(GAINS)
     target, dt = 0.015, 1e-3
     minimum = plant.travel_time(-0.01, target) / GAINS.duty_max

@@ -15,12 +15,15 @@
 """Stiffness set-point -> compression, with the gas-amount correction (no ROS)."""
 import pytest
 
+from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.control.pd import PDController, PDGains
 from bellows_ros.control.stiffness import StiffnessSetpoint
 from bellows_ros.errors import ParameterError
-from bellows_ros.models.actuator import load_actuator_params, pressure, stiffness
+from bellows_ros.models.actuator import pressure, stiffness
 from bellows_ros.models.actuator_plant import ActuatorPlant
 from bellows_ros.models.stiffness_map import stiffness_range
+
+PLANT = load_actuator_plant_params()
 
 PARAMS = load_actuator_params()
 
@@ -52,7 +55,7 @@ def test_leak_is_corrected_from_the_measured_pressure():
     gains = PDGains(kp=400.0, kd=0.0, velocity_cutoff=50.0, duty_max=0.8, deadband=2e-5)
     results = {}
     for corrected in (True, False):
-        plant = ActuatorPlant(PARAMS, effects=leak, noise=False)
+        plant = ActuatorPlant(PARAMS, PLANT, effects=leak, noise=False)
         setpoint = StiffnessSetpoint(PARAMS, gas_time_constant=1.0 if corrected else 1e12)
         setpoint.set_stiffness(k_target)
         pd, dt, x = PDController(gains), 2e-3, plant.x_nut

@@ -17,10 +17,10 @@ import math
 
 import pytest
 
+from bellows_ros.config.segment import load_segment_params
 from bellows_ros.control import angle_trajectory
 from bellows_ros.control.angle_tracking import AngleTracker, TrackingGains
 from bellows_ros.errors import ParameterError
-from bellows_ros.models.segment import load_segment_params
 
 P = load_segment_params()
 GAINS = TrackingGains(40.0, 640.0, 2.0, 20.0, 20.0, P.p0, 0.05)

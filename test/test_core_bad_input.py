@@ -303,7 +303,6 @@ def test_a_parameter_of_the_wrong_kind_is_named(tmp_path, capsys, body, needle):
     ('air_chamber: {x_min: -0.2}', "'actuator.air_chamber.x_min' -0.2 m lies beyond the frustum "
                                    'geometry (3)'),
     ('gas: {x_c_ref: 0.047, p_ref: 0.0}', "'actuator.gas.p_ref' must be > 0"),
-    ('drive: {gear_ratio: 0.0}', "'actuator.drive.gear_ratio' must be > 0"),
 ])
 def test_an_inadmissible_actuator_parameter_is_named(tmp_path, capsys, body, needle):
     _check_named(tmp_path, capsys, 'actuator', body, needle)

@@ -28,9 +28,11 @@ import numpy as np
 import pytest
 
 from bellows_ros.cli import main
+from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.data import read_csv
-from bellows_ros.models.actuator import load_actuator_params
 from bellows_ros.models.actuator_experiments import actuator_record
+
+PLANT = load_actuator_plant_params()
 
 REPORT_KEYS = {'system', 'baseline', 'cause', 'extended', 'gain', 'causes', 'unexplained',
                'candidates'}
@@ -74,7 +76,7 @@ def hidden(tmp_path, effects, seed):
     rng = np.random.default_rng(seed)
     params = random_params(rng)
     chosen = {name: EFFECTS[name](rng) for name in effects}
-    record = actuator_record(params, chosen, seed=seed, duration=DURATION)
+    record = actuator_record(params, PLANT, chosen, seed=seed, duration=DURATION)
     return write_csv(tmp_path / 'data.csv', record), chosen
 
 
@@ -127,7 +129,7 @@ def test_two_effects_are_both_named(tmp_path):
 def test_effect_outside_the_vocabulary_is_unexplained(tmp_path):
     """A pressure disturbance no candidate describes (a 0.3 Hz ripple from, say, a pump nearby)."""
     rng = np.random.default_rng(5)
-    record = actuator_record(random_params(rng), None, seed=5, duration=DURATION)
+    record = actuator_record(random_params(rng), PLANT, None, seed=5, duration=DURATION)
     record['p'] = record['p'] + 120.0 * np.sin(2 * np.pi * 0.3 * record['t'])
     report, directory = diagnose(tmp_path, write_csv(tmp_path / 'data.csv', record))
     assert report['unexplained'] is True
@@ -150,7 +152,7 @@ def test_report_files_and_extended_yaml_go_back_into_the_system(tmp_path):
         assert f'![{name}]({name})' in text, name  # and shown in the report
     assert report['baseline']['unit'] == 'Pa'
     assert all(set(c) == {'cause', 'heldout_rmse', 'params'} for c in report['candidates'])
-    extended = load_actuator_params(directory / 'extended.yaml')
+    extended = load_actuator_plant_params(directory / 'extended.yaml')
     tau = extended.effect_defaults()['sensor_lag']['time_constant']
     assert tau == pytest.approx(chosen['sensor_lag']['time_constant'], rel=0.3)
     # the extended file drives `bellows simulate` with the fitted effect switched on: its pressure
@@ -209,8 +211,8 @@ def test_backlash_in_a_record_that_never_reverses_is_not_named_as_something_else
     rng = np.random.default_rng(3)
     params = random_params(rng)
     width = rng.uniform(3e-4, 6e-4)
-    record = actuator_record(params, {'backlash': {'width': width}}, seed=3, duration=DURATION,
-                             x_c0=-0.010, monotone=True)
+    record = actuator_record(params, PLANT, {'backlash': {'width': width}}, seed=3,
+                             duration=DURATION, x_c0=-0.010, monotone=True)
     assert np.all(np.diff(record['x_c']) >= 0.0)       # the encoder never goes back
     report, directory = diagnose(tmp_path, write_csv(tmp_path / 'sweep.csv', record))
     details = json.loads((directory / 'details.json').read_text())
@@ -274,8 +276,8 @@ def paper_b_force_test(tmp_path, effects, seed):
     rng = np.random.default_rng(seed)
     params = buckling_params(rng)
     chosen = {name: EFFECTS[name](rng) for name in effects}
-    record = actuator_record(params, chosen, seed=seed, duration=60.0, x_c_range=(0.0, 0.048),
-                             spring_range=(0.011, 0.013))
+    record = actuator_record(params, PLANT, chosen, seed=seed, duration=60.0,
+                             x_c_range=(0.0, 0.048), spring_range=(0.011, 0.013))
     return write_csv(tmp_path / 'force_test.csv', record), params, chosen
 
 

@@ -27,8 +27,10 @@ from rosbags.rosbag2 import Writer
 from rosbags.typesys import get_typestore, Stores
 
 from bellows_ros.cli import main
-from bellows_ros.models.actuator import load_actuator_params
+from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.models.actuator_experiments import actuator_record
+
+PLANT = load_actuator_plant_params()
 
 STORE = get_typestore(Stores.ROS2_JAZZY)
 JOINT_STATE = 'sensor_msgs/msg/JointState'
@@ -78,7 +80,7 @@ def write_actuator_bag(path, record, every=4):
 @pytest.mark.slow
 def test_names_a_hidden_effect_from_a_rosbag2(tmp_path):
     params = load_actuator_params()
-    record = actuator_record(params, {'backlash': {'width': 4e-4}}, seed=41, duration=30.0)
+    record = actuator_record(params, PLANT, {'backlash': {'width': 4e-4}}, seed=41, duration=30.0)
     bag = tmp_path / 'recording'
     write_actuator_bag(bag, record)
     report_dir = tmp_path / 'report'

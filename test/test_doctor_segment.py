@@ -27,8 +27,10 @@ import numpy as np
 import pytest
 
 from bellows_ros.cli import main
-from bellows_ros.models.segment import load_segment_params
+from bellows_ros.config.segment import load_segment_params, load_segment_plant_params
 from bellows_ros.models.segment_experiments import quasi_static_record
+
+PLANT = load_segment_plant_params()
 
 NAMES = ('t', 'psi', 'p1', 'p2', 'tau_ext', 'psi_dot', 'tau_motion')
 DURATION = 30.0
@@ -65,7 +67,7 @@ def hidden(tmp_path, effects, seed, duration=DURATION):
     rng = np.random.default_rng(seed)
     params = random_params(rng)
     chosen = {name: EFFECTS[name](rng) for name in effects}
-    record = quasi_static_record(params, chosen, seed=seed, duration=duration,
+    record = quasi_static_record(params, PLANT, chosen, seed=seed, duration=duration,
                                  pressure_hold=PRESSURE_HOLD)
     return write_csv(tmp_path / 'bench.csv', record), chosen
 
@@ -110,7 +112,7 @@ def test_no_effect_is_none(tmp_path):
 def test_effect_outside_the_vocabulary_is_unexplained(tmp_path):
     """A 0.3 Hz torque ripple (no cause in the vocabulary makes one) must not get a name."""
     rng = np.random.default_rng(21)
-    record = quasi_static_record(random_params(rng), {}, seed=21, duration=DURATION,
+    record = quasi_static_record(random_params(rng), PLANT, {}, seed=21, duration=DURATION,
                                  pressure_hold=PRESSURE_HOLD)
     record['tau_ext'] = record['tau_ext'] + 0.05 * np.sin(2 * np.pi * 0.3 * record['t'])
     report, directory = diagnose(tmp_path, write_csv(tmp_path / 'bench.csv', record))
@@ -138,7 +140,7 @@ def test_paper_a_story_end_to_end(tmp_path):
     YAML must reproduce the hysteresis.
     """
     params = load_segment_params()
-    record = quasi_static_record(params, {'contact_hysteresis': {}}, seed=31, duration=40.0)
+    record = quasi_static_record(params, PLANT, {'contact_hysteresis': {}}, seed=31, duration=40.0)
     data = write_csv(tmp_path / 'bench.csv', record)
     report, directory = diagnose(tmp_path, data)
     assert report['cause'] == 'contact_hysteresis'
@@ -169,7 +171,8 @@ def test_record_pressurised_only_at_its_end_names_nothing(tmp_path):
     """
     rng = np.random.default_rng(1)
     params = random_params(rng)
-    record = quasi_static_record(params, {'natural_curvature': EFFECTS['natural_curvature'](rng)},
+    record = quasi_static_record(params, PLANT,
+                                 {'natural_curvature': EFFECTS['natural_curvature'](rng)},
                                  seed=1, duration=DURATION)
     gauge = np.maximum(record['p1'], record['p2']) - params.p0
     assert np.max(record['p1']) < 2.95e5 and np.max(record['p2']) < 2.95e5

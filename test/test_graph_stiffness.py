@@ -41,8 +41,9 @@ import time
 import pytest
 from runtimes import node_env, override, stop_all
 
-from bellows_ros.hardware.actuator_board import load_config
-from bellows_ros.models.actuator import load_actuator_params, stiffness
+from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
+from bellows_ros.config.hardware import actuator_board_config
+from bellows_ros.models.actuator import stiffness
 from bellows_ros.models.stiffness_map import compression_for_stiffness, stiffness_range
 from bellows_ros.runtime import dds_node
 from bellows_ros.runtime.messages import msg
@@ -67,8 +68,8 @@ def test_stiffness_step_and_leak_hold(runtime, tmp_path, monkeypatch):
     k_low = max(1400.0, 1.01 * k_min)
     x_low = compression_for_stiffness(params, k_low)
     x_high = compression_for_stiffness(params, K_HIGH)
-    duty_max = load_config().duty_max
-    travel_min = abs(x_high - x_low) / (duty_max * params.drive.max_speed)
+    duty_max = actuator_board_config().duty_max
+    travel_min = abs(x_high - x_low) / (duty_max * load_actuator_plant_params().drive.max_speed)
 
     domain = str(random.randint(201, 230))
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)

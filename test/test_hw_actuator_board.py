@@ -27,12 +27,13 @@ from polling import wait_for
 import pytest
 import serial
 
+from bellows_ros.config.hardware import actuator_board_config
 from bellows_ros.hardware import serial_protocol as sp
-from bellows_ros.hardware.actuator_board import ActuatorBoard, load_config
+from bellows_ros.hardware.actuator_board import ActuatorBoard
 from bellows_ros.hardware.faults import Faults
 from bellows_ros.hardware.sim_actuator_board import ActuatorState, SimActuatorBoard
 
-CONFIG = load_config()
+CONFIG = actuator_board_config()
 
 
 class Plant:

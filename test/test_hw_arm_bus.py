@@ -31,12 +31,13 @@ import can
 from polling import wait_for
 import pytest
 
+from bellows_ros.config.hardware import arm_bus_config
 from bellows_ros.hardware import can_protocol as cp
-from bellows_ros.hardware.arm_bus import ArmBus, load_config, open_bus, open_can
+from bellows_ros.hardware.arm_bus import ArmBus, open_bus, open_can
 from bellows_ros.hardware.faults import Faults
 from bellows_ros.hardware.sim_arm_bus import SimArmBus
 
-CONFIG = load_config()
+CONFIG = arm_bus_config()
 N = CONFIG.n_segments
 
 

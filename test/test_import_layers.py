@@ -15,8 +15,9 @@
 """
 The package's import graph (from the source, with ast): no cycles, every import goes down.
 
-The layers: models -> identify/doctor -> hardware -> control -> nodes/runtime ->
-bench/demos/cli.
+The layers: models -> config -> identify/doctor -> hardware -> control -> nodes/runtime ->
+bench/demos/cli. The models read no file: they import nothing of the package but other models and
+the errors; the config layer reads config/*.yaml and builds their parameter objects.
 
 Every import counts, also one inside a function: a deferred import still ties the two modules
 together, it only hides the cycle until run time.
@@ -30,11 +31,12 @@ PACKAGE = Path(__file__).resolve().parents[1] / 'bellows_ros'
 LAYERS = {
     'errors': 0, 'params': 0, 'table': 0, 'data': 0, 'bag': 0,
     'models': 1,
-    'identify': 2, 'doctor': 2,
-    'hardware': 3,
-    'control': 4,
-    'nodes': 5, 'runtime': 5,
-    'bench': 6, 'demos': 6, 'cli': 6,
+    'config': 2,
+    'identify': 3, 'doctor': 3,
+    'hardware': 4,
+    'control': 5,
+    'nodes': 6, 'runtime': 6,
+    'bench': 7, 'demos': 7, 'cli': 7,
 }
 
 
@@ -144,3 +146,73 @@ def test_layers_import_only_downward():
                     if _layer(source) is not None and _layer(target) is not None
                     and _layer(target) > _layer(source))
     assert upward == []
+
+
+# What the models may import from the package: each other and the errors. Everything that reads a
+# file (params, data, bag, table, config, the CLI...) lies outside this set.
+MODEL_IMPORTS = ('bellows_ros.models', 'bellows_ros.errors')
+# Calls that read or write a file, wherever they come from.
+FILE_CALLS = {'open', 'read_text', 'write_text', 'read_bytes', 'write_bytes', 'loadtxt',
+              'genfromtxt', 'savetxt', 'safe_load', 'load'}
+
+
+def _is_model(module):
+    return module == 'bellows_ros.models' or module.startswith('bellows_ros.models.')
+
+
+def test_the_models_import_nothing_that_reads_files():
+    outside = sorted(f'{source} -> {target}' for source, targets in import_graph().items()
+                     if _is_model(source) for target in targets
+                     if not target.startswith(MODEL_IMPORTS))
+    assert outside == []
+
+
+def test_the_models_call_no_file_function():
+    calls = []
+    for name, path in _modules().items():
+        if not _is_model(name):
+            continue
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.Call):
+                func = node.func
+                called = func.id if isinstance(func, ast.Name) else getattr(func, 'attr', None)
+                if called in FILE_CALLS:
+                    calls.append(f'{name}:{node.lineno} {called}()')
+    assert calls == []
+
+
+def test_the_file_rules_see_a_violation():
+    """The two rules above are not vacuous: the config layer breaks both, as it should."""
+    graph = import_graph()
+    assert 'bellows_ros.params' in graph['bellows_ros.config.segment']
+    assert not all(t.startswith(MODEL_IMPORTS) for t in graph['bellows_ros.config.segment'])
+    source = (PACKAGE / 'params.py').read_text()
+    assert any(isinstance(n, ast.Call) and getattr(n.func, 'id', None) == 'open'
+               for n in ast.walk(ast.parse(source)))
+
+
+def reachable(graph, start):
+    """Every module `start` imports, directly or through others."""
+    seen, todo = set(), [start]
+    while todo:
+        for target in graph.get(todo.pop(), ()):
+            if target not in seen:
+                seen.add(target)
+                todo.append(target)
+    return seen
+
+
+# The drivers' configuration path and the one piece of physics it may touch: the drive train
+# (`Drive.metres_per_count`, the encoder scale), which solves nothing.
+DRIVER_MODULES = ('bellows_ros.config.hardware', 'bellows_ros.hardware.actuator_board',
+                  'bellows_ros.hardware.arm_bus', 'bellows_ros.hardware.sim_arm_bus',
+                  'bellows_ros.hardware.sim_actuator_board', 'bellows_ros.nodes.driver_node')
+DRIVER_MODELS = {'bellows_ros.models.actuator_drive', 'bellows_ros.models.derivatives'}
+
+
+def test_the_drivers_configuration_imports_no_physics_model():
+    graph = import_graph()
+    assert 'bellows_ros.models.actuator' in reachable(graph, 'bellows_ros.config.actuator')
+    for module in DRIVER_MODULES:
+        models = {m for m in reachable(graph, module) if _is_model(m)}
+        assert models <= DRIVER_MODELS, f'{module} reaches {sorted(models - DRIVER_MODELS)}'

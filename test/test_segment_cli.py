@@ -26,9 +26,12 @@ import numpy as np
 import pytest
 
 from bellows_ros.cli import main
-from bellows_ros.models.segment import load_segment_params, OUTPUTS, simulate_model
+from bellows_ros.config.segment import load_segment_params, load_segment_plant_params
+from bellows_ros.models.segment import OUTPUTS, simulate_model
 from bellows_ros.models.segment_experiments import quasi_static_record
 from bellows_ros.models.segment_plant import FULL_MODEL
+
+PLANT = load_segment_plant_params()
 
 COLUMNS = ['t', 'psi', 'p1', 'p2', 'tau_ext', 'psi_dot']
 
@@ -51,8 +54,8 @@ def read(path):
 
 @pytest.fixture(scope='module')
 def record():
-    return quasi_static_record(load_segment_params(), FULL_MODEL, None, seed=4, duration=8.0,
-                               dt=1e-2)
+    return quasi_static_record(load_segment_params(), PLANT, FULL_MODEL, None, seed=4,
+                               duration=8.0, dt=1e-2)
 
 
 def test_simulate_writes_input_plus_the_model_outputs_with_state_carried(tmp_path, record):

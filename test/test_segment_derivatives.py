@@ -23,7 +23,10 @@ import math
 import numpy as np
 import pytest
 
+from bellows_ros.config.segment import load_segment_plant_params
 from bellows_ros.models.derivatives import rate, rates
+
+PLANT = load_segment_plant_params()
 
 
 def _stream(t, x, initial=0.0):
@@ -77,14 +80,14 @@ def test_short_and_empty_records():
 
 def test_the_plant_moves_an_imposed_angle_with_the_same_rates():
     """The simulated segment's Ψ̇, Ψ̈ on an imposed path are the batch rates of that path."""
-    from bellows_ros.models.segment import load_segment_params
+    from bellows_ros.config.segment import load_segment_params
     from bellows_ros.models.segment_plant import NO_NOISE, SegmentPlant
 
     params = load_segment_params()
     dt = 1e-3
     t = np.arange(400) * dt
     psi = 0.6 * np.sin(2 * np.pi * 1.5 * t) ** 2
-    plant = SegmentPlant(params, noise=NO_NOISE, psi0=float(psi[0]))
+    plant = SegmentPlant(params, PLANT, noise=NO_NOISE, psi0=float(psi[0]))
     true = []
     for value in psi[1:].tolist():
         sample = plant.step(dt, 3e5, params.p0, psi_imposed=value)

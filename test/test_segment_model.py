@@ -24,14 +24,16 @@ import numpy as np
 import pytest
 
 from bellows_ros.bench.segment import previous_step
+from bellows_ros.config.segment import load_segment_params, load_segment_plant_params
 from bellows_ros.errors import ParameterError
 from bellows_ros.identify.segment import calibrate_fig10, fig10_torques
 from bellows_ros.models.contact import contact_angle
 from bellows_ros.models.segment import (actuator_regressor, contact_lengths, external_torque,
-                                        friction_regressor, load_segment_params, OUTPUTS,
-                                        previous_regressor, relative_pressure, restoring_regressor,
-                                        scaled_pressure, SegmentModel, SegmentOutput,
-                                        simulate_model, strain_memory)
+                                        friction_regressor, OUTPUTS, previous_regressor,
+                                        relative_pressure, restoring_regressor, scaled_pressure,
+                                        SegmentModel, SegmentOutput, simulate_model, strain_memory)
+
+PLANT = load_segment_plant_params()
 
 
 @pytest.fixture(scope='module')
@@ -142,13 +144,13 @@ def test_fig10_calibration_of_the_default_parameters(params):
     Chain 1 at 4 bar abs, chain 2 vented, Ψ = 74.5°, excursion to -30° and back; the previous
     model gives one value.
     """
-    before, after, prev_before, prev_after = fig10_torques(params)
+    before, after, prev_before, prev_after = fig10_torques(params, PLANT)
     assert before == pytest.approx(6.7, abs=0.01)
     assert after == pytest.approx(9.1, abs=0.01)
     assert after >= 1.1 * before and 5.0 <= before <= 12.0 and 5.0 <= after <= 12.0
     assert prev_before == prev_after and 5.0 <= prev_before <= 12.0
     # the YAML values are what the documented calibration produces (a trace, not magic numbers)
-    calibrated = calibrate_fig10(params)
+    calibrated = calibrate_fig10(params, PLANT)
     np.testing.assert_allclose(calibrated.actuator_theta, params.actuator_theta, rtol=1e-5,
                                atol=1e-5)
     np.testing.assert_allclose(calibrated.previous_theta, params.previous_theta, rtol=1e-5,

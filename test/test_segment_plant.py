@@ -18,11 +18,14 @@ import math
 import numpy as np
 import pytest
 
+from bellows_ros.config.segment import load_segment_params, load_segment_plant_params
 from bellows_ros.errors import ParameterError
-from bellows_ros.models.segment import load_segment_params, SegmentModel
+from bellows_ros.models.segment import SegmentModel
 from bellows_ros.models.segment_experiments import fig10_record, quasi_static_record, run_plant
 from bellows_ros.models.segment_plant import (FULL_MODEL, NO_NOISE, plant_physics, SEGMENT_EFFECTS,
                                               SegmentPlant)
+
+PLANT = load_segment_plant_params()
 
 
 @pytest.fixture(scope='module')
@@ -43,12 +46,12 @@ def test_effect_vocabulary_matches_design():
 ])
 def test_unknown_effects_and_parameters_are_named(params, effects, message):
     with pytest.raises(ParameterError, match=message.replace('(', r'\(')):
-        SegmentPlant(params, effects)
+        SegmentPlant(params, PLANT, effects)
 
 
 def test_unknown_noise_key_is_named(params):
     with pytest.raises(ParameterError, match="'torque'"):
-        SegmentPlant(params, noise={'torque': 0.1})
+        SegmentPlant(params, PLANT, noise={'torque': 0.1})
 
 
 def _bench(params, effects, n=6000, dt=1e-3):
@@ -56,7 +59,7 @@ def _bench(params, effects, n=6000, dt=1e-3):
     psi = 1.0 * np.sin(2 * np.pi * 0.25 * t)
     cmd1 = np.where(t > 0.5, 4.5e5, params.p0)
     cmd2 = np.where(t > 3.0, 2.5e5, params.p0)
-    return run_plant(SegmentPlant(params, effects, NO_NOISE), dt, cmd1, cmd2, psi)
+    return run_plant(SegmentPlant(params, PLANT, effects, NO_NOISE), dt, cmd1, cmd2, psi)
 
 
 def test_baseline_plant_is_the_previous_model_without_the_missing_physics(params):
@@ -89,8 +92,8 @@ def test_effect_parameters_override_the_yaml(params):
 
 
 def test_pressures_follow_commands_through_the_valve_lag(params):
-    plant = SegmentPlant(params, noise=NO_NOISE)
-    tau = params.plant_valve_tau
+    plant = SegmentPlant(params, PLANT, noise=NO_NOISE)
+    tau = PLANT.valve_tau
     samples = [plant.step(1e-3, 5e5, params.p0,
                           psi_imposed=0.0) for _ in range(int(round(tau / 1e-3)))]
     # after one time constant: 1 - 1/e of the step
@@ -102,8 +105,8 @@ def test_pressures_follow_commands_through_the_valve_lag(params):
 
 
 def test_sensor_lag_delays_only_the_measured_pressure(params):
-    lagged = SegmentPlant(params, {'sensor_lag': {'tau': 0.2}}, NO_NOISE)
-    plain = SegmentPlant(params, {}, NO_NOISE)
+    lagged = SegmentPlant(params, PLANT, {'sensor_lag': {'tau': 0.2}}, NO_NOISE)
+    plain = SegmentPlant(params, PLANT, {}, NO_NOISE)
     for _ in range(100):
         a = lagged.step(1e-3, 5e5, params.p0, psi_imposed=0.3)
         b = plain.step(1e-3, 5e5, params.p0, psi_imposed=0.3)
@@ -114,21 +117,21 @@ def test_sensor_lag_delays_only_the_measured_pressure(params):
 
 def test_noise_has_the_configured_spread_and_seed_repeats(params):
     def run(seed):
-        plant = SegmentPlant(params, seed=seed)
+        plant = SegmentPlant(params, PLANT, seed=seed)
         return np.array([plant.step(1e-3, params.p0, params.p0,
                                     psi_imposed=0.0) for _ in range(4000)])
     first, again, other = run(3), run(3), run(4)
     np.testing.assert_array_equal(first, again)
     assert not np.array_equal(first, other)
     std = first.std(axis=0)  # columns t psi psi_dot p1 p2 tau_ext
-    assert std[1] == pytest.approx(params.plant_noise_psi, rel=0.1)
-    assert std[3] == pytest.approx(params.plant_noise_p, rel=0.1)
-    assert std[5] == pytest.approx(params.plant_noise_tau, rel=0.1)
+    assert std[1] == pytest.approx(PLANT.noise_psi, rel=0.1)
+    assert std[3] == pytest.approx(PLANT.noise_p, rel=0.1)
+    assert std[5] == pytest.approx(PLANT.noise_tau, rel=0.1)
 
 
 def test_free_motion_settles_where_the_torques_balance(params):
     # vented chains: τ_drive = τ_s = 2 k_s Ψ, so a load of 1 N·m holds Ψ = -1/(2 k_s)
-    plant = SegmentPlant(params, FULL_MODEL, NO_NOISE)
+    plant = SegmentPlant(params, PLANT, FULL_MODEL, NO_NOISE)
     for _ in range(20000):  # friction (c_f < 0) slows the creep near rest: time constant ≈ 1.7 s
         sample = plant.step(1e-3, params.p0, params.p0, tau_load=1.0)
     assert abs(sample.psi_dot) < 1e-5
@@ -136,24 +139,24 @@ def test_free_motion_settles_where_the_torques_balance(params):
 
 
 def test_free_pressurised_segment_is_stable_and_rests_on_its_end_stop(params):
-    plant = SegmentPlant(params, FULL_MODEL, NO_NOISE)
+    plant = SegmentPlant(params, PLANT, FULL_MODEL, NO_NOISE)
     for _ in range(8000):
         sample = plant.step(1e-3, 4e5, params.p0, tau_load=0.0)
     assert math.isfinite(sample.psi) and abs(sample.psi_dot) < 1e-3
     # chain 1 bends the segment towards positive Ψ until the end stop carries τ_drive
-    assert params.plant_psi_limit < sample.psi < params.plant_psi_limit + 0.1
+    assert PLANT.psi_limit < sample.psi < PLANT.psi_limit + 0.1
 
 
 def test_fig10_record_shows_the_hysteresis_only_with_contact_hysteresis(params):
-    record, before, after = fig10_record(params, FULL_MODEL, NO_NOISE)
+    record, before, after = fig10_record(params, PLANT, FULL_MODEL, NO_NOISE)
     assert record['psi'][before] == pytest.approx(record['psi'][after], abs=1e-12)
     assert -record['tau_ext'][after] > 1.1 * -record['tau_ext'][before]
-    baseline, before, after = fig10_record(params, {}, NO_NOISE)
+    baseline, before, after = fig10_record(params, PLANT, {}, NO_NOISE)
     assert baseline['tau_ext'][after] == pytest.approx(baseline['tau_ext'][before], abs=1e-9)
 
 
 def test_quasi_static_record_has_the_design_columns_and_is_cheap(params):
-    record = quasi_static_record(params, FULL_MODEL, None, seed=2, duration=10.0)
+    record = quasi_static_record(params, PLANT, FULL_MODEL, None, seed=2, duration=10.0)
     assert set(record) >= {'t', 'psi', 'p1', 'p2', 'tau_ext', 'psi_dot'}
     assert len(record['t']) == 10000 and np.all(np.diff(record['t']) > 0)
     assert record['p1'].max() <= params.p_max and record['psi'].std() > 0.1
@@ -161,8 +164,8 @@ def test_quasi_static_record_has_the_design_columns_and_is_cheap(params):
 
 def test_a_late_real_time_caller_gets_the_same_motion(params):
     """A CPU-starved simulator passes one long dt; the stiff end stop must not make it bounce."""
-    on_time = SegmentPlant(params, effects=FULL_MODEL, noise=NO_NOISE)
-    late = SegmentPlant(params, effects=FULL_MODEL, noise=NO_NOISE)
+    on_time = SegmentPlant(params, PLANT, effects=FULL_MODEL, noise=NO_NOISE)
+    late = SegmentPlant(params, PLANT, effects=FULL_MODEL, noise=NO_NOISE)
     for _ in range(1000):      # pressurise chain 1 and let the segment run onto its end stop
         on_time.step(1e-3, 4e5, 101325.0)
         late.step(1e-3, 4e5, 101325.0)
@@ -172,5 +175,5 @@ def test_a_late_real_time_caller_gets_the_same_motion(params):
             on_time.step(1e-3, 4e5, 101325.0)
         late.step(20e-3, 4e5, 101325.0)
         worst = max(worst, abs(late.psi - on_time.psi))
-    assert abs(late.psi) <= params.plant_psi_limit + 0.05
+    assert abs(late.psi) <= PLANT.psi_limit + 0.05
     assert worst < 1e-6

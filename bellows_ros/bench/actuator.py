@@ -28,8 +28,8 @@ import time
 import numpy as np
 
 from bellows_ros.bench import Result, timing
-from bellows_ros.models.actuator import (estimate_gas, evaluate, evaluate_array,
-                                         load_actuator_params)
+from bellows_ros.config.actuator import load_actuator
+from bellows_ros.models.actuator import estimate_gas, evaluate, evaluate_array
 from bellows_ros.models.actuator_geometry import P_ATM, volume_geo
 from bellows_ros.models.actuator_plant import ActuatorPlant
 from bellows_ros.models.stiffness_map import (compression_for_stiffness, stiffness_map,
@@ -38,7 +38,7 @@ from bellows_ros.models.stiffness_map import (compression_for_stiffness, stiffne
 
 def run(quick=False):
     calls = 2000 if quick else 20000
-    params = load_actuator_params()
+    params, plant_params = load_actuator()
     rng = random.Random(1)
     c = params.chamber
     points = itertools.cycle([(rng.uniform(c.x_min, c.x_max),
@@ -80,14 +80,14 @@ def run(quick=False):
     for result in results[2:]:
         result.extra['ratio_to_V_geo'] = f'{result.value / geometry.value:.1f}'
 
-    plant = ActuatorPlant(params, seed=0)
+    plant = ActuatorPlant(params, plant_params, seed=0)
     duties = itertools.cycle([rng.uniform(-1.0, 1.0) for _ in range(997)])
     results.append(timing('actuator plant step (dt = 1 ms, no effects)',
                           lambda: plant.step(1e-3, next(duties), x_s_imposed=0.005), calls,
                           reference=reference, target=100e-6))
     effects = {'air_leak': {}, 'heat_exchange': {}, 'wall_bulging': {}, 'sensor_lag': {},
                'backlash': {}}
-    plant_all = ActuatorPlant(params, effects, seed=0)
+    plant_all = ActuatorPlant(params, plant_params, effects, seed=0)
     results.append(timing('actuator plant step (dt = 1 ms, all effects)',
                           lambda: plant_all.step(1e-3, next(duties), x_s_imposed=0.005), calls,
                           reference=reference, target=100e-6))

@@ -44,10 +44,10 @@ model's entry) and what the contact memory adds to paper A's torque (`memory_tor
 import numpy as np
 
 from bellows_ros.bench import Result
+from bellows_ros.config.segment import load_segment_params
 from bellows_ros.control import angle_trajectory, closed_loop
 from bellows_ros.models.contact import contact_angle
-from bellows_ros.models.segment import (load_segment_params, SegmentModel, SegmentOutput,
-                                        simulate_model, strain_memory)
+from bellows_ros.models.segment import SegmentModel, SegmentOutput, simulate_model, strain_memory
 
 MODES = (('feedback_only', 'none'), ('previous_model', 'previous'), ('paper_a_model', 'paper_a'))
 TARGET_RATIO = 0.5

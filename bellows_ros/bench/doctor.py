@@ -27,8 +27,8 @@ import time
 import numpy as np
 
 from bellows_ros.bench import Result
+from bellows_ros.config.actuator import load_actuator
 from bellows_ros.doctor.diagnosis import diagnose
-from bellows_ros.models.actuator import load_actuator_params
 from bellows_ros.models.actuator_experiments import actuator_record
 
 EFFECTS = {'air_leak': {'conductance': 3e-12}, 'sensor_lag': {'time_constant': 0.05}}
@@ -50,8 +50,7 @@ def _median_time(fn, repeats):
 
 def run(quick=False):
     duration, repeats = (60.0, 1) if quick else (600.0, 3)
-    params = load_actuator_params()
-    record = actuator_record(params, EFFECTS, seed=1, duration=duration)
+    record = actuator_record(*load_actuator(), EFFECTS, seed=1, duration=duration)
     with tempfile.TemporaryDirectory() as directory:
         path = Path(directory) / 'actuator_10min.csv'
         _write(path, record)

@@ -62,9 +62,10 @@ import time
 
 from bellows_ros import params
 from bellows_ros.bench import Result, timing
+from bellows_ros.config.segment import load_segment_params
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.loop_timing import LoopStats, PeriodicLoop
-from bellows_ros.models.segment import load_segment_params, SegmentModel
+from bellows_ros.models.segment import SegmentModel
 from bellows_ros.runtime import realtime
 
 # The installed config (a pip or colcon install has no source tree beside the package).

@@ -24,7 +24,8 @@ the strain memories really fill and release as in use. Target: ≤ 20 µs per st
 import math
 
 from bellows_ros.bench import Result, timing
-from bellows_ros.models.segment import load_segment_params, SegmentModel
+from bellows_ros.config.segment import load_segment_params
+from bellows_ros.models.segment import SegmentModel
 
 TARGET = 20e-6
 

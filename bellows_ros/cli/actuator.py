@@ -18,9 +18,10 @@ import sys
 import numpy as np
 
 from bellows_ros import params as param_files
+from bellows_ros.config.actuator import load_actuator, params_to_flat
 from bellows_ros.data import check_range, read_table, write_csv
 from bellows_ros.identify.actuator import fit_actuator
-from bellows_ros.models.actuator import evaluate_array, load_actuator_params, params_to_flat
+from bellows_ros.models.actuator import evaluate_array
 from bellows_ros.models.actuator_plant import ActuatorPlant, effect_parameters
 
 
@@ -39,23 +40,24 @@ def simulate(input_path, output_path, params_path, effects):
     through the backlash, if any), x_s is imposed; sensors are noise-free so the output shows the
     effects alone. p and f columns of the input, if any, are replaced by the simulated ones.
     """
-    params = load_actuator_params(params_path)
-    chosen = effect_parameters(params, effects) if effects else {}
+    config = load_actuator(params_path)
+    params = config.model
+    chosen = effect_parameters(config.plant, effects) if effects else {}
     table = read_table(input_path, 'actuator', ('t', 'x_c', 'x_s'))  # p, f are outputs here
     _check_compressions(table, params)
     x_c, x_s, t = table['x_c'], table['x_s'], table['t']
     if not chosen:
         p, f, k = evaluate_array(params, x_c, x_s)
     else:
-        p, f, k = _run_plant(params, chosen, t, x_c, x_s)
+        p, f, k = _run_plant(params, config.plant, chosen, t, x_c, x_s)
     write_csv(output_path, table, {'p': p, 'f': f, 'k': k})
     what = 'model' if not chosen else 'plant with ' + ', '.join(chosen)
     print(f'bellows simulate actuator: {len(t)} rows, {what} -> {output_path}', file=sys.stderr)
     return 0
 
 
-def _run_plant(params, effects, t, x_c, x_s):
-    plant = ActuatorPlant(params, effects, noise=False, x_c0=x_c[0], x_s0=x_s[0])
+def _run_plant(params, plant_params, effects, t, x_c, x_s):
+    plant = ActuatorPlant(params, plant_params, effects, noise=False, x_c0=x_c[0], x_s0=x_s[0])
     n = len(t)
     p, f, k = np.empty(n), np.empty(n), np.empty(n)
     p[0], f[0], k[0] = plant.pressure, plant.force, plant.stiffness
@@ -67,7 +69,8 @@ def _run_plant(params, effects, t, x_c, x_s):
 
 def identify(args):
     """Fit V_tube, P0 (p_ref), E_V, F_MTS and E_F to DATA; write them as a ROS 2 parameter file."""
-    params = load_actuator_params(args.params)
+    config = load_actuator(args.params)
+    params = config.model
     table = read_table(args.data, 'actuator')
     _check_compressions(table, params)
     run = table['run'] if 'run' in table else None
@@ -77,7 +80,8 @@ def identify(args):
     header = (f'bellows identify actuator {args.data}\n'
               f'volume error rms {fit.volume_error_ml[0]:.3f} mL, '
               f'force error rms {fit.force_error_n[0]:.3f} N')
-    param_files.write_file(args.output, params_to_flat(fitted), header)
+    # The whole file (drive, sensors and effects as given): one file to read back.
+    param_files.write_file(args.output, params_to_flat(fitted, config.plant), header)
     rms, low, high = fit.volume_error_ml
     print(f'volume error: {low:+.2f} mL to {high:+.2f} mL (rms {rms:.3f} mL) '
           f'over {fit.rows} samples')

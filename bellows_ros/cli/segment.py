@@ -26,10 +26,11 @@ output columns are the plant's true values.
 import numpy as np
 
 from bellows_ros import data
+from bellows_ros.config.segment import load_segment
 from bellows_ros.errors import DataError
 from bellows_ros.identify.segment import fit_segment, MIN_RATE_PER_CUTOFF
 from bellows_ros.models.derivatives import rates
-from bellows_ros.models.segment import load_segment_params, OUTPUTS, simulate_model
+from bellows_ros.models.segment import OUTPUTS, simulate_model
 from bellows_ros.models.segment_plant import check_effects, SegmentPlant
 
 INPUT_REQUIRED = ('t', 'psi', 'p1', 'p2')  # a simulation input needs no measured torque
@@ -49,21 +50,22 @@ def _psi_dot(table):
 
 def simulate(input_path, output_path, params_path, effects):
     """Run the model (no effects) or the plant (effects: name -> {param: float}); write the CSV."""
-    params = load_segment_params(params_path)
+    config = load_segment(params_path)
+    params = config.model
     effects = check_effects(effects)
     table = _read(input_path, params, INPUT_REQUIRED)
     if not effects:
         outputs = simulate_model(params, table['psi'], table['p1'], table['p2'], _psi_dot(table))
     else:
-        outputs = _run_plant(params, effects, table)
+        outputs = _run_plant(params, config.plant, effects, table)
     data.write_csv(output_path, table, outputs)
     return 0
 
 
-def _run_plant(params, effects, table):
+def _run_plant(params, plant_params, effects, table):
     t = table['t']
     steps = np.diff(t, prepend=t[0] - (t[1] - t[0] if len(t) > 1 else 1e-3))
-    plant = SegmentPlant(params, effects, seed=0, psi0=float(table['psi'][0]))
+    plant = SegmentPlant(params, plant_params, effects, seed=0, psi0=float(table['psi'][0]))
     measured, true = [], []
     for dt, psi, p1, p2 in zip(steps.tolist(), table['psi'].tolist(), table['p1'].tolist(),
                                table['p2'].tolist()):
@@ -81,9 +83,8 @@ def _run_plant(params, effects, table):
     return outputs
 
 
-def _filter_summary(fit, params):
-    """One line: which input low-pass the fit (and the fitted model's prediction) used."""
-    wanted = params.identify_input_cutoff
+def _filter_summary(fit, wanted):
+    """One line: which input low-pass the fit used (`wanted`: the file's cutoff, Hz)."""
     if fit.input_cutoff is not None:
         return (f'inputs p1, p2, psi, psi_dot low-passed at {fit.input_cutoff:g} Hz (zero-phase '
                 f'Butterworth, data at {fit.rate:.4g} Hz); tau_ext not filtered')
@@ -96,24 +97,27 @@ def _filter_summary(fit, params):
 
 def identify(args):
     """Fit paper A's model to DATA, write the parameters, print held-out errors of both models."""
-    params = load_segment_params(args.params)
+    config = load_segment(args.params)
+    params = config.model
     table = _read(args.data, params)
     if len(table) < 50:
         raise DataError(table.path, f'only {len(table)} rows: identification needs at least 50')
-    fit = fit_segment(params, table.values, seed=args.seed, progress=not args.quiet)
+    fit = fit_segment(params, table.values, config.identify.input_cutoff, seed=args.seed,
+                      progress=not args.quiet)
     header = (f'bellows identify segment {args.data}\n'
               f'held-out RMSE {fit.heldout["model"][0]:.4g} N·m (previous model '
               f'{fit.heldout["previous"][0]:.4g} N·m) on the last {fit.heldout_rows} rows; '
-              f'{_filter_summary(fit, params)}')
+              f'{_filter_summary(fit, config.identify.input_cutoff)}')
     from bellows_ros.params import write_file
-    write_file(args.output, fit.params.flat(), header=header)
+    # The whole file (the plant and identification settings as given): one file to read back.
+    write_file(args.output, config._replace(model=fit.params).flat(), header=header)
     mu, gamma = fit.params.ogden_mu, fit.params.ogden_gamma
     print(f'fitted: mu = [{mu[0]:.6g}, {mu[1]:.6g}] N/m, '
           f'gamma = [{gamma[0]:.4g}, {gamma[1]:.4g}], '
           f'c_psi0 = {fit.params.restoring_c_psi0:.4g}, '
           f'c_psi0_p = {fit.params.restoring_c_psi0_p:.4g} rad '
           f'({fit.evaluations} evaluations)')
-    print(_filter_summary(fit, params))
+    print(_filter_summary(fit, config.identify.input_cutoff))
     print(f'held-out error on the last {fit.heldout_rows} of '
           f'{fit.train_rows + fit.heldout_rows} rows '
           f'(against the raw measured tau_ext):')

@@ -28,10 +28,10 @@ import dataclasses
 import numpy as np
 
 from bellows_ros import params as parameters
+from bellows_ros.config.segment import load_segment
 from bellows_ros.control import angle_trajectory
 from bellows_ros.control.angle_tracking import AngleTracker, TrackingGains
 from bellows_ros.hardware import can_protocol
-from bellows_ros.models.segment import load_segment_params
 from bellows_ros.models.segment_plant import FULL_MODEL, SegmentPlant
 
 TrackingRun = namedtuple('TrackingRun',
@@ -43,18 +43,19 @@ TrackingRun.__doc__ = ('Arrays per sample: time s, set-point and true angle rad,
 DT = 1e-3
 
 
-def simulate(params, gains, feedforward, trajectory, effects, seed=0, control_every=5,
-             setpoint_every=1, duration=None, noise=None, plant_params=None, model=None):
+def simulate(params, plant_params, gains, feedforward, trajectory, effects, seed=0,
+             control_every=5, setpoint_every=1, duration=None, noise=None, physics=None,
+             model=None):
     """
-    Track `trajectory` on `SegmentPlant(plant_params, effects, noise, seed)` -> TrackingRun.
+    Track `trajectory` on `SegmentPlant(physics, plant_params, effects, noise, seed)` -> a run.
 
-    params: the tracker's model (SegmentParams); plant_params: the plant's (default: the same);
-    model: a stand-in for the tracker's `SegmentModel` (step, peek, torques, params), for
-    ablations.
+    params: the tracker's model (SegmentParams); plant_params: the simulated segment's
+    SegmentPlantParams; physics: the plant's SegmentParams (default: the tracker's); model: a
+    stand-in for the tracker's `SegmentModel` (step, peek, torques, params), for ablations.
     """
     total = angle_trajectory.duration(trajectory) if duration is None else duration
     steps = int(round(total / DT))
-    plant = SegmentPlant(plant_params or params, effects=effects, noise=noise, seed=seed,
+    plant = SegmentPlant(physics or params, plant_params, effects=effects, noise=noise, seed=seed,
                          psi0=trajectory.start)
     tracker = AngleTracker(params, gains, feedforward)
     if model is not None:
@@ -102,11 +103,10 @@ def setpoint_every():
                  / db.get_message_by_name('ARM_SEG1_SAMPLE').cycle_time)
 
 
-def with_rigid_body(segment):
+def with_rigid_body(segment, plant):
     """Return the model's (2) with the simulated segment's M, C, N (as segment.dynamics)."""
-    return segment.replace(dynamics_inertia=segment.plant_inertia,
-                           dynamics_damping=segment.plant_damping,
-                           dynamics_gravity=segment.plant_gravity)
+    return segment.replace(dynamics_inertia=plant.inertia, dynamics_damping=plant.damping,
+                           dynamics_gravity=plant.gravity)
 
 
 def track(mode, trajectory, rigid_body=True, lead=True, seed=0, duration=None,
@@ -118,12 +118,12 @@ def track(mode, trajectory, rigid_body=True, lead=True, seed=0, duration=None,
     config/nodes_sim.yaml's arm_controller_node. Optionally without the rigid-body terms of (2) or
     the valve-lag lead; `model_factory(params)` replaces the tracker's own SegmentModel.
     """
-    segment = load_segment_params()
+    segment, plant, _ = load_segment()
     gains, control_every = controller_settings(segment)
     if not lead:
         gains = dataclasses.replace(gains, lead=0.0)
-    model = with_rigid_body(segment) if rigid_body and mode != 'none' else segment
-    return simulate(model, gains, mode, trajectory, FULL_MODEL, seed=seed,
+    model = with_rigid_body(segment, plant) if rigid_body and mode != 'none' else segment
+    return simulate(model, plant, gains, mode, trajectory, FULL_MODEL, seed=seed,
                     control_every=control_every, setpoint_every=setpoint_every(),
-                    duration=duration, plant_params=segment,
+                    duration=duration, physics=segment,
                     model=None if model_factory is None else model_factory(model))

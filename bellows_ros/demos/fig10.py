@@ -24,7 +24,8 @@ import sys
 
 import numpy as np
 
-from bellows_ros.models.segment import load_segment_params, simulate_model
+from bellows_ros.config.segment import load_segment
+from bellows_ros.models.segment import simulate_model
 from bellows_ros.models.segment_experiments import fig10_record
 from bellows_ros.models.segment_plant import FULL_MODEL, NO_NOISE
 
@@ -38,9 +39,9 @@ def main(argv=None):
     parser.add_argument('--noise', action='store_true',
                         help='sensor noise from segment.plant.noise')
     args = parser.parse_args(argv)
-    params = load_segment_params(args.params)
-    record, before, after = fig10_record(params, FULL_MODEL, None if args.noise else NO_NOISE,
-                                         seed=0)
+    params, plant, _ = load_segment(args.params)
+    record, before, after = fig10_record(params, plant, FULL_MODEL,
+                                         None if args.noise else NO_NOISE, seed=0)
     model = simulate_model(params, record['psi'], record['p1'], record['p2'], record['psi_dot'])
     print(f"{'':28}{'before':>10}{'after':>10}   "
           '(N·m; paper A measured 6.7 / 9.1, previous model 9.9)')

@@ -49,11 +49,12 @@ import dataclasses
 
 import numpy as np
 
+from bellows_ros.config.actuator import params_to_flat
 from bellows_ros.doctor.filters import lag, play, recurrence, relax
 from bellows_ros.doctor.scoring import Model, noise_floor, noise_floor_ramps
 from bellows_ros.errors import ParameterError
-from bellows_ros.models.actuator import (Buckling, buckling_force, params_to_flat, pressure,
-                                         without_buckling, without_bulging)
+from bellows_ros.models.actuator import (Buckling, buckling_force, pressure, without_buckling,
+                                         without_bulging)
 from bellows_ros.models.actuator_geometry import e_v, frustum_state, P_ATM, volume_geo
 
 CAUSES = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash', 'buckling')
@@ -355,13 +356,16 @@ def build_model(record, params, causes, warm=None, scales=None):
                  n_linear=F_MTS_DEGREE + 2, starts=starts)
 
 
-def extended_flat(params, causes, values):
+def extended_flat(config, causes, values):
     """
     Return the flat ROS 2 parameters of the extended model (for `params.write_file`).
+
+    `config`: the `ActuatorConfig` diagnosed (model and plant: the file is complete).
 
     The refitted gas and tube, E_V if wall bulging pays, and the fitted effect parameters under
     `actuator.effects.*` (read by `bellows simulate actuator --effect NAME` and the plant).
     """
+    params = config.model
     base = values['baseline']
     model = dataclasses.replace(params, p_ref=base['p_ref'], v_tube=base['v_tube'])
     model = without_buckling(without_bulging(model))
@@ -379,7 +383,7 @@ def extended_flat(params, causes, values):
         e = values['wall_bulging']
         model = bulged(model, [e['e_q'], e['e_dq_chamber'], e['e_dq_spring'], e['e_dd_chamber'],
                                e['e_dd_spring']])
-    flat = params_to_flat(model)
+    flat = params_to_flat(model, config.plant)
     for cause in causes:
         if cause in ('wall_bulging', 'buckling'):
             flat[f'actuator.effects.{cause}.scale'] = 1.0

@@ -146,11 +146,12 @@ def system_module(system):
 
 
 def load_params(system, params_path):
+    """Return the system's parameter objects (`SegmentConfig`, `ActuatorConfig`) of a file."""
     if system == 'actuator':
-        from bellows_ros.models.actuator import load_actuator_params
-        return load_actuator_params(params_path)
-    from bellows_ros.models.segment import load_segment_params
-    return load_segment_params(params_path)
+        from bellows_ros.config.actuator import load_actuator
+        return load_actuator(params_path)
+    from bellows_ros.config.segment import load_segment
+    return load_segment(params_path)
 
 
 def decimation_factor(record, rate):
@@ -169,10 +170,11 @@ def diagnose(system, path, params_path=None, progress=False, causes=None):
     """
     started = time.perf_counter()
     module = system_module(system)
-    params = load_params(system, params_path)
+    config = load_params(system, params_path)
+    params = config.model
     full = checks.load(path, system)
     if system == 'segment':
-        module.add_columns(full, params)
+        module.add_columns(full, params, config.identify.input_cutoff)
     record = full.decimated(decimation_factor(full, module.FIT_RATE))
     extra = {}
     outputs = getattr(module, 'OUTPUTS', None)
@@ -243,7 +245,7 @@ def diagnose(system, path, params_path=None, progress=False, causes=None):
         unexplained = _structured(evidence)
         return Diagnosis(system, str(path), record, y, module.UNIT, module.BASELINE, baseline,
                          current, chosen, candidates, noise, evidence, bool(unexplained), values,
-                         module.extended_flat(params, chosen, values), timings, failure)
+                         module.extended_flat(config, chosen, values), timings, failure)
     views = []
     for i, (name, unit, label) in enumerate(outputs):
         scale = scales[name]
@@ -263,7 +265,7 @@ def diagnose(system, path, params_path=None, progress=False, causes=None):
     view = views[primary]
     return Diagnosis(system, str(path), record, view.signal, view.unit, module.BASELINE, baseline,
                      current, chosen, candidates, view.noise, worst.evidence, bool(unexplained),
-                     values, module.extended_flat(params, chosen, values), timings, failure, views,
+                     values, module.extended_flat(config, chosen, values), timings, failure, views,
                      primary)
 
 

@@ -64,12 +64,12 @@ STARTS = {
 }
 
 
-def add_columns(record, params):
+def add_columns(record, params, input_cutoff):
     """
     Add the derived columns the segment causes need: Ψ̇ (if absent) and Y (the target).
 
     The measured inputs are low-passed as the identification does (`identify.segment.filter_inputs`
-    at `segment.identify.input_cutoff`).
+    at `input_cutoff` Hz, the file's `segment.identify.input_cutoff`).
 
     Why filter: the torque is steep in the pressure (~0.05 N·m per kPa), so white pressure-sensor
     noise (1 kPa) would reach the prediction as ~0.05 N·m at 1 kHz — as large as the torque
@@ -81,7 +81,7 @@ def add_columns(record, params):
     if 'psi_dot' not in columns:
         columns['psi_dot'] = rates(columns['t'], columns['psi'])
     columns['y'] = target(params, columns)  # Y = τ_motion - τ_ext (30), from the raw record
-    filtered, _, _ = filter_inputs(columns, params.identify_input_cutoff)
+    filtered, _, _ = filter_inputs(columns, input_cutoff)
     columns.update(filtered)
     return record
 
@@ -232,17 +232,19 @@ def build_model(record, params, causes, warm=None, contact=None, noise=None):
     return Model(causes, names, x0, lower, upper, run, physical, n_linear=n_linear, starts=starts)
 
 
-def extended_flat(params, causes, values):
+def extended_flat(config, causes, values):
     """
     Return the flat ROS 2 parameters of the extended model for `params.write_file`.
 
-    Names of config/segment.yaml, loadable by `load_segment_params`.
+    `config`: the `SegmentConfig` diagnosed. All names of config/segment.yaml, loadable by
+    `bellows_ros.config.segment.load_segment`.
 
     The fitted coefficients go to their YAML names; physics a cause did not find is written as
     switched off (c_f,p = 0, c_Ψ0,p = k_s,p = 0), so the file describes exactly the extended model.
     A fitted sensor lag goes to `segment.plant.sensor_lag_tau` (the plant's `sensor_lag` effect).
     """
-    flat = params.flat()
+    params = config.model
+    flat = config.flat()
     vector = {'actuator.theta': list(params.actuator_theta),
               'previous.theta': list(params.previous_theta)}
     scalars = {}

@@ -21,8 +21,8 @@ watchdog.
 
 API
 ---
-- ``load_config(params_path=None) -> ActuatorBoardConfig`` (from config/hardware.yaml,
-  ``hardware.actuator_board.*``).
+- ``config``: ``bellows_ros.config.hardware.actuator_board_config(params_path=None) ->
+  ActuatorBoardConfig`` (config/hardware.yaml, ``hardware.actuator_board.*``).
 - ``ActuatorBoard(config, on_sample=None)``; ``on_sample(sample: ActuatorSample)`` is called from
   the reader thread for every good telemetry frame (keep it short).
 - ``.latest() -> ActuatorSample | None``: newest good sample, None when there is none or it is
@@ -43,43 +43,11 @@ import time
 
 import serial
 
-from bellows_ros import params
 from bellows_ros.hardware import serial_protocol as sp
 from bellows_ros.hardware.safety import into_end_stop, limit_duty, Watchdog
 from bellows_ros.hardware.sample_delivery import deliver, fresh
-from bellows_ros.models.actuator import load_actuator_params
 
 log = logging.getLogger(__name__)
-
-
-@dataclasses.dataclass(frozen=True)
-class ActuatorBoardConfig:
-    port: str
-    baud: int
-    stale_timeout: float
-    reconnect_interval: float
-    heartbeat_period: float
-    command_timeout: float
-    duty_max: float
-    metres_per_count: float
-    x_c_min: float
-    x_c_max: float
-
-
-def load_config(params_path=None, actuator_params_path=None):
-    """
-    `ActuatorBoardConfig` from config/hardware.yaml with the user's file laid over it.
-
-    The encoder scaling and the end stops are not repeated in hardware.yaml: they come from the
-    actuator's drive and travel limits (config/actuator.yaml, or `actuator_params_path`), their one
-    source. The soft end stops lie `end_stop_margin` (m) inside the mechanical ones.
-    """
-    flat = params.section(params.load('hardware', params_path), 'hardware.actuator_board')
-    actuator = load_actuator_params(actuator_params_path)
-    margin = flat.pop('end_stop_margin')
-    flat.update(metres_per_count=actuator.drive.metres_per_count,
-                x_c_min=actuator.chamber.x_min + margin, x_c_max=actuator.chamber.x_max - margin)
-    return params.build(ActuatorBoardConfig, flat, params_path or 'config/hardware.yaml')
 
 
 @dataclasses.dataclass(frozen=True)

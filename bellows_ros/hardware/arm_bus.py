@@ -21,7 +21,8 @@ host heartbeat and the newest pressure set-points, and runs the command watchdog
 
 API
 ---
-- ``load_config(params_path=None) -> ArmBusConfig`` (config/hardware.yaml, ``hardware.arm_bus.*``).
+- ``config``: ``bellows_ros.config.hardware.arm_bus_config(params_path=None) -> ArmBusConfig``
+  (config/hardware.yaml, ``hardware.arm_bus.*``).
 - ``open_bus(config, **kwargs) -> can.BusABC``: ``can.Bus(interface=config.interface,
   channel=config.channel, **kwargs)`` (socketcan on the robot; virtual / udp_multicast in tests).
 - ``ArmBus(config, bus=None, on_sample=None)``; takes ownership of `bus` (default
@@ -44,41 +45,12 @@ import time
 
 import can
 
-from bellows_ros import params
 from bellows_ros.hardware import can_protocol as cp
 from bellows_ros.hardware.can_echo_filter import drop_own_frames
 from bellows_ros.hardware.safety import clamp_pressures, Watchdog
 from bellows_ros.hardware.sample_delivery import deliver, fresh
-from bellows_ros.models.segment import load_segment_params
 
 log = logging.getLogger(__name__)
-
-
-@dataclasses.dataclass(frozen=True)
-class ArmBusConfig:
-    interface: str
-    channel: str
-    bitrate: int
-    dbc: str
-    n_segments: int
-    pressure_min: float
-    pressure_max: float
-    stale_timeout: float
-    command_timeout: float
-
-
-def load_config(params_path=None, segment_params_path=None):
-    """
-    `ArmBusConfig` from config/hardware.yaml with the user's file laid over it.
-
-    The set-point limits are the segment model's ambient pressure p0 and p_max
-    (config/segment.yaml, or `segment_params_path`): the valves exhaust to ambient, and above
-    p_max the model's scaled pressure leaves [0, 1].
-    """
-    flat = params.section(params.load('hardware', params_path), 'hardware.arm_bus')
-    segment = load_segment_params(segment_params_path)
-    flat.update(pressure_min=segment.p0, pressure_max=segment.p_max)
-    return params.build(ArmBusConfig, flat, params_path or 'config/hardware.yaml')
 
 
 # Linux's IP_MULTICAST_ALL (linux/in.h); Python's socket module does not export it.

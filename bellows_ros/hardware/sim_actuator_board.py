@@ -48,8 +48,8 @@ import threading
 import time
 import tty
 
+from bellows_ros.config.hardware import actuator_board_config
 from bellows_ros.hardware import serial_protocol as sp
-from bellows_ros.hardware.actuator_board import load_config
 from bellows_ros.hardware.faults import Faults
 from bellows_ros.hardware.loop_timing import LoopStats, LoopThread, PeriodicLoop
 from bellows_ros.hardware.safety import into_end_stop
@@ -75,7 +75,7 @@ class ActuatorState:
 class SimActuatorBoard:
     def __init__(self, step, config=None, link_path=None, faults=None, period=1e-3, record=False):
         if config is None:
-            config = load_config()
+            config = actuator_board_config()
         self._step = step
         self.config = config
         self.faults = faults if faults is not None else Faults()

@@ -35,11 +35,11 @@ import time
 
 import can
 
+from bellows_ros.config.hardware import vent_pressure as ambient_pressure
 from bellows_ros.hardware import can_protocol as cp
 from bellows_ros.hardware.can_echo_filter import drop_own_frames
 from bellows_ros.hardware.faults import Faults
 from bellows_ros.hardware.loop_timing import LoopStats, LoopThread, PeriodicLoop
-from bellows_ros.models.segment import load_segment_params
 
 log = logging.getLogger(__name__)
 
@@ -67,8 +67,8 @@ class SimArmBus:
         psi = self._samples[0].get_signal_by_name('Psi')
         self._p_range = (p1.minimum, p1.maximum)
         self._psi_range = (psi.minimum, psi.maximum)
-        # Vented valves hold ambient: the segment model's p0 (config/segment.yaml).
-        self.vent_pressure = load_segment_params().p0 if vent_pressure is None else vent_pressure
+        # Vented valves hold ambient: the segment's p0 (config/segment.yaml).
+        self.vent_pressure = ambient_pressure() if vent_pressure is None else vent_pressure
         self.setpoints = (self.vent_pressure,) * (2 * n_segments)
         self._commanded = list(self.setpoints)
         self._last_host = None      # never heard: vented until a host speaks

@@ -113,10 +113,6 @@ def filter_inputs(record, cutoff):
     return filtered, float(cutoff), rate
 
 
-def _cutoff(params, input_cutoff):
-    return params.identify_input_cutoff if input_cutoff is None else input_cutoff
-
-
 def target(params, record):
     """
     Compute Y = τ_motion - τ_ext (30), N·m.
@@ -236,8 +232,8 @@ def _bounds():
     return optimize.Bounds(lows, highs)
 
 
-def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=150, screen=32,
-                progress=True, input_cutoff=None, search_rows=SEARCH_ROWS, refine_rows=REFINE_ROWS,
+def fit_segment(params, record, input_cutoff, holdout=0.3, starts=3, seed=0, max_evaluations=150,
+                screen=32, progress=True, search_rows=SEARCH_ROWS, refine_rows=REFINE_ROWS,
                 polish_evaluations=POLISH_EVALUATIONS):
     """
     Fit paper A's model to `record` (arrays, columns of docs/interfaces.md); returns a `Fit`.
@@ -258,11 +254,11 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=1
        at most ~`polish_evaluations` forward runs (0: skip the step).
     The two Ogden terms are interchangeable, so (μ1, γ1) and (μ2, γ2) may come out swapped.
     Before all of it the inputs are low-pass filtered (`filter_inputs`) at `input_cutoff` Hz
-    (None: `params.identify_input_cutoff`; 0: off); `Fit.input_cutoff` says what was applied.
+    (`segment.identify.input_cutoff`; 0: off); `Fit.input_cutoff` says what was applied.
     """
     from tqdm import tqdm
 
-    record, applied_cutoff, rate = filter_inputs(record, _cutoff(params, input_cutoff))
+    record, applied_cutoff, rate = filter_inputs(record, input_cutoff)
     y_all = target(params, record)
     n = len(y_all)
     n_train = max(2, int(round(n * (1.0 - holdout))))
@@ -373,23 +369,23 @@ def fit_segment(params, record, holdout=0.3, starts=3, seed=0, max_evaluations=1
                applied_cutoff, rate)
 
 
-def predict(params, record, input_cutoff=None):
+def predict(params, record, input_cutoff):
     """
     Run the fitted model's prediction pipeline on a measured record.
 
-    The same input filter as the fit (`filter_inputs` at `input_cutoff` Hz, None:
-    `params.identify_input_cutoff`), then the regressors (31) with θ of `params`. Returns (Ŷ of
+    The same input filter as the fit (`filter_inputs` at `input_cutoff` Hz, the file's
+    `segment.identify.input_cutoff`), then the regressors (31) with θ of `params`. Returns (Ŷ of
     paper A's model, Ŷ of the previous model (34), Y measured) in N·m, Y = τ_motion - τ_ext (30)
     with the raw measured τ_ext.
     """
-    filtered = filter_inputs(record, _cutoff(params, input_cutoff))[0]
+    filtered = filter_inputs(record, input_cutoff)[0]
     blocks = regressors(params, filtered)
     rows = slice(None)
     return _predict(params, blocks,
                     rows), _predict_previous(params, blocks, rows), target(params, filtered)
 
 
-def prediction_errors(params, record, input_cutoff=None):
+def prediction_errors(params, record, input_cutoff):
     """
     Return (RMSE, MAE) in N·m of `predict` against the raw measured torque.
 
@@ -416,7 +412,7 @@ def _predict_previous(params, blocks, rows):
 FIG10_BEFORE, FIG10_AFTER = 6.7, 9.1  # |τ_ext| measured by paper A before/after the excursion, N·m
 
 
-def calibrate_fig10(params, before=FIG10_BEFORE, after=FIG10_AFTER, free=(0, 1), seed=0):
+def calibrate_fig10(params, plant, before=FIG10_BEFORE, after=FIG10_AFTER, free=(0, 1), seed=0):
     """
     Choose θ_a so paper A's Fig. 10 scenario gives |τ_ext| = before/after; refit θ_prev.
 
@@ -425,12 +421,13 @@ def calibrate_fig10(params, before=FIG10_BEFORE, after=FIG10_AFTER, free=(0, 1),
     the regressor rows at the two instants, and the two entries `free` of θ_a (the others kept)
     follow from a 2x2 linear solve. τ_ext = -τ_drive at rest (τ_motion = 0 there). θ_prev is then
     the least-squares fit of (34) to a noise-free quasi-static record of the calibrated physics, as
-    paper A refitted its previous model on the same data. Returns the calibrated SegmentParams.
+    paper A refitted its previous model on the same data. `plant`: the simulated segment's
+    SegmentPlantParams (valves, dynamics). Returns the calibrated SegmentParams.
     """
     from bellows_ros.models.segment_experiments import fig10_record, quasi_static_record
     from bellows_ros.models.segment_plant import FULL_MODEL, NO_NOISE
 
-    record, i_before, i_after = fig10_record(params, FULL_MODEL, NO_NOISE)
+    record, i_before, i_after = fig10_record(params, plant, FULL_MODEL, NO_NOISE)
     blocks = regressors(params, record)
     rows = [i_before, i_after]
     theta_a = np.array(params.actuator_theta, float)
@@ -441,14 +438,14 @@ def calibrate_fig10(params, before=FIG10_BEFORE, after=FIG10_AFTER, free=(0, 1),
            - x[:, others] @ theta_a[others])
     theta_a[free] = np.linalg.solve(x[:, free], rhs)
     calibrated = params.replace(actuator_theta=tuple(float(v) for v in theta_a))
-    quasi = quasi_static_record(calibrated, FULL_MODEL, NO_NOISE, seed=seed, duration=300.0,
-                                dt=5e-3)
+    quasi = quasi_static_record(calibrated, plant, FULL_MODEL, NO_NOISE, seed=seed,
+                                duration=300.0, dt=5e-3)
     qblocks = regressors(calibrated, quasi)
     theta_prev = fit_previous(calibrated, qblocks, target(calibrated, quasi))
     return calibrated.replace(previous_theta=tuple(float(v) for v in theta_prev))
 
 
-def fig10_torques(params, effects=None, noise=None, seed=None):
+def fig10_torques(params, plant, effects=None, noise=None, seed=None):
     """
     Return |τ_ext| of the Fig. 10 scenario before and after the excursion, with the old model's.
 
@@ -459,7 +456,8 @@ def fig10_torques(params, effects=None, noise=None, seed=None):
     from bellows_ros.models.segment_experiments import fig10_record
     from bellows_ros.models.segment_plant import FULL_MODEL, NO_NOISE
 
-    record, i_before, i_after = fig10_record(params, FULL_MODEL if effects is None else effects,
+    record, i_before, i_after = fig10_record(params, plant,
+                                             FULL_MODEL if effects is None else effects,
                                              NO_NOISE if noise is None else noise, seed)
     out = simulate_model(params, record['psi'], record['p1'], record['p2'], record['psi_dot'])
     return (-record['tau_ext'][i_before], -record['tau_ext'][i_after],
@@ -474,15 +472,16 @@ def main(argv=None):
     """
     import argparse
 
-    from bellows_ros.models.segment import load_segment_params
+    from bellows_ros.config.segment import load_segment
     parser = argparse.ArgumentParser(description=main.__doc__)
     parser.add_argument('--calibrate', action='store_true', required=True)
     parser.add_argument('--params', help='start from this parameter file instead of the defaults')
     args = parser.parse_args(argv)
-    calibrated = calibrate_fig10(load_segment_params(args.params))
+    config = load_segment(args.params)
+    calibrated = calibrate_fig10(config.model, config.plant)
     print('actuator.theta:', [round(v, 6) for v in calibrated.actuator_theta])
     print('previous.theta:', [round(v, 6) for v in calibrated.previous_theta])
-    before, after, prev_before, prev_after = fig10_torques(calibrated)
+    before, after, prev_before, prev_after = fig10_torques(calibrated, config.plant)
     print(f'Fig. 10: |tau_ext| before {before:.3f} N·m, after {after:.3f} N·m; '
           f'previous model {prev_before:.3f} / {prev_after:.3f} N·m')
     return 0

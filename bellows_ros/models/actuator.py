@@ -41,57 +41,12 @@ import math
 
 import numpy as np
 
-from bellows_ros import params as param_files
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.actuator_geometry import (Bellows, e_v, e_v_in_q, frustum_state, P_ATM,
                                                   volume, volume_geo)
 
 _NEWTON_TOL = 1e-6   # Pa
 _NEWTON_MAX = 30
-
-
-@dataclass(frozen=True)
-class Drive:
-    """
-    Motor, gearbox and lead screw (section II-A): a Pololu-class 12 V DC gear motor.
-
-    supply_voltage V; resistance Ω; inductance H; torque_constant N·m/A (= back-EMF V·s/rad);
-    rotor_inertia kg·m²; viscous_friction N·m·s/rad (motor side); gear_ratio (100:1);
-    counts_per_rev: encoder counts per motor turn; lead: m per lead-screw turn (20 TPI = 1.27 mm);
-    efficiency: lead screw (< 0.5, so it is not back-drivable).
-    """
-
-    supply_voltage: float
-    resistance: float
-    inductance: float
-    torque_constant: float
-    rotor_inertia: float
-    viscous_friction: float
-    gear_ratio: float
-    counts_per_rev: int
-    lead: float
-    efficiency: float
-
-    @property
-    def metres_per_count(self):
-        return self.lead / (self.gear_ratio * self.counts_per_rev)
-
-    @property
-    def max_speed(self):
-        """Chamber speed (m/s) at full duty with no load: no-load motor speed through the drive."""
-        k = self.torque_constant
-        omega = k * self.supply_voltage / (k * k + self.resistance * self.viscous_friction)
-        return omega / (2.0 * math.pi) / self.gear_ratio * self.lead
-
-
-@dataclass(frozen=True)
-class Sensors:
-    """Pressure and force sensors: white noise (standard deviation) and quantisation step."""
-
-    pressure_noise: float
-    pressure_quantum: float
-    force_noise: float
-    force_quantum: float
 
 
 @dataclass(frozen=True)
@@ -137,14 +92,15 @@ NO_BUCKLING = None  # `ActuatorParams.buckling` of an actuator whose spring does
 @dataclass(frozen=True)
 class ActuatorParams:
     """
-    All parameters of `config/actuator.yaml` (section `actuator.`), SI units.
+    The model's parameters of `config/actuator.yaml` (section `actuator.`), SI units.
 
     chamber, spring: `Bellows` (Table II, E_V); p_ref: gas amount as the design-point pressure, Pa;
     x_c_ref: design-point chamber compression, m; v_tube: tube volume, m³ (17);
     f_mts: F_MTS(x) = Σ f_mts[i] x^(i+1), N (unpressurised spring curve); e_f: C1..C4 of (11);
     x_s_low, x_s_high: spring range of the paper's average-slope stiffness (0-12 mm);
-    drive, sensors: the hardware; effects: default parameters of the plant's physical effects;
     buckling: `Buckling` of the spring (None, or stiffness_loss 0: the spring does not buckle).
+    The simulated actuator's drive, sensors and effects are `actuator_plant.ActuatorPlantParams`;
+    the config layer (`bellows_ros.config.actuator`) builds both from the one file.
     """
 
     chamber: Bellows
@@ -156,9 +112,6 @@ class ActuatorParams:
     e_f: tuple
     x_s_low: float
     x_s_high: float
-    drive: Drive
-    sensors: Sensors
-    effects: tuple = ()
     buckling: Buckling = NO_BUCKLING
 
     def __post_init__(self):
@@ -173,163 +126,6 @@ class ActuatorParams:
                 raise ParameterError(f"parameter 'actuator.{name}.e_v': expected 10 "
                                      f'coefficients, got {len(bellows.e_v)}')
         object.__setattr__(self, '_gas_nominal', gas_amount(self, self.p_ref))
-
-    def effect_defaults(self):
-        """{effect name: {parameter: value}} from the YAML."""
-        return {name: dict(items) for name, items in self.effects}
-
-
-def load_actuator_params(params_path=None):
-    """`config/actuator.yaml` with the user's file (if any) laid over it -> `ActuatorParams`."""
-    flat = param_files.load('actuator', params_path)
-    return params_from_flat(flat, params_path or 'config/actuator.yaml')
-
-
-def params_from_flat(flat, source='parameters'):
-    """Build `ActuatorParams` from flat dotted names (`actuator.gas.v_tube`, ...)."""
-    values = param_files.section(flat, 'actuator')
-    build = param_files.build
-    parts = {}
-    for prefix in ('air_chamber', 'spring', 'gas', 'force', 'stiffness', 'drive', 'sensors',
-                   'effects', 'buckling'):
-        parts[prefix] = param_files.section(values, prefix)
-    known = {name.split('.')[0] for name in values}
-    unknown = sorted(known - set(parts))
-    if unknown:
-        raise ParameterError(f"{source}: unknown parameter 'actuator.{unknown[0]}'")
-    effects = {}
-    for name, value in parts['effects'].items():
-        effect, _, key = name.partition('.')
-        effects.setdefault(effect, {})[key] = float(value)
-    try:
-        _check_admissible(parts, source)
-        return ActuatorParams(
-            chamber=build(Bellows, parts['air_chamber'], f'{source}: actuator.air_chamber'),
-            spring=build(Bellows, parts['spring'], f'{source}: actuator.spring'),
-            p_ref=float(_need(parts['gas'], 'p_ref', source, 'gas')),
-            x_c_ref=float(_need(parts['gas'], 'x_c_ref', source, 'gas')),
-            v_tube=float(_need(parts['gas'], 'v_tube', source, 'gas')),
-            f_mts=tuple(float(v) for v in _need(parts['force'], 'f_mts', source, 'force')),
-            e_f=tuple(float(v) for v in _need(parts['force'], 'e_f', source, 'force')),
-            x_s_low=float(_need(parts['stiffness'], 'x_s_low', source, 'stiffness')),
-            x_s_high=float(_need(parts['stiffness'], 'x_s_high', source, 'stiffness')),
-            drive=build(Drive, parts['drive'], f'{source}: actuator.drive'),
-            sensors=build(Sensors, parts['sensors'], f'{source}: actuator.sensors'),
-            effects=tuple(sorted((k, tuple(sorted(v.items()))) for k, v in effects.items())),
-            buckling=_buckling(parts['buckling'], source),
-        )
-    except TypeError as exc:  # a list where a number belongs, or the reverse
-        raise ParameterError(f'{source}: {exc}') from None
-    except ParameterError as exc:  # from a parameter object's own checks, which know no file
-        message = str(exc)
-        if message.startswith(f'{source}:'):
-            raise
-        raise ParameterError(f'{source}: {message}') from None
-
-
-def _check_admissible(parts, source):
-    """
-    Refuse values the equations cannot use, naming the parameter (as the segment's check does).
-
-    Without this a zero height divides by zero while the gas amount is computed, a fractional
-    segment count is silently truncated, and a travel range beyond the frustum geometry (3) takes
-    the square root of a negative number.
-    """
-    def fail(name, why):
-        raise ParameterError(f"{source}: parameter 'actuator.{name}' {why}")
-
-    def number(group, name):
-        value = parts[group].get(name)
-        if not isinstance(value, (int, float)) or isinstance(value, bool):
-            fail(f'{group}.{name}', f'must be a number, got {value!r}')
-        return float(value)
-    for group in ('air_chamber', 'spring'):
-        r_big, r_small = number(group, 'r_big'), number(group, 'r_small')
-        h0, x_min, x_max = number(group, 'h0'), number(group, 'x_min'), number(group, 'x_max')
-        n = parts[group].get('n')
-        if isinstance(n, bool) or not isinstance(n, (int, float)) or n != int(n) or n < 1:
-            fail(f'{group}.n', f'must be a positive whole number of segments, got {n!r}')
-        if not r_big > r_small > 0:
-            fail(f'{group}.r_big', f'must exceed r_small > 0 (got {r_big:g}, {r_small:g})')
-        if not h0 > 0:
-            fail(f'{group}.h0', 'must be > 0')
-        if number(group, 'wall') < 0:
-            fail(f'{group}.wall', 'must be >= 0')
-        if not x_min < x_max < n * h0:
-            fail(f'{group}.x_max', f'must exceed x_min and stay below n*h0 = {n * h0:g} m')
-        for x in (x_min, x_max):  # R(dh)^2 term of (3) is concave in dh: the ends bound it
-            dh = x / n
-            if (r_big - r_small) ** 2 - (dh * dh - 2.0 * h0 * dh) / 4.0 <= 0:
-                fail(f'{group}.x_min' if x == x_min else f'{group}.x_max',
-                     f'{x:g} m lies beyond the frustum geometry (3) of this bellows')
-    if not number('gas', 'p_ref') > 0:
-        fail('gas.p_ref', 'must be > 0 (absolute pressure, Pa)')
-    if number('gas', 'v_tube') < 0:
-        fail('gas.v_tube', 'must be >= 0')
-    x_c_ref = number('gas', 'x_c_ref')
-    if not number('air_chamber', 'x_min') <= x_c_ref <= number('air_chamber', 'x_max'):
-        fail('gas.x_c_ref', 'must lie within the air chamber travel [x_min, x_max]')
-    if not number('stiffness', 'x_s_low') < number('stiffness', 'x_s_high'):
-        fail('stiffness.x_s_high', 'must exceed x_s_low')
-    for name in ('supply_voltage', 'resistance', 'torque_constant', 'rotor_inertia', 'gear_ratio',
-                 'counts_per_rev', 'lead', 'efficiency'):
-        if not number('drive', name) > 0:
-            fail(f'drive.{name}', 'must be > 0')
-    for name in ('inductance', 'viscous_friction'):
-        if number('drive', name) < 0:
-            fail(f'drive.{name}', 'must be >= 0')
-    for name, value in parts['sensors'].items():
-        if number('sensors', name) < 0:
-            fail(f'sensors.{name}', 'must be >= 0')
-
-
-def _buckling(values, source):
-    if not values:
-        return NO_BUCKLING
-    bounds = {}
-    for name, value in param_files.section(values, 'bounds').items():
-        if not (isinstance(value, (list, tuple)) and len(value) == 2):
-            raise ParameterError(f'{source}: actuator.buckling.bounds.{name}: '
-                                 'expected [low, high]')
-        bounds[name] = (float(value[0]), float(value[1]))
-    plain = {k: v for k, v in values.items() if not k.startswith('bounds.')}
-    plain['bounds'] = tuple(sorted(bounds.items()))
-    return param_files.build(Buckling, plain, f'{source}: actuator.buckling')
-
-
-def _need(mapping, name, source, group):
-    if name not in mapping:
-        raise ParameterError(f"{source}: missing parameter 'actuator.{group}.{name}'")
-    return mapping[name]
-
-
-def params_to_flat(params):
-    """Inverse of `params_from_flat`: flat dotted names, ready for `params.write_file`."""
-    flat = {}
-    for name, bellows in (('air_chamber', params.chamber), ('spring', params.spring)):
-        for field in dataclasses.fields(Bellows):
-            value = getattr(bellows, field.name)
-            flat[f'actuator.{name}.{field.name}'] = (list(value) if isinstance(value, tuple)
-                                                     else value)
-    flat['actuator.gas.p_ref'] = params.p_ref
-    flat['actuator.gas.x_c_ref'] = params.x_c_ref
-    flat['actuator.gas.v_tube'] = params.v_tube
-    flat['actuator.force.f_mts'] = list(params.f_mts)
-    flat['actuator.force.e_f'] = list(params.e_f)
-    flat['actuator.stiffness.x_s_low'] = params.x_s_low
-    flat['actuator.stiffness.x_s_high'] = params.x_s_high
-    for group, obj in (('drive', params.drive), ('sensors', params.sensors)):
-        for field in dataclasses.fields(obj):
-            flat[f'actuator.{group}.{field.name}'] = getattr(obj, field.name)
-    for effect, items in params.effects:
-        for key, value in items:
-            flat[f'actuator.effects.{effect}.{key}'] = value
-    if params.buckling is not NO_BUCKLING:
-        for name in Buckling.NAMES:
-            flat[f'actuator.buckling.{name}'] = getattr(params.buckling, name)
-        for name, (low, high) in params.buckling.bounds:
-            flat[f'actuator.buckling.bounds.{name}'] = [low, high]
-    return flat
 
 
 def without_bulging(params):

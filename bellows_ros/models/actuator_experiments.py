@@ -116,26 +116,26 @@ def spring_programme(rng, n, dt, amplitude=(0.008, 0.020)):
     return x_s
 
 
-def actuator_record(params, effects=None, noise=None, seed=None, duration=60.0, dt=1e-3,
-                    x_c_range=(-0.020, 0.040), gas=None, x_c0=None, monotone=False,
+def actuator_record(params, plant_params, effects=None, noise=None, seed=None, duration=60.0,
+                    dt=1e-3, x_c_range=(-0.020, 0.040), gas=None, x_c0=None, monotone=False,
                     spring_range=(0.008, 0.020)):
     """
     Simulate a measurement: dict of arrays `t, x_c, x_s, p, f` (docs/interfaces.md).
 
-    params: ActuatorParams; effects/noise: as `ActuatorPlant`; seed: for the programme and noise;
-    duration s; dt s; x_c_range: the span of chamber targets, m; gas: the sealed gas amount as
-    p_ref, Pa (default the YAML's); x_c0: initial chamber compression, m (default the design
-    point); monotone: the chamber only compresses (ramps and holds, `chamber_programme`);
-    spring_range: (low, high) m of the spring's peak compressions (`spring_programme`). 60 s at 1
-    kHz takes a second or two.
+    params: ActuatorParams; plant_params: ActuatorPlantParams; effects/noise: as `ActuatorPlant`;
+    seed: for the programme and noise; duration s; dt s; x_c_range: the span of chamber targets,
+    m; gas: the sealed gas amount as p_ref, Pa (default the YAML's); x_c0: initial chamber
+    compression, m (default the design point); monotone: the chamber only compresses (ramps and
+    holds, `chamber_programme`); spring_range: (low, high) m of the spring's peak compressions
+    (`spring_programme`). 60 s at 1 kHz takes a second or two.
     """
     if not (duration > 0.0 and dt > 0.0):
         raise ParameterError(f'duration and dt must be > 0, got {duration}, {dt}')
     rng = np.random.default_rng(seed)
     n = int(round(duration / dt))
     x_c0 = params.x_c_ref if x_c0 is None else x_c0
-    plant = ActuatorPlant(params, effects, noise, seed=None if seed is None else seed + 1, gas=gas,
-                          x_c0=x_c0)
+    plant = ActuatorPlant(params, plant_params, effects, noise,
+                          seed=None if seed is None else seed + 1, gas=gas, x_c0=x_c0)
     low = max(x_c_range[0], plant.x_c_min)
     high = min(x_c_range[1], plant.x_c_max)
     ref = chamber_programme(rng, n, dt, x_c0, low, high, plant.max_speed, monotone)
@@ -154,7 +154,7 @@ def actuator_record(params, effects=None, noise=None, seed=None, duration=60.0, 
     return out
 
 
-def volume_test_series(params, gases=(0.92, 0.96, 1.0, 1.04, 1.08),
+def volume_test_series(params, plant_params, gases=(0.92, 0.96, 1.0, 1.04, 1.08),
                        effects=('wall_bulging', 'buckling'),
                        noise=None, seed=0, duration=12.0, dt=1e-3):
     """
@@ -170,7 +170,7 @@ def volume_test_series(params, gases=(0.92, 0.96, 1.0, 1.04, 1.08),
     starts = np.linspace(-0.020, 0.040, len(gases))
     order = np.random.default_rng(seed).permutation(len(gases))
     for index, fraction in enumerate(gases):
-        record = actuator_record(params, effects, noise,
+        record = actuator_record(params, plant_params, effects, noise,
                                  None if seed is None else seed + 7 * index,
                                  duration, dt, gas=fraction * params.p_ref,
                                  x_c0=starts[order[index]])

@@ -39,9 +39,11 @@ What the simulated hardware and the tests run. Underneath is paper B's model (`a
       it the force is paper B's (7)-(12) alone, the doctor's force baseline.
 
 With no effect the plant is exactly `actuator.evaluate(without_buckling(without_bulging(params)),
-...)` plus sensor noise; `model_params(params, effects)` returns the parameters the model needs for
-the same physics.
+...)` plus sensor noise; `model_params(params, effect_parameters(plant, effects))` returns the
+parameters the model needs for the same physics. Its own parameters (drive, sensors, effect
+defaults) are `ActuatorPlantParams`, built with the model's by `bellows_ros.config.actuator`.
 """
+from dataclasses import dataclass
 import math
 import random
 from typing import NamedTuple
@@ -49,11 +51,42 @@ from typing import NamedTuple
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.actuator import (_forward, gas_amount, p_ref_of_amount, scaled_buckling,
                                          scaled_bulging, without_buckling, without_bulging)
+from bellows_ros.models.actuator_drive import Drive
 from bellows_ros.models.actuator_geometry import frustum_state, P_ATM, volume
 
 ACTUATOR_EFFECTS = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash',
                     'buckling')
 NOISE_KEYS = ('pressure_noise', 'pressure_quantum', 'force_noise', 'force_quantum')
+
+
+@dataclass(frozen=True)
+class Sensors:
+    """Pressure and force sensors: white noise (standard deviation) and quantisation step."""
+
+    pressure_noise: float
+    pressure_quantum: float
+    force_noise: float
+    force_quantum: float
+
+
+@dataclass(frozen=True)
+class ActuatorPlantParams:
+    """
+    The simulated actuator's own parameters, SI units.
+
+    drive: `Drive` (config/hardware.yaml, `hardware.actuator_board.drive.*`: the hardware's drive
+    train, shared with the driver); sensors: `Sensors` (config/actuator.yaml,
+    `actuator.sensors.*`); effects: ((effect, ((parameter, value), ...)), ...), the defaults of
+    `actuator.effects.*`.
+    """
+
+    drive: Drive
+    sensors: Sensors
+    effects: tuple = ()
+
+    def effect_defaults(self):
+        """{effect name: {parameter: value}} from the YAML."""
+        return {name: dict(items) for name, items in self.effects}
 
 
 class ActuatorSample(NamedTuple):
@@ -75,9 +108,9 @@ class ActuatorSample(NamedTuple):
     at_upper_stop: bool
 
 
-def effect_parameters(params, effects):
+def effect_parameters(plant, effects):
     """
-    Validate `effects` and fill in the YAML defaults.
+    Validate `effects` and fill in the YAML defaults of `plant` (ActuatorPlantParams).
 
     `effects`: None, an iterable of names, or {name: {parameter: value}} (as `--effect` gives).
     Returns {name: {parameter: float}}. An unknown effect or parameter, or a negative or non-finite
@@ -87,7 +120,7 @@ def effect_parameters(params, effects):
         return {}
     if not isinstance(effects, dict):
         effects = {name: {} for name in effects}
-    defaults = params.effect_defaults()
+    defaults = plant.effect_defaults()
     chosen = {}
     for name, overrides in effects.items():
         if name not in ACTUATOR_EFFECTS:
@@ -111,13 +144,14 @@ def effect_parameters(params, effects):
     return chosen
 
 
-def model_params(params, effects=None):
+def model_params(params, chosen=None):
     """
     Return parameters for which `actuator.evaluate` has the plant's static physics.
 
-    E_V and buckling on or off.
+    E_V and buckling on or off. `chosen`: the effects as `effect_parameters` returns them (None: no
+    effect).
     """
-    chosen = effect_parameters(params, effects)
+    chosen = chosen or {}
     if 'wall_bulging' in chosen:
         params = scaled_bulging(params, chosen['wall_bulging']['scale'])
     else:
@@ -137,6 +171,7 @@ class ActuatorPlant:
     Parameters
     ----------
     params : ActuatorParams
+    plant : ActuatorPlantParams (drive, sensors, effect defaults)
     effects : None, iterable of names or {name: {parameter: value}} (see `effect_parameters`)
     noise : None (the YAML's `actuator.sensors`), False (no noise, no quantisation), or a dict
         overriding some of `NOISE_KEYS`
@@ -146,16 +181,18 @@ class ActuatorPlant:
 
     """
 
-    def __init__(self, params, effects=None, noise=None, seed=None, x_c0=None, x_s0=0.0, gas=None):
-        self.effects = effect_parameters(params, effects)
+    def __init__(self, params, plant, effects=None, noise=None, seed=None, x_c0=None, x_s0=0.0,
+                 gas=None):
+        self.effects = effect_parameters(plant, effects)
         self.params = model_params(params, self.effects)
-        drive = params.drive
+        self.plant = plant
+        drive = plant.drive
         self.counts_per_rev = int(drive.counts_per_rev)
         self.x_c_min, self.x_c_max = params.chamber.x_min, params.chamber.x_max
         self.max_speed = drive.max_speed
         self._drive = drive
         self._metres_per_rad = drive.lead / (2.0 * math.pi * drive.gear_ratio)
-        self._noise = self._noise_settings(params, noise)
+        self._noise = self._noise_settings(plant, noise)
         self._random = random.Random(seed)
         # Effect switches and parameters, read once.
         e = self.effects
@@ -188,8 +225,8 @@ class ActuatorPlant:
         self._volume = self._total_volume(p) if self._heat_tau else None
 
     @staticmethod
-    def _noise_settings(params, noise):
-        s = params.sensors
+    def _noise_settings(plant, noise):
+        s = plant.sensors
         settings = {key: float(getattr(s, key)) for key in NOISE_KEYS}
         if noise is False:
             return dict.fromkeys(NOISE_KEYS, 0.0)

@@ -37,7 +37,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from bellows_ros import params as parameters
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.contact import ALPHA_PER_PSI, contact_angle, StrainMemory
 
@@ -62,8 +61,11 @@ OUTPUTS = SegmentOutput._fields
 @dataclass(frozen=True)
 class SegmentParams:
     """
-    All parameters of `config/segment.yaml` (section `segment.`); field = dotted name with '_'.
+    The driving-torque model's parameters of `config/segment.yaml`; field = dotted name with '_'.
 
+    Everything under `segment.` except `segment.plant.*` (the simulated segment,
+    `segment_plant.SegmentPlantParams`) and `segment.identify.*` (identification settings): the
+    config layer (`bellows_ros.config.segment`) builds all three from the one file.
     Units: Pa, m, N/m (Ogden μ), N·m, N·m/rad, rad, s, kg·m². See the YAML for each meaning.
     """
 
@@ -87,18 +89,6 @@ class SegmentParams:
     dynamics_inertia: float
     dynamics_damping: float
     dynamics_gravity: float
-    plant_valve_tau: float
-    plant_inertia: float
-    plant_damping: float
-    plant_gravity: float
-    plant_psi_limit: float
-    plant_stop_stiffness: float
-    plant_sensor_lag_tau: float
-    plant_noise_p: float
-    plant_noise_psi: float
-    plant_noise_psi_dot: float
-    plant_noise_tau: float
-    identify_input_cutoff: float
 
     def replace(self, **changes):
         """Return a copy with some fields changed (tuples for vectors)."""
@@ -118,33 +108,9 @@ def _plain(value):
 # Field name -> dotted YAML name below `segment.` (the YAML nests one level, see
 # config/segment.yaml).
 DOTTED = {name: name for name in ('p0', 'p_max')}
-for _field in fields(SegmentParams):
-    if _field.name not in DOTTED:
-        _group, _, _rest = _field.name.partition('_')
-        if _group == 'plant' and _rest.startswith('noise_'):
-            DOTTED[_field.name] = 'plant.noise.' + _rest[len('noise_'):]
-        else:
-            DOTTED[_field.name] = f'{_group}.{_rest}'
+DOTTED.update({f.name: f.name.replace('_', '.', 1) for f in fields(SegmentParams)
+               if f.name not in DOTTED})
 UNDOTTED = {dotted: name for name, dotted in DOTTED.items()}
-
-
-def load_segment_params(params_path=None):
-    """
-    `config/segment.yaml` with `params_path` (if any) laid over it -> SegmentParams.
-
-    Unknown or missing names raise ParameterError (via `bellows_ros.params`); so do physically
-    inadmissible values (μ_k ≤ 0, γ_k ≤ 2, p_max ≤ p0, non-positive geometry).
-    """
-    flat = parameters.section(parameters.load('segment', params_path), 'segment')
-    source = params_path or parameters.default_file('segment')
-    mapping = {}
-    for name, value in flat.items():
-        if name not in UNDOTTED:
-            raise ParameterError(f"{source}: unknown parameter 'segment.{name}'")
-        mapping[UNDOTTED[name]] = value
-    result = parameters.build(SegmentParams, mapping, source)
-    check_params(result, source)
-    return result
 
 
 def check_params(p, source='parameters'):
@@ -162,15 +128,12 @@ def check_params(p, source='parameters'):
         fail('previous_theta', 'needs 4 values (34)')
     if not p.p_max > p.p0 > 0:
         fail('p_max', 'must exceed p0 > 0')
-    for name in ('geometry_l0', 'geometry_s0', 'geometry_sa_max', 'plant_valve_tau',
-                 'plant_inertia', 'plant_psi_limit', 'plant_stop_stiffness'):
+    for name in ('geometry_l0', 'geometry_s0', 'geometry_sa_max'):
         if not getattr(p, name) > 0:
             fail(name, 'must be > 0')
     if int(p.geometry_n_lambda) != p.geometry_n_lambda or p.geometry_n_lambda < 1:
         fail('geometry_n_lambda', 'must be a positive integer')
-    for name in ('plant_noise_p', 'plant_noise_psi', 'plant_noise_psi_dot', 'plant_noise_tau',
-                 'plant_sensor_lag_tau', 'plant_damping', 'identify_input_cutoff',
-                 'dynamics_inertia', 'dynamics_damping'):  # negative: energy from nowhere
+    for name in ('dynamics_inertia', 'dynamics_damping'):  # negative: energy from nowhere
         if getattr(p, name) < 0:
             fail(name, 'must be >= 0')
 

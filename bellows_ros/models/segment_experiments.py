@@ -118,7 +118,7 @@ def _pressure_schedule(rng, duration, hold_range, params):
     return times, pressures1, pressures2
 
 
-def _record(params, effects, noise, seed, duration, dt, move_range, hold_range,
+def _record(params, plant_params, effects, noise, seed, duration, dt, move_range, hold_range,
             pressure_hold=None):
     rng = np.random.default_rng(seed)
     t = np.arange(1, int(round(duration / dt)) + 1) * dt
@@ -129,12 +129,13 @@ def _record(params, effects, noise, seed, duration, dt, move_range, hold_range,
     psi = _smooth_moves(angle_times, angles, t)
     cmd1 = _smooth_moves(pressure_times, p1, t)
     cmd2 = _smooth_moves(pressure_times, p2, t)
-    plant = SegmentPlant(params, effects, noise, seed=None if seed is None else seed + 7919)
+    plant = SegmentPlant(params, plant_params, effects, noise,
+                         seed=None if seed is None else seed + 7919)
     return run_plant(plant, dt, cmd1, cmd2, psi)
 
 
-def quasi_static_record(params, effects=None, noise=None, seed=None, duration=60.0, dt=1e-3,
-                        pressure_hold=None):
+def quasi_static_record(params, plant, effects=None, noise=None, seed=None, duration=60.0,
+                        dt=1e-3, pressure_hold=None):
     """
     Run slow excursions (2-5 s per move, |Ψ| ≤ 1.4 rad) like paper A's identification runs.
 
@@ -145,20 +146,21 @@ def quasi_static_record(params, effects=None, noise=None, seed=None, duration=60
     (`_pressure_schedule`: many levels over p0..p_max, steps and ramps at several speeds), which is
     what a pressure-dependent effect needs to be told from a smooth function of the pressure.
     """
-    return _record(params, effects, noise, seed, duration, dt, (2.0, 5.0), (0.5, 2.0),
+    return _record(params, plant, effects, noise, seed, duration, dt, (2.0, 5.0), (0.5, 2.0),
                    pressure_hold)
 
 
-def dynamic_record(params, effects=None, noise=None, seed=None, duration=30.0, dt=1e-3):
+def dynamic_record(params, plant, effects=None, noise=None, seed=None, duration=30.0, dt=1e-3):
     """
     Run faster motion at several speeds (0.3-1.5 s per move, short holds), changing pressures.
 
     Like paper A's dynamic validation (Fig. 12).
     """
-    return _record(params, effects, noise, seed, duration, dt, (0.3, 1.5), (0.0, 0.5))
+    return _record(params, plant, effects, noise, seed, duration, dt, (0.3, 1.5), (0.0, 0.5))
 
 
-def fig10_record(params, effects=('contact_hysteresis', 'pressure_friction', 'natural_curvature'),
+def fig10_record(params, plant_params,
+                 effects=('contact_hysteresis', 'pressure_friction', 'natural_curvature'),
                  noise=None, seed=None, dt=1e-3, excursion=FIG10_EXCURSION):
     """
     Paper A's Fig. 10 scenario on the bench, returns (record, before_index, after_index).
@@ -174,7 +176,7 @@ def fig10_record(params, effects=('contact_hysteresis', 'pressure_friction', 'na
                         [0.0, FIG10_PSI, excursion, FIG10_PSI], t)
     cmd1 = _smooth_moves([(3.0, 4.0)], [p0, FIG10_P1], t)
     cmd2 = np.full_like(t, p0)
-    plant = SegmentPlant(params, effects, noise, seed=seed)
+    plant = SegmentPlant(params, plant_params, effects, noise, seed=seed)
     record = run_plant(plant, dt, cmd1, cmd2, psi)
     before = int(round(6.0 / dt)) - 1
     return record, before, len(t) - 1

@@ -38,6 +38,7 @@ end stops at |Ψ| = `segment.plant.psi_limit`. Measured values carry Gaussian no
 standard deviations of `segment.plant.noise` unless `noise` overrides them.
 """
 from collections import namedtuple
+from dataclasses import dataclass, fields
 import math
 
 import numpy as np
@@ -55,12 +56,66 @@ EFFECT_PARAMETERS = {
     'pressure_friction': {'c_fp': 'friction_c_fp'},
     'natural_curvature': {'c_psi0': 'restoring_c_psi0', 'c_psi0_p': 'restoring_c_psi0_p',
                           'k_sp': 'restoring_k_sp'},
-    'sensor_lag': {'tau': 'plant_sensor_lag_tau'},
+    'sensor_lag': {'tau': 'sensor_lag_tau'},  # a field of SegmentPlantParams, not of the model
 }
 NOISE_KEYS = ('p', 'psi', 'psi_dot', 'tau')
 NO_NOISE = dict.fromkeys(NOISE_KEYS, 0.0)
 # Longest step of the free-motion integration, s (a numerical setting, not physics: see `step`).
 MAX_STEP = 1e-3
+
+
+@dataclass(frozen=True)
+class SegmentPlantParams:
+    """
+    The simulated segment's own parameters: `segment.plant.*` of config/segment.yaml.
+
+    valve_tau s (valve/chamber lag); inertia kg·m², damping N·m·s/rad, gravity N·m (the true
+    M, C, N of (2)); psi_limit rad and stop_stiffness N·m/rad (end stops); sensor_lag_tau s (the
+    `sensor_lag` effect's default); noise_p Pa, noise_psi rad, noise_psi_dot rad/s, noise_tau N·m
+    (sensor noise standard deviations). Field = dotted name below `segment.plant.` with '_'.
+    """
+
+    valve_tau: float
+    inertia: float
+    damping: float
+    gravity: float
+    psi_limit: float
+    stop_stiffness: float
+    sensor_lag_tau: float
+    noise_p: float
+    noise_psi: float
+    noise_psi_dot: float
+    noise_tau: float
+
+    def replace(self, **changes):
+        """Return a copy with some fields changed."""
+        values = {f.name: getattr(self, f.name) for f in fields(self)}
+        values.update(changes)
+        return SegmentPlantParams(**values)
+
+    def flat(self):
+        """Return flat ROS 2 names (`segment.plant.noise.p`, ...) -> values."""
+        return {'segment.plant.' + PLANT_DOTTED[f.name]: getattr(self, f.name)
+                for f in fields(self)}
+
+
+# Field name -> dotted YAML name below `segment.plant.`.
+PLANT_DOTTED = {f.name: (f.name.replace('_', '.', 1) if f.name.startswith('noise_') else f.name)
+                for f in fields(SegmentPlantParams)}
+
+
+def check_plant_params(plant, source='parameters'):
+    """Raise ParameterError for plant values the simulation cannot use (names the parameter)."""
+    def fail(name, why):
+        raise ParameterError(f"{source}: parameter 'segment.plant.{PLANT_DOTTED[name]}' {why}")
+    for name in ('valve_tau', 'inertia', 'psi_limit', 'stop_stiffness'):
+        if not getattr(plant, name) > 0:
+            fail(name, 'must be > 0')
+    for name in ('noise_p', 'noise_psi', 'noise_psi_dot', 'noise_tau', 'sensor_lag_tau',
+                 'damping'):  # negative: energy from nowhere
+        if getattr(plant, name) < 0:
+            fail(name, 'must be >= 0')
+
 
 SegmentSample = namedtuple('SegmentSample', 't psi psi_dot p1 p2 tau_ext')
 SegmentSample.__doc__ = 'One sample: time s, Ψ rad, Ψ̇ rad/s, chain pressures Pa abs, τ_ext N·m.'
@@ -99,7 +154,8 @@ def plant_physics(params, effects):
     Return SegmentParams of the true physics for the switched-on `effects` (validated mapping).
 
     Missing physics is switched off: c_f,p = 0 without `pressure_friction`; c_Ψ0,p = k_s,p = 0
-    without `natural_curvature`. Effect parameters override the YAML values.
+    without `natural_curvature`. Effect parameters override the YAML values (`sensor_lag`'s is the
+    plant's, applied by `SegmentPlant`).
     """
     changes = {}
     if 'pressure_friction' not in effects:
@@ -107,6 +163,8 @@ def plant_physics(params, effects):
     if 'natural_curvature' not in effects:
         changes.update(restoring_c_psi0_p=0.0, restoring_k_sp=0.0)
     for name, options in effects.items():
+        if name == 'sensor_lag':
+            continue
         for key, value in options.items():
             changes[EFFECT_PARAMETERS[name][key]] = value
     return params.replace(**changes)
@@ -116,20 +174,24 @@ class SegmentPlant:
     """
     The simulated segment. `step(...)` advances it by `dt` and returns the measured SegmentSample.
 
+    `params` (SegmentParams) is the physics the effects start from, `plant` (SegmentPlantParams)
+    the valves, dynamics, end stops and sensors.
+
     True state: `t`, `psi`, `psi_dot`, `psi_ddot`, `p1`, `p2` (chamber pressures), `tau_ext`,
     `tau_drive`, `tau_motion` (= M Ψ̈ + C Ψ̇ + N, true) and `outputs` (the model's
     `SegmentOutput` of the last step).
     """
 
-    def __init__(self, params, effects=None, noise=None, seed=None, psi0=0.0):
+    def __init__(self, params, plant, effects=None, noise=None, seed=None, psi0=0.0):
         self.effects = check_effects(effects)
         self.params = params
+        self.plant = plant
         self.physics = plant_physics(params, self.effects)
         self.hysteresis = 'contact_hysteresis' in self.effects
-        self.lag = (self.effects['sensor_lag'].get('tau', params.plant_sensor_lag_tau)
+        self.lag = (self.effects['sensor_lag'].get('tau', plant.sensor_lag_tau)
                     if 'sensor_lag' in self.effects else 0.0)
-        sigma = {'p': params.plant_noise_p, 'psi': params.plant_noise_psi,
-                 'psi_dot': params.plant_noise_psi_dot, 'tau': params.plant_noise_tau}
+        sigma = {'p': plant.noise_p, 'psi': plant.noise_psi, 'psi_dot': plant.noise_psi_dot,
+                 'tau': plant.noise_tau}
         for key, value in (noise or {}).items():
             if key not in sigma:
                 raise ParameterError(f"segment plant noise: unknown key '{key}' (known: "
@@ -173,12 +235,12 @@ class SegmentPlant:
         Needed because one pressurised chain alone has no equilibrium inside the range: its
         actuator torque grows with Ψ faster than the restoring torque falls.
         """
-        p = self.physics
-        over = abs(self.psi) - p.plant_psi_limit
+        p = self.plant
+        over = abs(self.psi) - p.psi_limit
         if over <= 0.0:
             return 0.0
-        damping = 1.6 * math.sqrt(p.plant_stop_stiffness * p.plant_inertia)
-        return -math.copysign(p.plant_stop_stiffness * over, self.psi) - damping * self.psi_dot
+        damping = 1.6 * math.sqrt(p.stop_stiffness * p.inertia)
+        return -math.copysign(p.stop_stiffness * over, self.psi) - damping * self.psi_dot
 
     def step(self, dt, p_cmd1, p_cmd2, psi_imposed=None, tau_load=None):
         """
@@ -198,11 +260,11 @@ class SegmentPlant:
                              self.sensed2 + n_p2, self.tau_ext + n_tau)
 
     def _advance(self, dt, p_cmd1, p_cmd2, psi_imposed, tau_load):
-        p = self.physics
-        blend = 1.0 - math.exp(-dt / p.plant_valve_tau)
+        p = self.plant
+        blend = 1.0 - math.exp(-dt / p.valve_tau)
         self.p1 += blend * (p_cmd1 - self.p1)
         self.p2 += blend * (p_cmd2 - self.p2)
-        dynamics = (p.plant_inertia, p.plant_damping, p.plant_gravity)
+        dynamics = (p.inertia, p.damping, p.gravity)
         if psi_imposed is not None:
             # The imposed path is piecewise linear in Ψ: its rates are the backward differences.
             velocity = rate(psi_imposed, self.psi, dt, self.psi_dot)
@@ -217,7 +279,7 @@ class SegmentPlant:
             # (2) solved for Ψ̈: M Ψ̈ = τ_ext + τ_drive + τ_stop - (C Ψ̇ + N(Ψ))
             psi = self.psi
             self.psi_ddot = (self.tau_ext + self.tau_drive + self._end_stop()
-                             - motion_torque(*dynamics, psi, self.psi_dot, 0.0)) / p.plant_inertia
+                             - motion_torque(*dynamics, psi, self.psi_dot, 0.0)) / p.inertia
             self.psi_dot += dt * self.psi_ddot
             self.psi += dt * self.psi_dot
             # Semi-implicit Euler: damping acts with the updated rate, gravity at the old angle.

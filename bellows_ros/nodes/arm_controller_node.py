@@ -45,12 +45,12 @@ realtime_priority, cpu_latency_limit (runtime/realtime.py).
 import math
 import time
 
+from bellows_ros.config.hardware import arm_bus_config
+from bellows_ros.config.segment import load_segment_params
 from bellows_ros.control import angle_trajectory
 from bellows_ros.control.angle_tracking import AngleTracker, check_feedforward, TrackingGains
 from bellows_ros.errors import BellowsError
-from bellows_ros.hardware import arm_bus
 from bellows_ros.hardware.loop_timing import LoopStats
-from bellows_ros.models.segment import load_segment_params
 from bellows_ros.nodes import diagnostics
 from bellows_ros.nodes.sample_pairing import CHAMBERS, JOINTS, SamplePairs, segment_rows
 from bellows_ros.runtime import Node, realtime, run
@@ -113,7 +113,7 @@ class ArmControllerNode(Node):
                                f'numbers >= 1, got {list(segments)}')
         check_feedforward(feedforward, 'arm_controller_node')
         path = angle_trajectory.by_name(trajectory) if trajectory else None
-        watchdog = arm_bus.load_config().command_timeout
+        watchdog = arm_bus_config().command_timeout
         most = int(watchdog / 4 / SAMPLE_PERIOD)  # a command at least every quarter watchdog
         if not 1 <= self.control_every <= most:
             raise BellowsError(f'arm_controller_node: parameter control_every must be 1..{most} '

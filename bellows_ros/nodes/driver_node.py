@@ -44,6 +44,7 @@ import os
 import threading
 import time
 
+from bellows_ros.config.hardware import actuator_board_config, arm_bus_config
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware import actuator_board, arm_bus
 from bellows_ros.hardware.loop_timing import LoopStats
@@ -106,9 +107,9 @@ class DriverNode(Node):
             self._wait_for_subscribers(wait_for_subscribers)
         try:
             if self.use_actuator:
-                self._open_actuator(actuator_board.load_config(hardware_params), port)
+                self._open_actuator(actuator_board_config(hardware_params), port)
             if self.use_arm:
-                self._open_arm(arm_bus.load_config(hardware_params), interface, channel,
+                self._open_arm(arm_bus_config(hardware_params), interface, channel,
                                n_segments)
             self._wait_for_samples()
         except BaseException:

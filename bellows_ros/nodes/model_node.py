@@ -36,10 +36,11 @@ A sample with a non-finite value or a pressure outside [0, 2 p_max] is rejected 
 from array import array
 import time
 
+from bellows_ros.config.segment import load_segment_params
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.models.derivatives import rate
-from bellows_ros.models.segment import external_torque, load_segment_params, SegmentModel
+from bellows_ros.models.segment import external_torque, SegmentModel
 from bellows_ros.nodes import diagnostics
 from bellows_ros.nodes.sample_pairing import CHAMBERS, JOINTS, SamplePairs, segment_rows
 from bellows_ros.runtime import Node, realtime, run

@@ -39,9 +39,9 @@ import math
 from pathlib import Path
 import time
 
+from bellows_ros.config.actuator import load_actuator_params
 from bellows_ros.control import angle_trajectory, closed_loop
 from bellows_ros.errors import BellowsError
-from bellows_ros.models.actuator import load_actuator_params
 from bellows_ros.models.stiffness_map import stiffness_range
 from bellows_ros.runtime import Node, realtime, run
 

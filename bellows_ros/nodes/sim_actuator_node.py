@@ -23,7 +23,8 @@ Node parameters:
   port (str): the symlink to create (the driver's actuator.port).
   actuator_params (str): YAML laid over config/actuator.yaml ('' = defaults); also holds the
       effects' parameters (actuator.effects.*).
-  hardware_params (str): YAML laid over config/hardware.yaml (encoder, end stops).
+  hardware_params (str): YAML laid over config/hardware.yaml (the drive train: motor, gearbox,
+      lead screw, encoder; the board's end-stop margin).
   effects (string array): plant effects to switch on (air_leak, heat_exchange, wall_bulging,
       sensor_lag, backlash, buckling); [''] = none.
   seed (int): sensor noise seed.
@@ -39,10 +40,10 @@ With use_sim_time the node is the clock source: it publishes the plant's time on
 """
 import math
 
+from bellows_ros.config.actuator import load_actuator
+from bellows_ros.config.hardware import actuator_board_config
 from bellows_ros.errors import BellowsError
-from bellows_ros.hardware import actuator_board
 from bellows_ros.hardware.sim_actuator_board import SimActuatorBoard
-from bellows_ros.models.actuator import load_actuator_params
 from bellows_ros.models.actuator_plant import ActuatorPlant
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime, run
@@ -65,8 +66,8 @@ class SimActuatorNode(Node):
         self.check_parameters()
         if not port:
             raise BellowsError('sim_actuator_node: parameter port is empty')
-        params = load_actuator_params(actuator_params)
-        self.plant = ActuatorPlant(params, effects=effects, seed=seed,
+        params, plant = load_actuator(actuator_params, hardware_params)
+        self.plant = ActuatorPlant(params, plant, effects=effects, seed=seed,
                                    x_c0=None if math.isnan(x_c0) else x_c0)
         self.sim_time = self.get_parameter('use_sim_time').value
         if self.sim_time:
@@ -75,9 +76,8 @@ class SimActuatorNode(Node):
         self._ticks = 0
         self.end_stop_hits = 0
         self.x_c_seen = [math.inf, -math.inf]
-        self.board = SimActuatorBoard(self.step,
-                                      config=actuator_board.load_config(hardware_params),
-                                      link_path=port)
+        config = actuator_board_config(hardware_params, actuator_params)
+        self.board = SimActuatorBoard(self.step, config=config, link_path=port)
         self.board.start()
         self.diag_pub = self.create_publisher(self.msg.DiagnosticArray, '/diagnostics', 10)
         self.report = diagnostics.LoopReport(self.board.stats)

@@ -33,10 +33,10 @@ Node parameters:
       negative = off (runtime/realtime.py).
 """
 
+from bellows_ros.config.segment import load_segment
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.arm_bus import open_can
 from bellows_ros.hardware.sim_arm_bus import SimArmBus
-from bellows_ros.models.segment import load_segment_params
 from bellows_ros.models.segment_plant import SegmentPlant
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime, run
@@ -56,8 +56,8 @@ class SimArmNode(Node):
         clock_rate = self.declare_parameter('clock_rate', 100.0).value
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
-        params = load_segment_params(segment_params)
-        self.plants = [SegmentPlant(params, effects=effects, seed=seed + i)
+        params, plant, _ = load_segment(segment_params)
+        self.plants = [SegmentPlant(params, plant, effects=effects, seed=seed + i)
                        for i in range(n_segments)]
         self.sim_time = self.get_parameter('use_sim_time').value
         if self.sim_time:

@@ -41,11 +41,11 @@ latency held while the node runs, 0 = idle CPUs poll, negative = off; runtime/re
 """
 import time
 
+from bellows_ros.config.actuator import load_actuator_params
 from bellows_ros.control.pd import PDController, PDGains
 from bellows_ros.control.stiffness import StiffnessSetpoint
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.loop_timing import LoopStats
-from bellows_ros.models.actuator import load_actuator_params
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime, run, stamp_ns
 from bellows_ros.runtime.topics import SAMPLE_DEPTH

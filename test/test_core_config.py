@@ -1,0 +1,134 @@
+# Copyright 2026 bellows_ros maintainers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""The config layer: one file per system, one object per layer, and files that round-trip."""
+import dataclasses
+
+import pytest
+
+from bellows_ros import params as param_files
+from bellows_ros.config.actuator import load_actuator
+from bellows_ros.config.hardware import actuator_board_config, arm_bus_config, vent_pressure
+from bellows_ros.config.segment import load_segment
+from bellows_ros.errors import ParameterError
+from bellows_ros.models.actuator import ActuatorParams
+from bellows_ros.models.segment import SegmentParams
+
+
+def write(path, text):
+    path.write_text(text)
+    return path
+
+
+def test_the_driver_configuration_builds_no_physics_object(monkeypatch):
+    """The drivers' config comes from the YAML alone: no ActuatorParams, no SegmentParams."""
+    expected_actuator = load_actuator()
+    expected_segment = load_segment().model
+
+    def refuse(*args, **kwargs):
+        raise AssertionError('a physics object was built for the driver configuration')
+    monkeypatch.setattr(ActuatorParams, '__init__', refuse)
+    monkeypatch.setattr(SegmentParams, '__init__', refuse)
+    with pytest.raises(AssertionError):
+        load_actuator()    # the patch bites where physics is built
+    board = actuator_board_config()
+    bus = arm_bus_config()
+    # ... and gives the values of the one source, config/actuator.yaml and config/segment.yaml
+    margin = param_files.load('hardware')['hardware.actuator_board.end_stop_margin']
+    assert board.metres_per_count == expected_actuator.plant.drive.metres_per_count
+    assert board.x_c_min == pytest.approx(expected_actuator.model.chamber.x_min + margin)
+    assert board.x_c_max == pytest.approx(expected_actuator.model.chamber.x_max - margin)
+    assert (bus.pressure_min, bus.pressure_max) == (expected_segment.p0, expected_segment.p_max)
+    assert vent_pressure() == expected_segment.p0
+
+
+def test_the_driver_configuration_follows_the_users_files(tmp_path):
+    hardware = write(tmp_path / 'h.yaml', '/**:\n  ros__parameters:\n    hardware:\n'
+                     '      actuator_board: {drive: {counts_per_rev: 128}}\n')
+    actuator = write(tmp_path / 'a.yaml', '/**:\n  ros__parameters:\n    actuator:\n'
+                     '      air_chamber: {x_max: 0.04}\n')
+    segment = write(tmp_path / 's.yaml', '/**:\n  ros__parameters:\n    segment: {p_max: 6.0e5}\n')
+    default = actuator_board_config()
+    board = actuator_board_config(hardware, actuator)
+    assert board.metres_per_count == pytest.approx(default.metres_per_count / 2)
+    assert board.x_c_max == pytest.approx(default.x_c_max - 0.008)
+    # the simulated actuator's encoder is the same drive train, from the same file
+    assert load_actuator(hardware_params_path=hardware).plant.drive.metres_per_count == \
+        board.metres_per_count
+    assert arm_bus_config(segment_params_path=segment).pressure_max == 6.0e5
+
+
+@pytest.mark.parametrize('name, body, needle', [
+    ('h.yaml', 'hardware: {actuator_board: {drive: {lead: 0.0}}}',
+     "'hardware.actuator_board.drive.lead' must be > 0"),
+    ('a.yaml', 'actuator: {air_chamber: {x_min: true}}', "'actuator.air_chamber.x_min'"),
+    ('s.yaml', 'segment: {p_max: 9.0e4}', "'segment.p_max' must exceed p0"),
+    ('h.yaml', 'hardware: {actuator_board: {end_stop_margin: 0.05}}', 'leaves no travel'),
+])
+def test_a_bad_shared_value_is_named_by_the_driver_configuration(tmp_path, name, body, needle):
+    path = write(tmp_path / name, f'/**:\n  ros__parameters:\n    {body}\n')
+    keyword = {'a.yaml': 'actuator_params_path', 'h.yaml': 'params_path'}.get(name)
+    with pytest.raises(ParameterError, match=needle):
+        if name == 's.yaml':
+            arm_bus_config(segment_params_path=path)
+        else:
+            actuator_board_config(**{keyword: path})
+
+
+def test_the_segment_file_splits_into_model_plant_and_identification():
+    config = load_segment()
+    flat = param_files.section(param_files.load('segment'), 'segment')
+    assert config.plant.valve_tau == flat['plant.valve_tau']
+    assert config.plant.noise_psi_dot == flat['plant.noise.psi_dot']
+    assert config.identify.input_cutoff == flat['identify.input_cutoff']
+    assert config.model.ogden_mu == tuple(flat['ogden.mu'])
+    model_names = {f.name for f in dataclasses.fields(SegmentParams)}
+    assert not any(name.startswith(('plant', 'identify')) for name in model_names)
+    # every name of the file lands in exactly one object
+    assert set(config.flat()) == {f'segment.{name}' for name in flat}
+
+
+@pytest.mark.parametrize('body, needle', [
+    ('plant: {valve_tau: 0.0}', "'segment.plant.valve_tau' must be > 0"),
+    ('plant: {noise: {psi: -1.0}}', "'segment.plant.noise.psi' must be >= 0"),
+    ('identify: {input_cutoff: -1.0}', "'segment.identify.input_cutoff' must be >= 0"),
+    ('ogden: {gamma: [1.5, 6.0]}', "'segment.ogden.gamma' needs two values > 2"),
+])
+def test_each_part_of_the_segment_file_is_checked(tmp_path, body, needle):
+    path = write(tmp_path / 'p.yaml', f'/**:\n  ros__parameters:\n    segment:\n      {body}\n')
+    with pytest.raises(ParameterError, match=needle):
+        load_segment(path)
+
+
+def test_a_written_segment_file_reads_back_the_same(tmp_path):
+    config = load_segment()
+    changed = config._replace(
+        model=config.model.replace(ogden_mu=(5000.0, 300.0), actuator_theta=(1.0,) * 8),
+        plant=config.plant.replace(valve_tau=0.07, noise_p=1500.0))
+    path = tmp_path / 'segment.yaml'
+    param_files.write_file(path, changed.flat(), 'header')
+    assert load_segment(path) == changed
+
+
+def test_a_written_actuator_file_reads_back_the_same(tmp_path):
+    config = load_actuator()
+    model = dataclasses.replace(config.model, v_tube=2.0e-5, p_ref=1.05e5)
+    plant = dataclasses.replace(config.plant, sensors=dataclasses.replace(
+        config.plant.sensors, pressure_noise=20.0))
+    path = tmp_path / 'actuator.yaml'
+    param_files.write_file(path, type(config)(model, plant).flat())
+    loaded = load_actuator(path)
+    assert loaded.model.v_tube == model.v_tube and loaded.model.p_ref == model.p_ref
+    assert loaded.plant == plant
+    assert loaded.model.chamber == model.chamber and loaded.model.buckling == model.buckling
