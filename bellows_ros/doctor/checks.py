@@ -13,20 +13,22 @@
 # limitations under the License.
 
 """
-Loading and checking the data the doctor is given.
+Checking the data the doctor is given (a table in memory: it reads no file).
 
-Two kinds of verdict: a `DataError` when the file cannot be diagnosed at all (too short, unevenly
+Two kinds of verdict: a `DataError` when the data cannot be diagnosed at all (too short, unevenly
 sampled, the input never moves), and per cause a reason why this record cannot separate that cause
-("not identifiable from this data"), so that the doctor skips it instead of guessing.
+("not identifiable from this data"), so that the doctor skips it instead of guessing. Messages name
+the data by the table's `path` (the file it was read from, or the name an in-memory caller gave).
 """
 from dataclasses import dataclass
 
 import numpy as np
 
-from bellows_ros.data import check_range, read_table
+from bellows_ros.data import check_range
 from bellows_ros.doctor.scoring import block_masks
 from bellows_ros.errors import DataError
 from bellows_ros.models.actuator_geometry import P_ATM
+from bellows_ros.table import check_increasing, COLUMNS, Table
 
 MIN_SAMPLES = 200
 MIN_DURATION = 5.0        # s
@@ -74,9 +76,36 @@ class Record:
                       self.resampled)
 
 
-def load(path, system):
-    """Read a CSV or rosbag2 record of `system`, check it, return an evenly sampled `Record`."""
-    table = read_table(path, system)
+def as_table(data, system, source='<arrays>'):
+    """
+    Return `data` as a `Table`: a `Table` as the readers give it, or a mapping column -> array.
+
+    A mapping must hold the system's required columns (`table.COLUMNS`) as 1-D arrays of one
+    length; `source` names it in error messages. Time must increase, as the file readers require.
+    """
+    if isinstance(data, Table):
+        return data
+    required, optional = COLUMNS[system]
+    for name in required:
+        if name not in data:
+            raise DataError(source, 'missing', column=name)
+    values = {name: np.asarray(data[name], float) for name in required + optional
+              if name in data}
+    lengths = {len(column) if column.ndim == 1 else -1 for column in values.values()}
+    if len(lengths) != 1 or -1 in lengths:
+        raise DataError(source, 'the columns must be 1-D arrays of one length')
+    for name, column in values.items():
+        if not np.all(np.isfinite(column)):
+            raise DataError(source, f'{column[~np.isfinite(column)][0]} is not a finite number',
+                            column=name)
+    table = Table(str(source), list(values), values)
+    check_increasing(table, 't')
+    return table
+
+
+def checked_record(table, system):
+    """Check a `system` table (`as_table`) and return it as an evenly sampled `Record`."""
+    path = table.path
     if len(table) < MIN_SAMPLES:
         raise DataError(path, f'only {len(table)} samples; the doctor needs at least '
                               f'{MIN_SAMPLES} to fit on some blocks of time and score on others')
