@@ -190,7 +190,7 @@ def moving_fraction(position, dt, speed):
     return float(np.mean(np.abs(rate) > speed))
 
 
-def pressure_coverage(record, share=0.5):
+def pressure_coverage(record, ambient, share=0.5):
     """
     Tell why not every fold's training rows reach `share` of the highest chain pressure.
 
@@ -203,7 +203,7 @@ def pressure_coverage(record, share=0.5):
     held-out score measures an extrapolation, and comparing causes on it names whichever
     extrapolates least.
     """
-    gauge = np.maximum(record['p1'], record['p2']) - P_ATM
+    gauge = np.maximum(record['p1'], record['p2']) - ambient
     top = float(gauge.max())
     for fold, (train, _) in enumerate(block_masks(len(record))):
         reached = float(gauge[train].max())
@@ -217,11 +217,13 @@ def pressure_coverage(record, share=0.5):
     return None
 
 
-def identifiability(record, noise):
+def identifiability(record, noise, ambient=P_ATM):
     """
     For each cause: None if this record can separate it, else the reason why not.
 
-    `record` is the (decimated) record, `noise` the white-noise floor of the measured signal.
+    `record` is the (decimated) record, `noise` the white-noise floor of the measured signal,
+    `ambient` the ambient pressure (Pa) gauge pressures are taken from: the segment's p0 (paper A),
+    paper B's P_atm for the actuator.
     """
     reasons = {}
     if record.system == 'actuator':
@@ -231,7 +233,7 @@ def identifiability(record, noise):
         rate_c = np.abs(np.gradient(x_c, record.dt))
         rate_s = np.abs(np.gradient(x_s, record.dt))
         moving = float(np.mean((rate_c > 2e-5) | (rate_s > 1e-3)))
-        offset = float(np.median(np.abs(p - P_ATM)))
+        offset = float(np.median(np.abs(p - ambient)))
         reasons['air_leak'] = (None if offset > 300 and record.duration >= 10 else
                                f'the pressure stays within {offset:.0f} Pa of ambient (or the '
                                'record is shorter than 10 s), so no air would flow through a '
@@ -258,7 +260,7 @@ def identifiability(record, noise):
         # the onset (which moves with the pressure) cannot be told from the material force.
         loaded = p[x_s > 0.004]
         spread = float(np.ptp(loaded)) if len(loaded) > 0.02 * len(p) else 0.0
-        top = float(loaded.max()) - P_ATM if len(loaded) else 0.0
+        top = float(loaded.max()) - ambient if len(loaded) else 0.0
         reasons['buckling'] = (None if spread > 8e3 and top > 5e3 else
                                'the spring is never compressed by more than 4 mm over a span '
                                'of pressures reaching 5 kPa gauge, so a buckling onset that '
@@ -269,7 +271,7 @@ def identifiability(record, noise):
         spread = max(np.ptp(p1), np.ptp(p2))
         moving = moving_fraction(psi, record.dt, np.radians(0.5))
         reasons['contact_hysteresis'] = (None if turns >= 2
-                                         and max(p1.max(), p2.max()) > P_ATM + 2e4 else
+                                         and max(p1.max(), p2.max()) > ambient + 2e4 else
                                          f'the angle reverses only {turns} time(s) or no chain is '
                                          'pressurised; the contact memory shows only on a return '
                                          'path')
@@ -285,7 +287,7 @@ def identifiability(record, noise):
                                  'be seen')
         # Every segment cause acts through the chain pressures: none can be scored on held-out
         # blocks that only one fold's refit has not seen pressurised.
-        uncovered = pressure_coverage(record)
+        uncovered = pressure_coverage(record, ambient)
         if uncovered:
             reasons = {cause: reason or uncovered for cause, reason in reasons.items()}
     return reasons

@@ -184,7 +184,7 @@ def diagnose(system, data, params, progress=False, causes=None, source='<arrays>
     else:
         noise = scoring.noise_floor(module.measured(full))
         y = module.measured(record)
-        reasons = checks.identifiability(record, noise / np.sqrt(record.factor))
+        reasons = checks.identifiability(record, noise / np.sqrt(record.factor), params.p0)
     timings = {'load': time.perf_counter() - started}   # checks (the caller reads the data)
     bar = _progress(progress, total=1 + len(module.CAUSES if causes is None else causes))
     if system == 'segment':
