@@ -18,13 +18,7 @@
 Reads the parameters (config/<system>.yaml with --params laid over it) and the record (CSV or
 rosbag2 directory), hands both to the doctor (`bellows_ros.doctor.diagnosis.diagnose`, which
 takes data and returns a `Diagnosis`), and writes DIR/report.json, details.json, report.md,
-extended.yaml and the PNG plots.
-
-report.json has the keys of docs/interfaces.md; for a system with several measured outputs (the
-actuator's pressure p and force f) its baseline/extended/gain and the candidates' held-out RMSE are
-those of the output where the first cause pays most (`baseline.unit` says which), and `outputs`
-adds the figures of every output. Everything else (per-candidate gains, the decision, the residual
-evidence, timings) goes to details.json.
+extended.yaml and the PNG plots (their contents: `bellows_ros.doctor.report`).
 """
 import json
 from pathlib import Path
