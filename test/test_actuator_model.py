@@ -13,6 +13,7 @@
 # limitations under the License.
 
 """Paper B model: geometry, gas law, force/stiffness, calibration against the paper's figures."""
+import dataclasses
 import math
 
 import numpy as np
@@ -186,3 +187,54 @@ def test_geometric_volume_slope_is_the_derivative_of_the_volume():
     # The chamber's end stop sits where its volume peaks: extending further would raise P again.
     c = PARAMS.chamber
     assert volume_geo_slope(c, c.x_min) == pytest.approx(0.0, abs=2e-5)
+
+
+def test_spring_force_is_equations_9_to_12_computed_by_hand():
+    """F from `evaluate` against (3), (9)-(12) written out here, E_V's slope by differences."""
+    params = without_buckling(PARAMS)
+    s = params.spring
+    c1, c2, c3, c4 = params.e_f
+    for x_c, x_s in ((-0.02, 0.0), (0.0, 0.006), (0.02, 0.012), (0.045, 0.025), (0.01, -0.008)):
+        p, force, _ = evaluate(params, x_c, x_s)
+        dh = x_s / s.n
+        big = math.sqrt((s.r_big - s.r_small) ** 2 - (dh ** 2 - 2 * s.h0 * dh) / 4) + s.r_small
+        h = 1e-7
+
+        def bulge(x):
+            geometric = without_bulging(params)
+            return total_volume(params, x_c, x, p) - total_volume(geometric, x_c, x, p)
+        # (10): dV/d(nh) = pi/3 (R^2 + r^2 + R r) + dE_V/d(nh), with d(nh) = -dx
+        area = (math.pi / 3 * (big ** 2 + s.r_small ** 2 + big * s.r_small)
+                - (bulge(x_s + h) - bulge(x_s - h)) / (2 * h))
+        f_mts = np.polyval(list(params.f_mts[::-1]) + [0.0], x_s)
+        e_f = c1 * math.exp(c2 * p + c3 * dh + c4)                          # (11)
+        assert force == pytest.approx((p - P_ATM) * area + f_mts + e_f, rel=1e-7, abs=1e-7)
+
+
+def test_regression_forms_equal_the_model_functions():
+    """The fits' monomials of F_MTS, and their E_F shape times C1 e^(C4 + C2 P_atm), give F's."""
+    from bellows_ros.models.actuator import force_error, material_force, material_terms
+    x_s = np.linspace(-0.01, 0.03, 9)
+    p = np.linspace(85e3, 125e3, 9)
+    terms = np.column_stack(material_terms(x_s, len(PARAMS.f_mts)))
+    assert np.allclose(terms @ np.array(PARAMS.f_mts), material_force(PARAMS.f_mts, x_s)[0],
+                       rtol=1e-12, atol=1e-12)
+    c1, c2, c3, c4 = PARAMS.e_f
+    n = PARAMS.spring.n
+    shape = force_error((1.0, c2, c3, -c2 * P_ATM), n, x_s, p, np.exp)[0]
+    assert np.allclose(c1 * math.exp(c4 + c2 * P_ATM) * shape,
+                       force_error(PARAMS.e_f, n, x_s, p, np.exp)[0], rtol=1e-12)
+
+
+def test_e_v_forms_of_the_newton_solve_and_the_fit_equal_the_polynomial():
+    """E_V (5) as a cubic in q (gas-law Newton) and as monomials (fit) against `e_v` itself."""
+    from bellows_ros.models.actuator_geometry import e_v, e_v_in_q, e_v_regressors
+    rng = np.random.default_rng(3)
+    bellows = dataclasses.replace(PARAMS.spring, e_v=tuple(rng.uniform(-5e-6, 5e-6, 10)))
+    for x, p in zip(rng.uniform(-0.01, 0.03, 20), rng.uniform(85e3, 125e3, 20)):
+        value = e_v(bellows, x, p)[0]
+        q = (p - P_ATM) / P_ATM
+        c0, c1, c2, c3 = e_v_in_q(bellows, x)
+        assert c0 + q * (c1 + q * (c2 + q * c3)) == pytest.approx(value, rel=1e-12, abs=1e-20)
+        assert (np.dot(e_v_regressors(bellows, x, p), bellows.e_v)
+                == pytest.approx(value, rel=1e-12, abs=1e-20))

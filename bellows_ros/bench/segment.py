@@ -25,7 +25,7 @@ import math
 
 from bellows_ros.bench import Result, timing
 from bellows_ros.config.segment import load_segment_params
-from bellows_ros.models.segment import SegmentModel
+from bellows_ros.models.segment import previous_torques, SegmentModel
 
 TARGET = 20e-6
 
@@ -46,22 +46,12 @@ def _inputs(count=4000):
 
 
 def previous_step(params):
-    """Step the previous model (34) alone (the reference cost)."""
+    """Step the previous model (34) alone (the reference cost): the 1 kHz step's own terms."""
     p0, span = params.p0, 1.0 / (params.p_max - params.p0)
-    u0, u1, u2, u3 = params.previous_theta
-    k_s, k_sp, c_f, c_fp, c_vel = (params.restoring_k_s, params.restoring_k_sp,
-                                   params.friction_c_f,
-                                   params.friction_c_fp, params.friction_c_vel)
-    c_psi0, c_psi0_p = params.restoring_c_psi0, params.restoring_c_psi0_p
-    tanh = math.tanh
+    terms = previous_torques(params)
 
     def step(psi, psi_dot, p1, p2):
-        q1, q2 = (p1 - p0) * span, (p2 - p0) * span
-        tau_s = ((psi - c_psi0_p * tanh(c_psi0 * q1)) * (k_s + k_sp * q1)
-                 + (psi + c_psi0_p * tanh(c_psi0 * q2)) * (k_s + k_sp * q2))
-        tau_f = tanh(c_vel * psi_dot) * (c_f + c_fp * (q1 + q2))
-        return (tau_f + tau_s + q1 * (u0 + q1 * (u1 + u3 * q1) + u2 * psi)
-                - q2 * (u0 + q2 * (u1 + u3 * q2) - u2 * psi))
+        return terms(psi, psi_dot, (p1 - p0) * span, (p2 - p0) * span)[2]
     return step
 
 

@@ -12,7 +12,17 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""`bellows diagnose {segment|actuator} DATA --report DIR` (owned by the model-doctor work)."""
+"""
+`bellows diagnose {segment|actuator} DATA --report DIR`: all the doctor's file work.
+
+Reads the parameters (config/<system>.yaml with --params laid over it) and the record (CSV or
+rosbag2 directory), hands both to the doctor (`bellows_ros.doctor.diagnosis.diagnose`, which
+takes data and returns a `Diagnosis`), and writes DIR/report.json, details.json, report.md,
+extended.yaml and the PNG plots (their contents: `bellows_ros.doctor.report`).
+"""
+import json
+from pathlib import Path
+import time
 
 
 def add_arguments(parser):
@@ -27,5 +37,51 @@ def add_arguments(parser):
 
 
 def run(args):
-    from bellows_ros.doctor.report import diagnose_command
-    return diagnose_command(args)
+    from bellows_ros.data import read_table
+    from bellows_ros.doctor.diagnosis import diagnose
+    from bellows_ros.doctor.report import summary_line
+    started = time.perf_counter()
+    params = load_params(args.system, args.params)
+    table = read_table(args.data, args.system)
+    read = time.perf_counter() - started
+    result = diagnose(args.system, table, params, progress=not args.quiet)
+    result.timings = {name: seconds + read for name, seconds in result.timings.items()}
+    write_report(result, args.report)
+    print(summary_line(result, args.report))
+    return 0
+
+
+def load_params(system, params_path):
+    """Return the parameter objects of `system`: config/<system>.yaml, `params_path` over it."""
+    if system == 'actuator':
+        from bellows_ros.config.actuator import load_actuator
+        return load_actuator(params_path)
+    from bellows_ros.config.segment import load_segment
+    return load_segment(params_path)
+
+
+def write_report(d, directory):
+    """Write every output file of the diagnosis `d` into `directory` (created if needed)."""
+    import matplotlib.pyplot as plt
+
+    from bellows_ros import params as param_files
+    from bellows_ros.doctor.plots import figures
+    from bellows_ros.doctor.report import (details_dict, extended_header, EXTENDED_FILE,
+                                           markdown, report_dict)
+    from bellows_ros.errors import BellowsError
+    directory = Path(directory)
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise BellowsError(
+            f'{directory}: cannot create the report directory ({exc.strerror})') from None
+    (directory / 'report.json').write_text(json.dumps(report_dict(d), indent=2) + '\n')
+    (directory / 'details.json').write_text(json.dumps(details_dict(d), indent=2,
+                                                       default=float) + '\n')
+    param_files.write_file(directory / EXTENDED_FILE, d.extended_flat, extended_header(d))
+    plots = []
+    for name, figure in figures(d):
+        figure.savefig(directory / name, dpi=90)
+        plt.close(figure)
+        plots.append(name)
+    (directory / 'report.md').write_text(markdown(d, plots))

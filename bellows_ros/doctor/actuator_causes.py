@@ -53,9 +53,10 @@ from bellows_ros.config.actuator import params_to_flat
 from bellows_ros.doctor.filters import lag, play, recurrence, relax
 from bellows_ros.doctor.scoring import Model, noise_floor, noise_floor_ramps
 from bellows_ros.errors import ParameterError
-from bellows_ros.models.actuator import (Buckling, buckling_force, pressure, without_buckling,
-                                         without_bulging)
-from bellows_ros.models.actuator_geometry import e_v, frustum_state, P_ATM, volume_geo
+from bellows_ros.models.actuator import (air_force, Buckling, buckling_force, force_error,
+                                         gas_amount, material_terms, pressure_of_amount,
+                                         total_volume, without_buckling, without_bulging)
+from bellows_ros.models.actuator_geometry import P_ATM, volume_geo
 
 CAUSES = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash', 'buckling')
 BASELINE = ('paper B (17): geometric volume (no E_V), isothermal sealed gas, '
@@ -140,22 +141,22 @@ def measured(record, scales):
 
 def initial_guess(record, params):
     """Start of the baseline fit: p_ref from the mean measured P·V at the nominal v_tube."""
-    base = without_bulging(params)
-    v = total_geometric_volume(base, record['x_c'], record['x_s'], base.v_tube)
-    v_ref = total_geometric_volume(base, base.x_c_ref, 0.0, base.v_tube)
+    base = without_bulging(params)   # geometric volumes (4): the pressure argument is unused
+    v = total_volume(base, record['x_c'], record['x_s'], P_ATM)
+    v_ref = total_volume(base, base.x_c_ref, 0.0, P_ATM)
     return {'p_ref_kpa': float(np.mean(record['p'] * v) / v_ref / 1e3),
             'v_tube_ml': base.v_tube / ML,
             'x_c_offset_mm': 0.0}
 
 
-def total_geometric_volume(params, x_c, x_s, v_tube):
-    """V_geo,c(x_c) + V_geo,s(x_s) + V_tube, m³ (4, 17)."""
-    return volume_geo(params.chamber, x_c) + volume_geo(params.spring, x_s) + v_tube
-
-
 def bulged(params, e):
-    """`params` with the fitted E_V terms (m³) placed in both bellows' coefficient vectors (5)."""
-    e_q, e_dq_c, e_dq_s, e_dd_c, e_dd_s = e
+    """
+    `params` with the fitted E_V terms (m³) placed in both bellows' coefficient vectors (5).
+
+    `e`: the physical parameters of `wall_bulging` ({'e_q': ..., 'e_dd_spring': ...}, m³).
+    """
+    e_q, e_dq_c, e_dq_s, e_dd_c, e_dd_s = (e['e_q'], e['e_dq_chamber'], e['e_dq_spring'],
+                                           e['e_dd_chamber'], e['e_dd_spring'])
     chamber = [0.0] * 10
     spring = [0.0] * 10
     chamber[2], chamber[4], chamber[3] = e_q, e_dq_c, e_dd_c   # a01, a11, a20 of (5)
@@ -167,12 +168,11 @@ def bulged(params, e):
 
 def geometric_volumes(params, x_c, x_s):
     """
-    Compute V_geo,c(x_c), V_geo,s(x_s) (arrays) and V_geo at the design point (4), m³.
+    Compute V_geo,c(x_c), V_geo,s(x_s) (arrays) (4), m³.
 
     Everything of the volume that the fitted parameters do not change, computed once per record.
     """
-    design = volume_geo(params.chamber, params.x_c_ref) + volume_geo(params.spring, 0.0)
-    return volume_geo(params.chamber, x_c), volume_geo(params.spring, x_s), design
+    return volume_geo(params.chamber, x_c), volume_geo(params.spring, x_s)
 
 
 def predict(params, causes, values, x_c, x_s, dt, geometry=None):
@@ -190,22 +190,16 @@ def predict_state(params, causes, values, x_c, x_s, dt, geometry=None):
     Only the inputs x_c, x_s enter: no measured pressure, so nothing of the held-out output leaks
     in.
     """
-    base = values['baseline']
-    model = dataclasses.replace(without_bulging(params), p_ref=base['p_ref'],
-                                v_tube=base['v_tube'])
-    if 'wall_bulging' in causes:
-        e = values['wall_bulging']
-        model = bulged(model, [e['e_q'], e['e_dq_chamber'], e['e_dq_spring'], e['e_dd_chamber'],
-                               e['e_dd_spring']])
-    v_c, v_s, design = geometry or geometric_volumes(params, x_c, x_s)
-    offset = base.get('x_c_offset', 0.0)
+    model = _gas_model(params, causes, values)
+    v_c, v_s = geometry or geometric_volumes(params, x_c, x_s)
+    offset = values['baseline'].get('x_c_offset', 0.0)
     if offset or 'backlash' in causes:
         x_c = x_c + offset
         if 'backlash' in causes:
             x_c = play(x_c, values['backlash']['width'])
         v_c = volume_geo(params.chamber, x_c)
     volume = v_c + v_s + model.v_tube
-    n0 = model.p_ref * (design + model.v_tube)   # gas amount N = P V of the sealed gas (17)
+    n0 = gas_amount(model, model.p_ref)   # N = P V of the sealed gas (17)
     gas = np.ones(len(x_c))  # gas amount (times temperature), relative to the sealed amount
     if 'heat_exchange' in causes or 'air_leak' in causes:
         temperature = np.ones(len(x_c))
@@ -220,14 +214,21 @@ def predict_state(params, causes, values, x_c, x_s, dt, geometry=None):
             flow = dt * values['air_leak']['conductance'] * n0 * temperature / volume
             amount = recurrence(1.0 - flow * temperature / volume, flow * P_ATM / n0, 1.0)
             gas = temperature * amount
-    if 'wall_bulging' in causes:
-        p = pressure(model, x_c, x_s, gas=model.p_ref * gas, v_geo=volume)
-    else:
-        p = n0 * gas / volume
+    p = pressure_of_amount(model, x_c, x_s, n0 * gas, v_geo=volume)
     p_gas = p
     if 'sensor_lag' in causes:
         p = lag(p, dt, values['sensor_lag']['time_constant'])
     return p, p_gas
+
+
+def _gas_model(params, causes, values):
+    """Return `params` with the baseline's gas and tube, and the fitted E_V if it is a cause."""
+    base = values['baseline']
+    model = dataclasses.replace(without_bulging(params), p_ref=base['p_ref'],
+                                v_tube=base['v_tube'])
+    if 'wall_bulging' in causes:
+        model = bulged(model, values['wall_bulging'])
+    return model
 
 
 def force_columns(params, causes, values, x_s, p_gas):
@@ -235,25 +236,22 @@ def force_columns(params, causes, values, x_s, p_gas):
     Return the force the model knows, (7)-(10) (+ buckling), and the material force's columns.
 
     The columns of the linear material force: 1 (load cell zero), x_s .. x_s^3 (F_MTS), E_F's
-    shape exp(C2 (P - P_atm) + C3 Δh) (11).
+    shape exp(C2 (P - P_atm) + C3 Δh) (11), C1 being its coefficient.
     """
-    s = params.spring
-    _, _, f = frustum_state(s, x_s)
-    area = s._k * f
-    if 'wall_bulging' in causes:
-        e = values['wall_bulging']
-        model = bulged(params, [e['e_q'], e['e_dq_chamber'], e['e_dq_spring'], e['e_dd_chamber'],
-                                e['e_dd_spring']])
-        area = area - e_v(model.spring, x_s, p_gas)[1]
-    known = (p_gas - P_ATM) * area                                    # (9), (10)
+    model = (bulged(params, values['wall_bulging']) if 'wall_bulging' in causes
+             else without_bulging(params))
+    known = air_force(model, x_s, p_gas)[0]                          # (9), (10)
     if 'buckling' in causes:
         b = values['buckling']
         known = known + buckling_force(Buckling(b['stiffness_loss'], b['critical_pressure'],
                                                 b['critical_compression'], _onset_width(params)),
                                        x_s, p_gas, np.exp)[0]
     _, c2, c3, _ = params.e_f
-    columns = [np.ones_like(x_s)] + [x_s ** (i + 1) for i in range(F_MTS_DEGREE)]
-    columns.append(np.exp(np.clip(c2 * (p_gas - P_ATM) + c3 * x_s / s.n, -50.0, 50.0)))
+    # A trial step of the fit may predict any pressure: the exponent of E_F stays finite within
+    # the range the data checks accept.
+    shape = force_error((1.0, c2, c3, -c2 * P_ATM), params.spring.n, x_s,
+                        np.clip(p_gas, 0.0, 2e6), np.exp)[0]
+    columns = [np.ones_like(x_s)] + material_terms(x_s, F_MTS_DEGREE) + [shape]
     return known, np.column_stack(columns)
 
 
@@ -380,9 +378,7 @@ def extended_flat(config, causes, values):
             critical_pressure=b['critical_pressure'],
             critical_compression=b['critical_compression']))
     if 'wall_bulging' in causes:
-        e = values['wall_bulging']
-        model = bulged(model, [e['e_q'], e['e_dq_chamber'], e['e_dq_spring'], e['e_dd_chamber'],
-                               e['e_dd_spring']])
+        model = bulged(model, values['wall_bulging'])
     flat = params_to_flat(model, config.plant)
     for cause in causes:
         if cause in ('wall_bulging', 'buckling'):

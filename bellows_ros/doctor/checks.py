@@ -13,20 +13,22 @@
 # limitations under the License.
 
 """
-Loading and checking the data the doctor is given.
+Checking the data the doctor is given (a table in memory: it reads no file).
 
-Two kinds of verdict: a `DataError` when the file cannot be diagnosed at all (too short, unevenly
+Two kinds of verdict: a `DataError` when the data cannot be diagnosed at all (too short, unevenly
 sampled, the input never moves), and per cause a reason why this record cannot separate that cause
-("not identifiable from this data"), so that the doctor skips it instead of guessing.
+("not identifiable from this data"), so that the doctor skips it instead of guessing. Messages name
+the data by the table's `path` (the file it was read from, or the name an in-memory caller gave).
 """
 from dataclasses import dataclass
 
 import numpy as np
 
-from bellows_ros.data import check_range, read_table
+from bellows_ros.data import check_range
 from bellows_ros.doctor.scoring import block_masks
 from bellows_ros.errors import DataError
 from bellows_ros.models.actuator_geometry import P_ATM
+from bellows_ros.table import check_increasing, COLUMNS, Table
 
 MIN_SAMPLES = 200
 MIN_DURATION = 5.0        # s
@@ -74,9 +76,36 @@ class Record:
                       self.resampled)
 
 
-def load(path, system):
-    """Read a CSV or rosbag2 record of `system`, check it, return an evenly sampled `Record`."""
-    table = read_table(path, system)
+def as_table(data, system, source='<arrays>'):
+    """
+    Return `data` as a `Table`: a `Table` as the readers give it, or a mapping column -> array.
+
+    A mapping must hold the system's required columns (`table.COLUMNS`) as 1-D arrays of one
+    length; `source` names it in error messages. Time must increase, as the file readers require.
+    """
+    if isinstance(data, Table):
+        return data
+    required, optional = COLUMNS[system]
+    for name in required:
+        if name not in data:
+            raise DataError(source, 'missing', column=name)
+    values = {name: np.asarray(data[name], float) for name in required + optional
+              if name in data}
+    lengths = {len(column) if column.ndim == 1 else -1 for column in values.values()}
+    if len(lengths) != 1 or -1 in lengths:
+        raise DataError(source, 'the columns must be 1-D arrays of one length')
+    for name, column in values.items():
+        if not np.all(np.isfinite(column)):
+            raise DataError(source, f'{column[~np.isfinite(column)][0]} is not a finite number',
+                            column=name)
+    table = Table(str(source), list(values), values)
+    check_increasing(table, 't')
+    return table
+
+
+def checked_record(table, system):
+    """Check a `system` table (`as_table`) and return it as an evenly sampled `Record`."""
+    path = table.path
     if len(table) < MIN_SAMPLES:
         raise DataError(path, f'only {len(table)} samples; the doctor needs at least '
                               f'{MIN_SAMPLES} to fit on some blocks of time and score on others')
@@ -161,7 +190,7 @@ def moving_fraction(position, dt, speed):
     return float(np.mean(np.abs(rate) > speed))
 
 
-def pressure_coverage(record, share=0.5):
+def pressure_coverage(record, ambient, share=0.5):
     """
     Tell why not every fold's training rows reach `share` of the highest chain pressure.
 
@@ -174,7 +203,7 @@ def pressure_coverage(record, share=0.5):
     held-out score measures an extrapolation, and comparing causes on it names whichever
     extrapolates least.
     """
-    gauge = np.maximum(record['p1'], record['p2']) - P_ATM
+    gauge = np.maximum(record['p1'], record['p2']) - ambient
     top = float(gauge.max())
     for fold, (train, _) in enumerate(block_masks(len(record))):
         reached = float(gauge[train].max())
@@ -188,11 +217,13 @@ def pressure_coverage(record, share=0.5):
     return None
 
 
-def identifiability(record, noise):
+def identifiability(record, noise, ambient=P_ATM):
     """
     For each cause: None if this record can separate it, else the reason why not.
 
-    `record` is the (decimated) record, `noise` the white-noise floor of the measured signal.
+    `record` is the (decimated) record, `noise` the white-noise floor of the measured signal,
+    `ambient` the ambient pressure (Pa) gauge pressures are taken from: the segment's p0 (paper A),
+    paper B's P_atm for the actuator.
     """
     reasons = {}
     if record.system == 'actuator':
@@ -202,7 +233,7 @@ def identifiability(record, noise):
         rate_c = np.abs(np.gradient(x_c, record.dt))
         rate_s = np.abs(np.gradient(x_s, record.dt))
         moving = float(np.mean((rate_c > 2e-5) | (rate_s > 1e-3)))
-        offset = float(np.median(np.abs(p - P_ATM)))
+        offset = float(np.median(np.abs(p - ambient)))
         reasons['air_leak'] = (None if offset > 300 and record.duration >= 10 else
                                f'the pressure stays within {offset:.0f} Pa of ambient (or the '
                                'record is shorter than 10 s), so no air would flow through a '
@@ -229,7 +260,7 @@ def identifiability(record, noise):
         # the onset (which moves with the pressure) cannot be told from the material force.
         loaded = p[x_s > 0.004]
         spread = float(np.ptp(loaded)) if len(loaded) > 0.02 * len(p) else 0.0
-        top = float(loaded.max()) - P_ATM if len(loaded) else 0.0
+        top = float(loaded.max()) - ambient if len(loaded) else 0.0
         reasons['buckling'] = (None if spread > 8e3 and top > 5e3 else
                                'the spring is never compressed by more than 4 mm over a span '
                                'of pressures reaching 5 kPa gauge, so a buckling onset that '
@@ -240,7 +271,7 @@ def identifiability(record, noise):
         spread = max(np.ptp(p1), np.ptp(p2))
         moving = moving_fraction(psi, record.dt, np.radians(0.5))
         reasons['contact_hysteresis'] = (None if turns >= 2
-                                         and max(p1.max(), p2.max()) > P_ATM + 2e4 else
+                                         and max(p1.max(), p2.max()) > ambient + 2e4 else
                                          f'the angle reverses only {turns} time(s) or no chain is '
                                          'pressurised; the contact memory shows only on a return '
                                          'path')
@@ -256,7 +287,7 @@ def identifiability(record, noise):
                                  'be seen')
         # Every segment cause acts through the chain pressures: none can be scored on held-out
         # blocks that only one fold's refit has not seen pressurised.
-        uncovered = pressure_coverage(record)
+        uncovered = pressure_coverage(record, ambient)
         if uncovered:
             reasons = {cause: reason or uncovered for cause, reason in reasons.items()}
     return reasons

@@ -15,7 +15,10 @@
 """
 The model doctor's decision procedure (docs/doctor.md).
 
-1. Load and check the record; estimate the white-noise floor of the measured signal at full rate.
+It takes data and parameter objects and returns a `Diagnosis`; it reads and writes no file (the
+`bellows diagnose` command does: `bellows_ros.cli.diagnose`).
+
+1. Check the record; estimate the white-noise floor of the measured signal at full rate.
 2. Fit on a block-averaged copy (at most the system's `FIT_RATE` Hz and `FIT_SAMPLES` samples): the
    dynamics of every cause are slower than that, and averaging also lowers the noise.
 3. Score the baseline on held-out blocks of time.
@@ -90,7 +93,7 @@ class OutputView:
 @dataclass
 class Diagnosis:
     system: str
-    path: str
+    source: str                    # the data's name: the file it was read from, or the caller's
     record: checks.Record          # the fitted (block-averaged) copy
     signal: np.ndarray             # the measured signal compared with the model, on `record`
     unit: str
@@ -145,15 +148,6 @@ def system_module(system):
     return module
 
 
-def load_params(system, params_path):
-    """Return the system's parameter objects (`SegmentConfig`, `ActuatorConfig`) of a file."""
-    if system == 'actuator':
-        from bellows_ros.config.actuator import load_actuator
-        return load_actuator(params_path)
-    from bellows_ros.config.segment import load_segment
-    return load_segment(params_path)
-
-
 def decimation_factor(record, rate):
     """Block length that brings `record` to at most `rate` Hz and `FIT_SAMPLES` samples."""
     by_rate = int(np.floor(1.0 / (record.dt * rate) + 1e-6)) or 1
@@ -161,18 +155,22 @@ def decimation_factor(record, rate):
     return max(1, by_rate, by_size)
 
 
-def diagnose(system, path, params_path=None, progress=False, causes=None):
+def diagnose(system, data, config, progress=False, causes=None, source='<arrays>'):
     """
-    Diagnose the record at `path` (CSV or rosbag2 directory). Returns a `Diagnosis`.
+    Diagnose one record of `system` ('segment' or 'actuator'). Returns a `Diagnosis`.
 
-    `causes` restricts the candidates (default: the whole vocabulary of the system; `()` fits and
-    scores the baseline only, the benchmark's reference).
+    `data`: a `table.Table` (as `data.read_table` gives it) or a mapping column -> array (SI
+    units, the columns of the system's files); `config`: the system's parameter objects
+    (`config.segment.SegmentConfig` or `config.actuator.ActuatorConfig`): `config.model` is the
+    nominal model the doctor extends. `source` names
+    in-memory data in error messages (a table carries its own). `causes` restricts the candidates
+    (default: the whole vocabulary of the system; `()` fits and scores the baseline only, the
+    benchmark's reference).
     """
     started = time.perf_counter()
     module = system_module(system)
-    config = load_params(system, params_path)
     params = config.model
-    full = checks.load(path, system)
+    full = checks.checked_record(checks.as_table(data, system, source), system)
     if system == 'segment':
         module.add_columns(full, params, config.identify.input_cutoff)
     record = full.decimated(decimation_factor(full, module.FIT_RATE))
@@ -188,8 +186,8 @@ def diagnose(system, path, params_path=None, progress=False, causes=None):
     else:
         noise = scoring.noise_floor(module.measured(full))
         y = module.measured(record)
-        reasons = checks.identifiability(record, noise / np.sqrt(record.factor))
-    timings = {'load': time.perf_counter() - started}
+        reasons = checks.identifiability(record, noise / np.sqrt(record.factor), params.p0)
+    timings = {'load': time.perf_counter() - started}   # checks (the caller reads the data)
     bar = _progress(progress, total=1 + len(module.CAUSES if causes is None else causes))
     if system == 'segment':
         # Algorithm 1 over the record does not depend on any fitted parameter: run it once, at
@@ -243,7 +241,7 @@ def diagnose(system, path, params_path=None, progress=False, causes=None):
     if not outputs:
         evidence = residual_evidence(record, current.heldout, floor, system)
         unexplained = _structured(evidence)
-        return Diagnosis(system, str(path), record, y, module.UNIT, module.BASELINE, baseline,
+        return Diagnosis(system, full.path, record, y, module.UNIT, module.BASELINE, baseline,
                          current, chosen, candidates, noise, evidence, bool(unexplained), values,
                          module.extended_flat(config, chosen, values), timings, failure)
     views = []
@@ -263,7 +261,7 @@ def diagnose(system, path, params_path=None, progress=False, causes=None):
     unexplained = any(_structured(v.evidence) for v in views)
     worst = max(views, key=lambda v: v.evidence['rmse_over_noise'])
     view = views[primary]
-    return Diagnosis(system, str(path), record, view.signal, view.unit, module.BASELINE, baseline,
+    return Diagnosis(system, full.path, record, view.signal, view.unit, module.BASELINE, baseline,
                      current, chosen, candidates, view.noise, worst.evidence, bool(unexplained),
                      values, module.extended_flat(config, chosen, values), timings, failure, views,
                      primary)

@@ -20,7 +20,6 @@ fitted on. "baseline" is the simulation before the doctor, "extended" the model 
 found. A diagnosis of several outputs (the actuator's pressure and force) gets every plot for each:
 the first output under the plain names, the others with `_<label>` appended (fit_force.png ...).
 """
-from pathlib import Path  # noqa: E402
 from types import SimpleNamespace  # noqa: E402
 
 import matplotlib
@@ -45,22 +44,17 @@ def _inputs(diagnosis):
     return r['psi'], 'segment angle Ψ (rad)', r['p1'] - r['p2'], 'p1 - p2 (Pa)'
 
 
-def write_plots(diagnosis, directory):
+def figures(diagnosis):
     """
-    Write residuals.png, fit.png, hysteresis.png, autocorrelation.png; return the file names.
+    Yield (file name, figure): residuals.png, fit.png, hysteresis.png, autocorrelation.png.
 
-    The same plots follow for each further output.
+    The same plots follow for each further output. The caller saves each figure and closes it
+    (`matplotlib.pyplot.close`) before asking for the next.
     """
-    names = []
     for suffix, view in _views(diagnosis):
         for name, draw in (('residuals', _residuals), ('fit', _fit),
                            ('hysteresis', _hysteresis), ('autocorrelation', _autocorrelation)):
-            figure = draw(view)
-            file = f'{name}{suffix}.png'
-            figure.savefig(Path(directory) / file, dpi=90)
-            plt.close(figure)
-            names.append(file)
-    return names
+            yield f'{name}{suffix}.png', draw(view)
 
 
 def _views(d):

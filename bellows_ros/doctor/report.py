@@ -13,9 +13,10 @@
 # limitations under the License.
 
 """
-`bellows diagnose`: run the doctor and write the report.
+The doctor's report as data: report.json's and details.json's dictionaries and report.md's text.
 
-DIR/report.json, report.md, extended.yaml, details.json and the PNG plots.
+`bellows diagnose` (`bellows_ros.cli.diagnose`) writes them to DIR/report.json, details.json and
+report.md, with extended.yaml and the PNG plots (`bellows_ros.doctor.plots.figures`).
 
 report.json has the keys of docs/interfaces.md; for a system with several measured outputs (the
 actuator's pressure p and force f) its baseline/extended/gain and the candidates' held-out RMSE are
@@ -23,31 +24,29 @@ those of the output where the first cause pays most (`baseline.unit` says which)
 adds the figures of every output. Everything else (per-candidate gains, the decision, the residual
 evidence, timings) goes to details.json.
 """
-import json
 import math
-from pathlib import Path
 
 import numpy as np
 
-from bellows_ros import params as param_files
 from bellows_ros.doctor import diagnosis as engine
 from bellows_ros.doctor import scoring
-from bellows_ros.errors import BellowsError
 
 EXTENDED_FILE = 'extended.yaml'
 
 
-def diagnose_command(args):
-    """Entry point of `bellows diagnose` (args: system, data, report, params, quiet)."""
-    result = engine.diagnose(args.system, args.data, params_path=getattr(args, 'params', None),
-                             progress=not getattr(args, 'quiet', False))
-    write_report(result, args.report)
-    causes = ', '.join(result.causes) or 'none'
-    print(f'{args.system}: cause {causes}; held-out RMSE {result.baseline_rmse:.4g} -> '
-          f'{result.final_rmse:.4g} {result.unit} (gain {100 * result.gain:.1f} '
-          f'%){"; unexplained structure left" if result.unexplained else ""}; report in '
-          f'{args.report}')
-    return 0
+def summary_line(d, report_directory):
+    """Return the line `bellows diagnose` prints when it is done."""
+    causes = ', '.join(d.causes) or 'none'
+    return (f'{d.system}: cause {causes}; held-out RMSE {d.baseline_rmse:.4g} -> '
+            f'{d.final_rmse:.4g} {d.unit} (gain {100 * d.gain:.1f} '
+            f'%){"; unexplained structure left" if d.unexplained else ""}; report in '
+            f'{report_directory}')
+
+
+def extended_header(d):
+    """Return the comment at the top of extended.yaml."""
+    return (f'Extended {d.system} model written by `bellows diagnose` from {d.source}\n'
+            f'causes: {", ".join(d.causes) or "none"}; held-out gain {100 * d.gain:.1f} %')
 
 
 def _number(value):
@@ -98,7 +97,7 @@ def details_dict(d):
                              'heldout_rmse': c.score.rmse if c.score else None,
                              'insample_rmse': c.score.insample_rmse if c.score else None}
     return {
-        'data': d.path,
+        'data': d.source,
         'samples_fitted': len(d.record),
         'fit_rate_hz': 1.0 / d.record.dt,
         'decimation': d.record.factor,
@@ -131,25 +130,6 @@ def fold_rmse(heldout):
             for _, test in scoring.block_masks(np.shape(heldout)[-1])]
 
 
-def write_report(d, directory):
-    """Write every output file into `directory` (created if needed)."""
-    from bellows_ros.doctor.plots import write_plots
-    directory = Path(directory)
-    try:
-        directory.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise BellowsError(
-            f'{directory}: cannot create the report directory ({exc.strerror})') from None
-    (directory / 'report.json').write_text(json.dumps(report_dict(d), indent=2) + '\n')
-    (directory / 'details.json').write_text(json.dumps(details_dict(d), indent=2,
-                                                       default=float) + '\n')
-    header = (f'Extended {d.system} model written by `bellows diagnose` from {d.path}\n'
-              f'causes: {", ".join(d.causes) or "none"}; held-out gain {100 * d.gain:.1f} %')
-    param_files.write_file(directory / EXTENDED_FILE, d.extended_flat, header)
-    plots = write_plots(d, directory)
-    (directory / 'report.md').write_text(markdown(d, plots))
-
-
 def _fmt(value):
     if isinstance(value, float):
         return f'{value:.4g}'
@@ -158,7 +138,7 @@ def _fmt(value):
 
 def markdown(d, plots):
     lines = [f'# Model doctor: {d.system}', '',
-             f'Data: `{d.path}` — {len(d.record)} samples fitted '
+             f'Data: `{d.source}` — {len(d.record)} samples fitted '
              f'at {1 / d.record.dt:.0f} Hz (block means of {d.record.factor} raw samples).', '']
     if d.causes:
         lines.append(f'**Cause: {", ".join(f"`{c}`" for c in d.causes)}.** Extending the baseline '

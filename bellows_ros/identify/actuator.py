@@ -44,10 +44,11 @@ import numpy as np
 from scipy.optimize import fsolve, least_squares
 
 from bellows_ros.errors import BellowsError
-from bellows_ros.models.actuator import (buckling_force, evaluate_array, p_ref_of_amount,
-                                         stiffness, total_volume)
-from bellows_ros.models.actuator_geometry import (e_v, e_v_regressors, E_V_TERMS, frustum_state,
-                                                  P_ATM, volume_geo)
+from bellows_ros.models.actuator import (air_force, buckling_force, evaluate_array,
+                                         material_terms, p_ref_of_amount, stiffness, total_volume)
+# (11); the fits' flag `force_error` (fit E_F or not) keeps its name
+from bellows_ros.models.actuator import force_error as e_f_term
+from bellows_ros.models.actuator_geometry import e_v_regressors, E_V_TERMS, P_ATM, volume_geo
 
 # E_V terms kept from the starting parameters (see `fit_volume`): the constant, the pressure-only
 # terms and the term linear in Δh. Fitted: a20, a11, a30, a21, a12 (bulging that grows with the
@@ -133,23 +134,18 @@ def fit_volume(params, x_c, x_s, p, wall_bulging=True, run=None):
 
 
 def _force_regressors(params, x_s, p):
-    s = params.spring
-    _, _, f = frustum_state(s, x_s)
-    area = s._k * f
-    if s.bulging:
-        area = area - e_v(s, x_s, p)[1]
-    poly = np.column_stack([x_s ** (i + 1) for i in range(len(params.f_mts))])
-    known = (p - P_ATM) * area
+    """F_air (9, 10) plus the buckling term, which the fit keeps, and F_MTS's monomials."""
+    known = air_force(params, x_s, p)[0]
     if params.buckling is not None and params.buckling.stiffness_loss:
         known = known + buckling_force(params.buckling, x_s, p, np.exp)[0]
-    return known, poly
+    return known, np.column_stack(material_terms(x_s, len(params.f_mts)))
 
 
 def fit_force(params, x_s, p, f, force_error=True, seed=0, progress=False):
     """Stage 2: F_MTS (same degree as the YAML's) and, optionally, E_F (11). Returns params."""
     air, poly = _force_regressors(params, x_s, p)
     target = f - air
-    dh = x_s / params.spring.n
+    n = params.spring.n
     if not force_error:
         coef, *_ = np.linalg.lstsq(poly, target, rcond=None)
         return dataclasses.replace(params,
@@ -157,7 +153,7 @@ def fit_force(params, x_s, p, f, force_error=True, seed=0, progress=False):
 
     def solve_linear(z):
         c2, c3 = z[0] * 1e-5, z[1] * 1e2          # scaled so both unknowns are O(1)
-        shape = np.exp(c2 * (p - P_ATM) + c3 * dh)
+        shape = e_f_term((1.0, c2, c3, -c2 * P_ATM), n, x_s, p, np.exp)[0]   # (11) over C1
         a = np.column_stack([poly, shape])
         coef, *_ = np.linalg.lstsq(a, target, rcond=None)
         return coef, a @ coef - target

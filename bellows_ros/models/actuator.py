@@ -42,8 +42,8 @@ import math
 import numpy as np
 
 from bellows_ros.errors import ParameterError
-from bellows_ros.models.actuator_geometry import (Bellows, e_v, e_v_in_q, frustum_state, P_ATM,
-                                                  volume, volume_geo)
+from bellows_ros.models.actuator_geometry import (area, Bellows, e_v, e_v_in_q, frustum_state,
+                                                  P_ATM, volume, volume_geo, volume_geo_slope)
 
 _NEWTON_TOL = 1e-6   # Pa
 _NEWTON_MAX = 30
@@ -177,7 +177,15 @@ def pressure(params, x_c, x_s, gas=None, v_geo=None):
 
     `v_geo`: the geometric total volume V_c + V_s + V_tube (m³), if the caller already has it.
     """
-    amount = _gas(params, gas)
+    return pressure_of_amount(params, x_c, x_s, _gas(params, gas), v_geo)
+
+
+def pressure_of_amount(params, x_c, x_s, amount, v_geo=None):
+    """
+    System pressure P (Pa) of the gas amount N = `amount` (Pa·m³): the root of (17).
+
+    For a caller that holds N itself (the doctor's leak and heating); `v_geo` as in `pressure`.
+    """
     return _solve_pressure(params, x_c, x_s, amount, v_geo)[0]
 
 
@@ -246,7 +254,7 @@ def evaluate(params, x_c, x_s, gas=None):
     The fast scalar path: floats in, floats out. `gas` is the gas amount as `p_ref` (Pa), default
     `params.p_ref`.
     """
-    return _forward(params, float(x_c), float(x_s), _gas(params, gas), math.exp)
+    return forward(params, float(x_c), float(x_s), _gas(params, gas), math.exp)
 
 
 def evaluate_array(params, x_c, x_s, gas=None):
@@ -262,66 +270,90 @@ def evaluate_array(params, x_c, x_s, gas=None):
     else:
         amount = gas_amount(params, np.asarray(gas, dtype=float))
     x_c, x_s = np.broadcast_arrays(x_c, x_s)
-    return _forward(params, x_c, x_s, amount, np.exp)
+    return forward(params, x_c, x_s, amount, np.exp)
 
 
-def _forward(params, x_c, x_s, amount, exp):
-    """(P, F, K) from the gas law (17), the force (7-12) and its exact derivative (13)."""
+def forward(params, x_c, x_s, amount, exp=math.exp):
+    """
+    (P, F, K) at gas amount N = `amount` (Pa·m³): the gas law (17), force (7)-(12), K (13).
+
+    What `evaluate` and `evaluate_array` compute, for a caller that holds N itself (the plant,
+    whose N changes with a leak and the gas temperature). Floats with `math.exp`, arrays with
+    `np.exp`.
+    """
     s = params.spring
-    radius, d_radius, f = frustum_state(s, x_s)
-    k = s._k
-    height = s.h0 - x_s / s.n
-    v_geo = volume_geo(params.chamber, x_c) + k * s.n * height * f + params.v_tube
+    state = frustum_state(s, x_s)
+    v_geo = volume_geo(params.chamber, x_c) + volume_geo(s, x_s, state) + params.v_tube
     p, g_slope = _solve_pressure(params, x_c, x_s, amount, v_geo)
-    area = k * f                                        # (10), geometric part
-    d_f = (2.0 * radius + s.r_small) * d_radius
-    d_area_dx = k * d_f / s.n
-    d_area_dp = 0.0
-    dv_dx = k * (height * d_f - f)                      # exact dV_s/dx_s (4) for the gas law
-    if s.bulging:
-        _, e_x, _, e_xx, e_xp = e_v(s, x_s, p)
-        # [choice] (10) adds dE_V/d(nh) = -∂E_V/∂x to the equivalent area (x = nΔh = -(nh - nh0)).
-        area = area - e_x
-        d_area_dx = d_area_dx - e_xx
-        d_area_dp = -e_xp
-        dv_dx = dv_dx + e_x
+    error = e_v(s, x_s, p) if s.bulging else None
+    dv_dx = volume_geo_slope(s, x_s, state)             # exact dV_s/dx_s (4)-(6) for the gas law
+    if error:
+        dv_dx = dv_dx + error[1]
     dp_dx = -p * dv_dx / g_slope                        # implicit differentiation of (17)
-    force, stiffness = _spring_force(params, x_s, p, dp_dx, exp, (area, d_area_dx, d_area_dp))
+    force, stiffness = spring_force(params, x_s, p, dp_dx, exp, area(s, x_s, p, state, error))
     return p, force, stiffness
 
 
-def _spring_force(params, x_s, p, dp_dx, exp, area=None):
+def spring_force(params, x_s, p, dp_dx=0.0, exp=math.exp, spring_area=None):
     """
-    Spring force F (7) at (x_s, P) and its total derivative along x_s when P moves at dP/dx_s.
+    Spring force F (7), N, at (x_s, P), and its total derivative dF/dx_s (N/m) at dP/dx_s = dp_dx.
 
-    `area`: (A, ∂A/∂x_s, ∂A/∂P) of (10) if the caller already has them.
+    F = F_air (9) + F_MTS + E_F (12, 11) + F_buckle (`buckling_force`, when the parameters have
+    it). `spring_area`: `actuator_geometry.area(params.spring, x_s, p)` if the caller has it.
     """
-    s = params.spring
-    if area is None:
-        radius, d_radius, f = frustum_state(s, x_s)
-        area = (s._k * f, s._k * (2.0 * radius + s.r_small) * d_radius / s.n, 0.0)
-        if s.bulging:
-            _, e_x, _, e_xx, e_xp = e_v(s, x_s, p)
-            area = (area[0] - e_x, area[1] - e_xx, -e_xp)
-    area, d_area_dx, d_area_dp = area
-    gauge = p - P_ATM
-    force = gauge * area                                # (9)
-    stiffness = dp_dx * area + gauge * (d_area_dx + d_area_dp * dp_dx)
-    # F_MTS: polynomial fitted to the unpressurised spring ([choice] for paper B's FEA curve).
-    power, f_mts, k_mts = 1.0, 0.0, 0.0
-    for i, coefficient in enumerate(params.f_mts):
-        k_mts = k_mts + (i + 1) * coefficient * power
-        power = power * x_s
-        f_mts = f_mts + coefficient * power
-    c1, c2, c3, c4 = params.e_f
-    e_f = c1 * exp(c2 * p + c3 * x_s / s.n + c4)        # (11)
-    force = force + f_mts + e_f                         # (7), (12)
-    stiffness = stiffness + k_mts + e_f * (c2 * dp_dx + c3 / s.n)
+    air, stiffness = air_force(params, x_s, p, dp_dx, spring_area)
+    f_mts, k_mts = material_force(params.f_mts, x_s)
+    e_f, e_f_x, e_f_p = force_error(params.e_f, params.spring.n, x_s, p, exp)
+    force = air + f_mts + e_f                           # (7), (12)
+    stiffness = stiffness + k_mts + e_f_x + e_f_p * dp_dx
     if params.buckling is not NO_BUCKLING and params.buckling.stiffness_loss:
         f_b, f_b_x, f_b_p = buckling_force(params.buckling, x_s, p, exp)
         force = force + f_b
         stiffness = stiffness + f_b_x + f_b_p * dp_dx
     return force, stiffness
+
+
+def air_force(params, x_s, p, dp_dx=0.0, spring_area=None):
+    """
+    F_air = (P - P_atm) A (9), N, and its total derivative along x_s (N/m) at dP/dx_s = dp_dx.
+
+    A: the spring's equivalent area (10), `actuator_geometry.area`. Floats or arrays.
+    """
+    value, d_x, d_p = spring_area or area(params.spring, x_s, p)
+    gauge = p - P_ATM
+    return gauge * value, dp_dx * value + gauge * (d_x + d_p * dp_dx)
+
+
+def material_force(f_mts, x_s):
+    """
+    F_MTS(x_s) = Σ_i f_i x_s^(i+1), N, and its slope (N/m): the unpressurised spring (12).
+
+    [choice] A polynomial fitted to the unpressurised spring stands for paper B's FEA curve.
+    `material_terms` gives its monomials for fitting.
+    """
+    power, value, slope = 1.0, 0.0, 0.0
+    for i, coefficient in enumerate(f_mts):
+        slope = slope + (i + 1) * coefficient * power
+        power = power * x_s
+        value = value + coefficient * power
+    return value, slope
+
+
+def material_terms(x_s, degree):
+    """Return the monomials x_s^(i+1), i < degree, of F_MTS (`material_force`) as columns."""
+    return [x_s ** (i + 1) for i in range(degree)]
+
+
+def force_error(e_f, n, x_s, p, exp=math.exp):
+    """
+    E_F = C1 exp(C2 P + C3 Δh + C4) (11), N, with ∂E_F/∂x_s (N/m) and ∂E_F/∂P (N/Pa).
+
+    `e_f`: (C1, C2, C3, C4); n: the spring's segment count (Δh = x_s/n). With
+    (1, C2, C3, -C2 P_atm) it is the shape exp(C2 (P - P_atm) + C3 Δh) the fits scale by C1.
+    """
+    c1, c2, c3, c4 = e_f
+    value = c1 * exp(c2 * p + c3 * x_s / n + c4)
+    return value, value * c3 / n, value * c2
 
 
 def buckling_force(b, x_s, p, exp=math.exp):
@@ -362,8 +394,8 @@ def stiffness(params, x_c, gas=None):
     """
     amount = _gas(params, gas)
     low, high = params.x_s_low, params.x_s_high
-    f_low = _forward(params, float(x_c), low, amount, math.exp)[1]
-    f_high = _forward(params, float(x_c), high, amount, math.exp)[1]
+    f_low = forward(params, float(x_c), low, amount)[1]
+    f_high = forward(params, float(x_c), high, amount)[1]
     return (f_high - f_low) / (high - low)
 
 
@@ -377,7 +409,7 @@ def stiffness_from_rest(params, x_c, gas=None):
     """
     amount = _gas(params, gas)
     rest = rest_compression(params, x_c, gas)
-    f_high = _forward(params, float(x_c), params.x_s_high, amount, math.exp)[1]
+    f_high = forward(params, float(x_c), params.x_s_high, amount)[1]
     return f_high / (params.x_s_high - rest)
 
 
@@ -392,7 +424,7 @@ def rest_compression(params, x_c, gas=None, step=5e-4):
     amount = _gas(params, gas)
 
     def force(x):
-        return _forward(params, float(x_c), x, amount, math.exp)[1]
+        return forward(params, float(x_c), x, amount)[1]
     x, f = 0.0, force(0.0)
     direction = -1.0 if f > 0.0 else 1.0
     end = params.spring.x_min if f > 0.0 else params.x_s_high
@@ -416,7 +448,7 @@ def rest_length_change(params, p, x_low=-0.03, x_high=0.03):
     from scipy.optimize import brentq
 
     def force(x):
-        return _spring_force(params, x, p, 0.0, math.exp)[0]
+        return spring_force(params, x, p)[0]
     try:
         return -brentq(force, x_low, x_high, xtol=1e-9)
     except ValueError:

@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-Geometry and augmented volume of one bellows of paper B (equations 2-6, 10).
+Geometry, augmented volume and equivalent area of one bellows of paper B (equations 2-6, 10).
 
 A bellows is n identical segments, each two conical frusta of opposite orientation (Table II). The
 per-segment compression is Δh = h0 - h; the bellows' total compression is x = n Δh (positive =
@@ -79,21 +79,42 @@ def frustum_state(b, x):
     return radius, d_radius, radius * radius + r * r + radius * r
 
 
-def volume_geo(b, x):
-    """Geometric volume V_geo (4), m³, of 2n frusta at total compression x (m)."""
-    radius, _, f = frustum_state(b, x)
+def volume_geo(b, x, state=None):
+    """
+    Geometric volume V_geo (4), m³, of 2n frusta at total compression x (m).
+
+    `state`: `frustum_state(b, x)` if the caller already has it (the fast path computes it once).
+    """
+    _, _, f = state or frustum_state(b, x)
     return b._k * b.n * (b.h0 - x / b.n) * f
 
 
-def volume_geo_slope(b, x):
+def volume_geo_slope(b, x, state=None):
     """
     dV_geo/dx (m²): the exact derivative of (4) with respect to the total compression x.
 
     Negative while compressing shrinks the volume; it changes sign near full extension, where the
-    radius R collapses towards r.
+    radius R collapses towards r. `state` as in `volume_geo`.
     """
-    radius, d_radius, f = frustum_state(b, x)
+    radius, d_radius, f = state or frustum_state(b, x)
     return b._k * (-f + (b.h0 - x / b.n) * (2.0 * radius + b.r_small) * d_radius)
+
+
+def area(b, x, p, state=None, error=None):
+    """
+    Equivalent area A = dV/d(nh) (10), m², and its partial derivatives ∂A/∂x (m), ∂A/∂P (m²/Pa).
+
+    A = π/3 (R² + r² + R r) + dE_V/d(nh); [choice] dE_V/d(nh) = -∂E_V/∂x, since
+    x = nΔh = -(nh - nh0). `state` as in `volume_geo`; `error`: `e_v(b, x, p)` if the caller
+    already has it. Floats or arrays.
+    """
+    radius, d_radius, f = state or frustum_state(b, x)
+    value = b._k * f
+    d_x = b._k * (2.0 * radius + b.r_small) * d_radius / b.n
+    if not b.bulging:
+        return value, d_x, 0.0
+    _, e_x, _, e_xx, e_xp = error or e_v(b, x, p)
+    return value - e_x, d_x - e_xx, -e_xp
 
 
 def e_v(b, x, p):

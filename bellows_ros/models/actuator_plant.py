@@ -49,10 +49,11 @@ import random
 from typing import NamedTuple
 
 from bellows_ros.errors import ParameterError
-from bellows_ros.models.actuator import (_forward, gas_amount, p_ref_of_amount, scaled_buckling,
-                                         scaled_bulging, without_buckling, without_bulging)
+from bellows_ros.models.actuator import (forward, gas_amount, p_ref_of_amount, scaled_buckling,
+                                         scaled_bulging, total_volume, without_buckling,
+                                         without_bulging)
 from bellows_ros.models.actuator_drive import Drive
-from bellows_ros.models.actuator_geometry import frustum_state, P_ATM, volume
+from bellows_ros.models.actuator_geometry import area, P_ATM
 
 ACTUATOR_EFFECTS = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash',
                     'buckling')
@@ -219,10 +220,11 @@ class ActuatorPlant:
                                params.p_ref if gas is None else float(gas))  # N = P V at T_amb
         self._temperature = self._t_amb
         self._exp_cache = (None, 0.0, 0.0, 0.0)
-        p, force, k = _forward(self.params, self._x_c, self._x_s, self._gas, math.exp)
+        p, force, k = forward(self.params, self._x_c, self._x_s, self._gas)
         self._p, self._f, self._k = p, force, k
         self._p_sensor = p
-        self._volume = self._total_volume(p) if self._heat_tau else None
+        self._volume = (total_volume(self.params, self._x_c, self._x_s, p) if self._heat_tau
+                        else None)
 
     @staticmethod
     def _noise_settings(plant, noise):
@@ -343,7 +345,8 @@ class ActuatorPlant:
         torque = k * self._current
         # Gas load on the plate, reflected to the motor through a self-locking screw: it resists
         # motion in either direction and never drives the motor.
-        area_c = self._chamber_area()
+        # (10) for the chamber: the plate does the work (P - P_atm) dV_c [ours].
+        area_c = area(self.params.chamber, self._x_c, self._p)[0]
         resist = abs((self._p - P_ATM) * area_c) * self._metres_per_rad / d.efficiency
         omega = self._omega
         if omega == 0.0 and abs(torque) <= resist:
@@ -363,21 +366,12 @@ class ActuatorPlant:
         self._theta, self._omega = theta, omega
         self._move_plate(theta * self._metres_per_rad)
 
-    def _chamber_area(self):
-        c = self.params.chamber
-        _, _, f = frustum_state(c, self._x_c)
-        return c._k * f
-
-    def _total_volume(self, p):
-        pr = self.params
-        return volume(pr.chamber, self._x_c, p) + volume(pr.spring, self._x_s, p) + pr.v_tube
-
     def _spring_under_load(self, f_load):
         x = self._x_s
         amount = self._gas * self._temperature / self._t_amb
         s = self.params.spring
         for _ in range(20):
-            _, force, k = _forward(self.params, self._x_c, x, amount, math.exp)
+            _, force, k = forward(self.params, self._x_c, x, amount)
             step = (force - f_load) / k if k > 0.0 else 0.0
             x = min(max(x - step, s.x_min), s.x_max)
             if abs(step) < 1e-9:
@@ -388,7 +382,7 @@ class ActuatorPlant:
         if self._heat_tau:
             # Volume at the new geometry (E_V at the last pressure; the Newton solve below is
             # exact), needed only for the adiabatic temperature change.
-            volume_new = self._total_volume(self._p)
+            volume_new = total_volume(self.params, self._x_c, self._x_s, self._p)
             t = self._temperature * (self._volume / volume_new) ** (self._gamma - 1.0)
             self._temperature = self._t_amb + (t - self._t_amb) * self._exp_cache[3]
             self._volume = volume_new
@@ -396,7 +390,7 @@ class ActuatorPlant:
             self._gas -= (dt * self._p * self._leak * (self._p - P_ATM) * self._t_amb
                           / self._temperature)
         amount = self._gas * self._temperature / self._t_amb
-        self._p, self._f, self._k = _forward(self.params, self._x_c, self._x_s, amount, math.exp)
+        self._p, self._f, self._k = forward(self.params, self._x_c, self._x_s, amount)
 
     def _sample(self, dt):
         n = self._noise

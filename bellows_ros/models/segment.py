@@ -259,10 +259,7 @@ class SegmentModel:
         self._contact = (self.memory1.step, self.memory2.step)
         self._pressure = (p.p0, 1.0 / (p.p_max - p.p0))
         self._theta_a = tuple(float(v) for v in p.actuator_theta)
-        self._theta_prev = tuple(float(v) for v in p.previous_theta)
-        self._spring = (p.restoring_k_s, p.restoring_k_sp, p.restoring_c_psi0,
-                        p.restoring_c_psi0_p)
-        self._friction = (p.friction_c_f, p.friction_c_fp, p.friction_c_vel)
+        self._previous = previous_torques(p)
 
     def reset(self):
         self.memory1.reset()
@@ -295,9 +292,9 @@ class SegmentModel:
         """
         (τ_a, τ_s, τ_f, τ_drive, τ_prev), N·m, at given contact lengths s1, s2 (m); no state.
 
-        The fast form of (3)-(5), (17), (29), (34), hand-expanded for speed (see `step`).
+        The fast form of (3)-(5), (17), (29), (34), hand-expanded for speed (see `step`); τ_s, τ_f
+        and τ_prev from `previous_torques`.
         """
-        tanh = math.tanh
         p0, inv_span = self._pressure
         q1 = (p1 - p0) * inv_span
         q2 = (p2 - p0) * inv_span
@@ -308,19 +305,37 @@ class SegmentModel:
                        + t6 * q1 * psi + t7 * psi_sq)
                  - q2 * (t0 + s2 * (t1 + t2 * s2 + t3 * q2 - t4 * psi + t5 * psi_sq)
                          - t6 * q2 * psi + t7 * psi_sq))
+        tau_s, tau_f, tau_prev = self._previous(psi, psi_dot, q1, q2)
+        return tau_a, tau_s, tau_f, tau_a + tau_s + tau_f, tau_prev
+
+
+def previous_torques(p):
+    """
+    Return the fast scalar τ_s (3, 4), τ_f (5) and τ_prev (34) of a segment with parameters `p`.
+
+    The returned function maps (Ψ rad, Ψ̇ rad/s, p_scl,1, p_scl,2) to (τ_s, τ_f, τ_prev) in N·m.
+    Hand-expanded for the 1 kHz step (`SegmentModel.torques`), whose part it is, and the
+    benchmark's reference (`bench.segment.previous_step`, the previous model alone);
+    test/test_segment_model.py holds both equal to the regressors.
+    """
+    tanh = math.tanh
+    k_s, k_sp = p.restoring_k_s, p.restoring_k_sp
+    c_psi0, c_psi0_p = p.restoring_c_psi0, p.restoring_c_psi0_p
+    c_f, c_fp, c_vel = p.friction_c_f, p.friction_c_fp, p.friction_c_vel
+    u0, u1, u2, u3 = (float(v) for v in p.previous_theta)
+
+    def terms(psi, psi_dot, q1, q2):
         # restoring torque (3, 4)
-        k_s, k_sp, c_psi0, c_psi0_p = self._spring
         bend1 = psi - c_psi0_p * tanh(c_psi0 * q1)
         bend2 = psi + c_psi0_p * tanh(c_psi0 * q2)
         tau_s = bend1 * (k_s + k_sp * q1) + bend2 * (k_s + k_sp * q2)
         # friction torque (5)
-        c_f, c_fp, c_vel = self._friction
         tau_f = tanh(c_vel * psi_dot) * (c_f + c_fp * (q1 + q2))
         # previous model (34)
-        u0, u1, u2, u3 = self._theta_prev
         tau_prev = (tau_f + tau_s + q1 * (u0 + q1 * (u1 + u3 * q1) + u2 * psi)
                     - q2 * (u0 + q2 * (u1 + u3 * q2) - u2 * psi))
-        return tau_a, tau_s, tau_f, tau_a + tau_s + tau_f, tau_prev
+        return tau_s, tau_f, tau_prev
+    return terms
 
 
 # tuple.__new__ on the tuple of values: a NamedTuple without the keyword-argument call of its
