@@ -42,8 +42,11 @@ config/segment.yaml, e.g. identified parameters and the arm's segment.dynamics),
 (unmatched half-samples kept), max_sample_age (s: no command from a sample older than this),
 realtime_priority, cpu_latency_limit (runtime/realtime.py).
 """
+from collections import deque
 import math
 import time
+
+import numpy as np
 
 from bellows_ros.control import angle_trajectory
 from bellows_ros.control.angle_tracking import AngleTracker, check_feedforward, TrackingGains
@@ -135,6 +138,7 @@ class ArmControllerNode(Node):
                                      'rejected_setpoints'], 0)
         self.last_command = None
         self.stats = LoopStats()
+        self.ages = deque(maxlen=1000)  # s, age of the sample at each command (or skip)
         self.report = diagnostics.LoopReport(self.stats)
         self._p_limit = 2.0 * params.p_max
 
@@ -199,6 +203,7 @@ class ArmControllerNode(Node):
         # A command from an old sample (a backlog after a stall) would act on a state long gone,
         # which destabilises the loop; none is sent, and if that persists the driver vents.
         now = self.get_clock().now().nanoseconds
+        self.ages.append((now - stamp) * 1e-9)
         if now - stamp > self.max_age_ns:
             self.counts['stale_skipped'] += 1
             return
@@ -231,6 +236,13 @@ class ArmControllerNode(Node):
         values, rate, _ = self.report.values()
         values.update({k: str(v) for k, v in self.counts.items()})
         values['unmatched_dropped'] = str(self.pairs.dropped)
+        if self.ages:  # how late the samples reach the controller (latency and backlog)
+            ages = np.array(self.ages)
+            p50, p99 = np.percentile(ages, [50, 99])
+            values.update(sample_age_p50_us=f'{p50 * 1e6:.0f}',
+                          sample_age_p99_us=f'{p99 * 1e6:.0f}',
+                          sample_age_max_us=f'{ages.max() * 1e6:.0f}')
+            self.ages.clear()
         values['feedforward'] = self.feedforward
         statuses = []
         stale = rate == 0.0

@@ -37,13 +37,12 @@ negative = off; runtime/realtime.py).
 import csv
 import math
 from pathlib import Path
-import time
 
 from bellows_ros.control import angle_trajectory, closed_loop
 from bellows_ros.errors import BellowsError
 from bellows_ros.models.actuator import load_actuator_params
 from bellows_ros.models.stiffness_map import stiffness_range
-from bellows_ros.runtime import Node, realtime, run
+from bellows_ros.runtime import Node, realtime, run, stamp_ns
 
 
 class ScenarioNode(Node):
@@ -77,35 +76,44 @@ class ScenarioNode(Node):
                                              'tau_drive')}
         self.create_subscription(self.msg.Float64, '/actuator/stiffness',
                                  lambda m: self._add('stiffness', m.data), 10)
-        self.create_subscription(self.msg.JointState, '/joint_states', self.on_joint_states, 200)
-        self.create_subscription(self.msg.JointState, '/bellows/chambers', self.on_chambers, 200)
+        # Best effort: the recorder must never hold up the driver's reliable writers (a reader
+        # that does not acknowledge makes them block) and may miss samples when it falls behind.
+        sensor = self.runtime.SENSOR_DATA
+        self.create_subscription(self.msg.JointState, '/joint_states', self.on_joint_states,
+                                 sensor)
+        self.create_subscription(self.msg.JointState, '/bellows/chambers', self.on_chambers,
+                                 sensor)
         self.create_subscription(self.msg.JointState, '/bellows/driving_torque', self.on_torque,
-                                 200)
-        self.start = time.monotonic()
+                                 sensor)
+        self.start_ns = self.get_clock().now().nanoseconds
         self.done = False
         self._last_setpoint, self._ticks = None, 0
         self.create_timer(0.02, self.command)
 
-    def elapsed(self):
-        return time.monotonic() - self.start
+    def elapsed(self, stamp=None):
+        """Seconds since the start, now or at a message's header `stamp`."""
+        ns = self.get_clock().now().nanoseconds if stamp is None else stamp_ns(stamp)
+        return (ns - self.start_ns) * 1e-9
 
-    def _add(self, name, value):
-        self.series[name].append((self.elapsed(), value))
+    def _add(self, name, value, stamp=None):
+        # Samples carry the time they were taken: a recorder that falls behind (it has the
+        # lowest priority in the graph) still puts each where it belongs.
+        self.series[name].append((self.elapsed(stamp), value))
 
     def on_joint_states(self, msg):
         if 'segment_1' in msg.name:
-            self._add('psi', msg.position[msg.name.index('segment_1')])
+            self._add('psi', msg.position[msg.name.index('segment_1')], msg.header.stamp)
         if 'air_chamber' in msg.name:
-            self._add('x_c', msg.position[msg.name.index('air_chamber')])
+            self._add('x_c', msg.position[msg.name.index('air_chamber')], msg.header.stamp)
 
     def on_chambers(self, msg):
         if 'segment_1/chain_1' in msg.name:
-            self._add('p1', msg.effort[msg.name.index('segment_1/chain_1')])
-            self._add('p2', msg.effort[msg.name.index('segment_1/chain_2')])
+            self._add('p1', msg.effort[msg.name.index('segment_1/chain_1')], msg.header.stamp)
+            self._add('p2', msg.effort[msg.name.index('segment_1/chain_2')], msg.header.stamp)
 
     def on_torque(self, msg):
         if 'segment_1' in msg.name:
-            self._add('tau_drive', msg.effort[msg.name.index('segment_1')])
+            self._add('tau_drive', msg.effort[msg.name.index('segment_1')], msg.header.stamp)
 
     def stiffness_setpoint(self, t):
         return self.k_low if t < self.step_time else self.k_high
