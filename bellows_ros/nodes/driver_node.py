@@ -136,6 +136,16 @@ class DriverNode(Node):
         self.reports['actuator'] = diagnostics.LoopReport(self.actuator_clock.stats)
         self.actuator = actuator_board.ActuatorBoard(config, on_sample=self.on_actuator_sample)
         self.actuator_port = config.port
+        # A write to the board's serial port can block for up to its write timeout (a board, or
+        # a simulated one, that does not read for a while); the arm's pressure commands share
+        # the callback thread, and the arm's watchdog vents after 0.1 s without one. So the
+        # newest duty goes to a writer thread of its own.
+        self._duty = None
+        self._duty_stop = False
+        self._duty_ready = threading.Condition()
+        self._duty_writer = threading.Thread(target=self._write_duties, name='motor-commands',
+                                             daemon=True)
+        self._duty_writer.start()
 
     def _open_arm(self, config, interface, channel, n_segments):
         config = dataclasses.replace(config, interface=interface or config.interface,
@@ -184,6 +194,12 @@ class DriverNode(Node):
         time.sleep(_DISCOVERY_SETTLE)
 
     def close(self):
+        writer = getattr(self, '_duty_writer', None)
+        if writer is not None:
+            with self._duty_ready:
+                self._duty_stop = True
+                self._duty_ready.notify()
+            writer.join(timeout=1.0)
         devices = [(n, d) for n, d in (('actuator', self.actuator), ('arm', self.arm)) if d]
         for _, device in devices:
             device.close()
@@ -254,7 +270,19 @@ class DriverNode(Node):
 
     def on_motor_command(self, msg):
         if self.actuator is not None:
-            self.actuator.send_duty(msg.data)
+            with self._duty_ready:
+                self._duty = msg.data  # a newer duty replaces one not yet written
+                self._duty_ready.notify()
+
+    def _write_duties(self):
+        while True:
+            with self._duty_ready:
+                while self._duty is None and not self._duty_stop:
+                    self._duty_ready.wait()
+                if self._duty_stop:
+                    return
+                duty, self._duty = self._duty, None
+            self.actuator.send_duty(duty)
 
     # --- diagnostics -----------------------------------------------------------------------------
     def publish_diagnostics(self, final=False):
