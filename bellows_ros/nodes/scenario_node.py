@@ -165,7 +165,7 @@ class ScenarioNode(Node):
                          f'overshoot {max(0.0, overshoot):.1f} N/m, final {after[-1][1]:.1f} N/m')
         else:
             lines.append('stiffness step: no /actuator/stiffness received')
-        errors = self.tracking_errors()
+        errors = [e for _, e in self.tracking_errors()]
         if errors:
             graph = math.sqrt(sum(e * e for e in errors) / len(errors))
             run = self.feedback_only()
@@ -182,10 +182,10 @@ class ScenarioNode(Node):
         return lines
 
     def tracking_errors(self):
-        """Set-point minus measured Ψ of segment_1 over the trajectory, rad."""
+        """(t s, set-point minus measured Ψ rad) of segment_1 over the trajectory."""
         end = self.trajectory_start + angle_trajectory.duration(self.trajectory)
-        return [angle_trajectory.setpoint(self.trajectory, t - self.trajectory_start)[0] - psi
-                for t, psi in self.series['psi'] if self.trajectory_start <= t <= end]
+        return [(t, angle_trajectory.setpoint(self.trajectory, t - self.trajectory_start)[0]
+                 - psi) for t, psi in self.series['psi'] if self.trajectory_start <= t <= end]
 
     def feedback_only(self):
         """Return the feedback-only controller on the same trajectory, in process (cached)."""
@@ -202,7 +202,8 @@ class ScenarioNode(Node):
         import matplotlib
         matplotlib.use('Agg')
         import matplotlib.pyplot as plt
-        fig, axes = plt.subplots(3, 1, figsize=(9, 9), sharex=True)
+        fig, axes = plt.subplots(4, 1, figsize=(9, 11), sharex=True,
+                                 gridspec_kw={'height_ratios': [1, 1, 1.3, 1]})
 
         def plot(ax, name, scale=1.0, **style):
             points = self.series[name]
@@ -214,13 +215,22 @@ class ScenarioNode(Node):
         plot(axes[1], 'p1', 1e-5, label='segment_1 chain 1')
         plot(axes[1], 'p2', 1e-5, label='segment_1 chain 2')
         axes[1].set_ylabel('pressure (bar abs)')
-        plot(axes[2], 'psi_setpoint', 180 / math.pi, color='k', ls='--', label='Ψ set-point')
-        plot(axes[2], 'psi', 180 / math.pi, label='Ψ, paper A feedforward (graph)')
+        deg = 180 / math.pi
         alone = self.feedback_only()
-        axes[2].plot(alone.t + self.trajectory_start, alone.psi * 180 / math.pi, lw=0.8,
+        start = self.trajectory_start
+        plot(axes[2], 'psi', deg, lw=1.5, label='Ψ, paper A feedforward (graph)')
+        axes[2].plot(alone.t + start, alone.psi * deg, lw=1.0,
                      label='Ψ, feedback only (in process)')
+        plot(axes[2], 'psi_setpoint', deg, color='k', ls='--', lw=1.0, label='Ψ set-point')
         axes[2].set_ylabel('segment_1 angle (deg)')
-        axes[2].set_xlabel('time (s)')
+        # The angles lie on top of each other at this scale: the errors show the difference.
+        graph = self.tracking_errors()
+        axes[3].plot([t for t, _ in graph], [e * deg for _, e in graph], lw=1.0,
+                     label='paper A feedforward (graph)')
+        axes[3].plot(alone.t + start, (alone.psi_d - alone.psi) * deg, lw=1.0,
+                     label='feedback only (in process)')
+        axes[3].set_ylabel('set-point − Ψ (deg)')
+        axes[3].set_xlabel('time (s)')
         for ax in axes:
             ax.grid(True)
             ax.legend(loc='best')
