@@ -28,7 +28,8 @@ allocation of `control.pressure_allocation`) and `control.angle_trajectory` (bui
   /arm/psi_setpoint (JointState by segment name: position = Ψ_d rad, velocity = Ψ̇_d rad/s if
       given): from its first message on, a segment follows the topic instead of its trajectory.
   /diagnostics: per segment the tracking error (RMS and largest since the last report), the
-      set-point, saturated commands, plus the loop timing.
+      set-point, saturated commands, plus the loop timing and the age of the samples when a
+      command is due (`sample_age_*_us`: their latency plus any backlog).
 
 Before any set-point a segment holds the angle it had at the first sample (or follows the
 built-in `trajectory`, started `trajectory_delay` s after the first sample, on sample stamps).
