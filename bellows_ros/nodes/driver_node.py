@@ -282,7 +282,9 @@ class DriverNode(Node):
                 if self._duty_stop:
                     return
                 duty, self._duty = self._duty, None
-            self.actuator.send_duty(duty)
+            actuator = self.actuator  # None once closed
+            if actuator is not None:
+                actuator.send_duty(duty)
 
     # --- diagnostics -----------------------------------------------------------------------------
     def publish_diagnostics(self, final=False):
