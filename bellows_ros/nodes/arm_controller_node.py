@@ -28,7 +28,8 @@ allocation of `control.pressure_allocation`) and `control.angle_trajectory` (bui
   /arm/psi_setpoint (JointState by segment name: position = Ψ_d rad, velocity = Ψ̇_d rad/s if
       given): from its first message on, a segment follows the topic instead of its trajectory.
   /diagnostics: per segment the tracking error (RMS and largest since the last report), the
-      set-point, saturated commands, plus the loop timing.
+      set-point, saturated commands, plus the loop timing and the age of the samples when a
+      command is due (`sample_age_*_us`: their latency plus any backlog).
 
 Before any set-point a segment holds the angle it had at the first sample (or follows the
 built-in `trajectory`, started `trajectory_delay` s after the first sample, on sample stamps).
@@ -42,8 +43,11 @@ config/segment.yaml, e.g. identified parameters and the arm's segment.dynamics),
 (unmatched half-samples kept), max_sample_age (s: no command from a sample older than this),
 realtime_priority, cpu_latency_limit (runtime/realtime.py).
 """
+from collections import deque
 import math
 import time
+
+import numpy as np
 
 from bellows_ros.config.hardware import arm_bus_config
 from bellows_ros.config.segment import load_segment_params
@@ -135,6 +139,7 @@ class ArmControllerNode(Node):
                                      'rejected_setpoints'], 0)
         self.last_command = None
         self.stats = LoopStats()
+        self.ages = deque(maxlen=1000)  # s, age of the sample at each command (or skip)
         self.report = diagnostics.LoopReport(self.stats)
         self._p_limit = 2.0 * params.p_max
 
@@ -199,6 +204,7 @@ class ArmControllerNode(Node):
         # A command from an old sample (a backlog after a stall) would act on a state long gone,
         # which destabilises the loop; none is sent, and if that persists the driver vents.
         now = self.get_clock().now().nanoseconds
+        self.ages.append((now - stamp) * 1e-9)
         if now - stamp > self.max_age_ns:
             self.counts['stale_skipped'] += 1
             return
@@ -231,6 +237,13 @@ class ArmControllerNode(Node):
         values, rate, _ = self.report.values()
         values.update({k: str(v) for k, v in self.counts.items()})
         values['unmatched_dropped'] = str(self.pairs.dropped)
+        if self.ages:  # how late the samples reach the controller (latency and backlog)
+            ages = np.array(self.ages)
+            p50, p99 = np.percentile(ages, [50, 99])
+            values.update(sample_age_p50_us=f'{p50 * 1e6:.0f}',
+                          sample_age_p99_us=f'{p99 * 1e6:.0f}',
+                          sample_age_max_us=f'{ages.max() * 1e6:.0f}')
+            self.ages.clear()
         values['feedforward'] = self.feedforward
         statuses = []
         stale = rate == 0.0

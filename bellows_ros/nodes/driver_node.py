@@ -75,6 +75,45 @@ class SampleClock:
         self._last_time, self._last_index = arrival, index
 
 
+class NewestWriter:
+    """
+    Call `send(value)` from a thread of its own with the newest value `put`, never blocking `put`.
+
+    A value not yet sent when a newer one arrives is replaced (a motor duty: only the latest
+    counts).
+    """
+
+    def __init__(self, send, name):
+        self._send = send
+        self._value = None
+        self._stop = False
+        self._ready = threading.Condition()
+        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
+        self._thread.start()
+
+    def put(self, value):
+        with self._ready:
+            self._value = value
+            self._ready.notify()
+
+    def close(self):
+        """Stop the thread (values not yet sent are dropped); waits up to 1 s for a send."""
+        with self._ready:
+            self._stop = True
+            self._ready.notify()
+        self._thread.join(timeout=1.0)
+
+    def _run(self):
+        while True:
+            with self._ready:
+                while self._value is None and not self._stop:
+                    self._ready.wait()
+                if self._stop:
+                    return
+                value, self._value = self._value, None
+            self._send(value)
+
+
 class DriverNode(Node):
 
     def __init__(self, runtime):
@@ -137,6 +176,10 @@ class DriverNode(Node):
         self.reports['actuator'] = diagnostics.LoopReport(self.actuator_clock.stats)
         self.actuator = actuator_board.ActuatorBoard(config, on_sample=self.on_actuator_sample)
         self.actuator_port = config.port
+        # A write to the board's serial port can block for up to its write timeout (a board, or
+        # a simulated one, that does not read for a while); the arm's pressure commands share
+        # the callback thread, and the arm's watchdog vents after 0.1 s without one.
+        self.duty_writer = NewestWriter(self.actuator.send_duty, 'motor-commands')
 
     def _open_arm(self, config, interface, channel, n_segments):
         config = dataclasses.replace(config, interface=interface or config.interface,
@@ -185,6 +228,8 @@ class DriverNode(Node):
         time.sleep(_DISCOVERY_SETTLE)
 
     def close(self):
+        if getattr(self, 'duty_writer', None) is not None:
+            self.duty_writer.close()
         devices = [(n, d) for n, d in (('actuator', self.actuator), ('arm', self.arm)) if d]
         for _, device in devices:
             device.close()
@@ -255,7 +300,7 @@ class DriverNode(Node):
 
     def on_motor_command(self, msg):
         if self.actuator is not None:
-            self.actuator.send_duty(msg.data)
+            self.duty_writer.put(msg.data)
 
     # --- diagnostics -----------------------------------------------------------------------------
     def publish_diagnostics(self, final=False):

@@ -37,13 +37,12 @@ negative = off; runtime/realtime.py).
 import csv
 import math
 from pathlib import Path
-import time
 
 from bellows_ros.config.actuator import load_actuator_params
 from bellows_ros.control import angle_trajectory, closed_loop
 from bellows_ros.errors import BellowsError
 from bellows_ros.models.stiffness_map import stiffness_range
-from bellows_ros.runtime import Node, realtime, run
+from bellows_ros.runtime import Node, realtime, run, stamp_ns
 
 
 class ScenarioNode(Node):
@@ -77,35 +76,44 @@ class ScenarioNode(Node):
                                              'tau_drive')}
         self.create_subscription(self.msg.Float64, '/actuator/stiffness',
                                  lambda m: self._add('stiffness', m.data), 10)
-        self.create_subscription(self.msg.JointState, '/joint_states', self.on_joint_states, 200)
-        self.create_subscription(self.msg.JointState, '/bellows/chambers', self.on_chambers, 200)
+        # Best effort: the recorder must never hold up the driver's reliable writers (a reader
+        # that does not acknowledge makes them block) and may miss samples when it falls behind.
+        sensor = self.runtime.SENSOR_DATA
+        self.create_subscription(self.msg.JointState, '/joint_states', self.on_joint_states,
+                                 sensor)
+        self.create_subscription(self.msg.JointState, '/bellows/chambers', self.on_chambers,
+                                 sensor)
         self.create_subscription(self.msg.JointState, '/bellows/driving_torque', self.on_torque,
-                                 200)
-        self.start = time.monotonic()
+                                 sensor)
+        self.start_ns = self.get_clock().now().nanoseconds
         self.done = False
         self._last_setpoint, self._ticks = None, 0
         self.create_timer(0.02, self.command)
 
-    def elapsed(self):
-        return time.monotonic() - self.start
+    def elapsed(self, stamp=None):
+        """Seconds since the start, now or at a message's header `stamp`."""
+        ns = self.get_clock().now().nanoseconds if stamp is None else stamp_ns(stamp)
+        return (ns - self.start_ns) * 1e-9
 
-    def _add(self, name, value):
-        self.series[name].append((self.elapsed(), value))
+    def _add(self, name, value, stamp=None):
+        # Samples carry the time they were taken: a recorder that falls behind (it has the
+        # lowest priority in the graph) still puts each where it belongs.
+        self.series[name].append((self.elapsed(stamp), value))
 
     def on_joint_states(self, msg):
         if 'segment_1' in msg.name:
-            self._add('psi', msg.position[msg.name.index('segment_1')])
+            self._add('psi', msg.position[msg.name.index('segment_1')], msg.header.stamp)
         if 'air_chamber' in msg.name:
-            self._add('x_c', msg.position[msg.name.index('air_chamber')])
+            self._add('x_c', msg.position[msg.name.index('air_chamber')], msg.header.stamp)
 
     def on_chambers(self, msg):
         if 'segment_1/chain_1' in msg.name:
-            self._add('p1', msg.effort[msg.name.index('segment_1/chain_1')])
-            self._add('p2', msg.effort[msg.name.index('segment_1/chain_2')])
+            self._add('p1', msg.effort[msg.name.index('segment_1/chain_1')], msg.header.stamp)
+            self._add('p2', msg.effort[msg.name.index('segment_1/chain_2')], msg.header.stamp)
 
     def on_torque(self, msg):
         if 'segment_1' in msg.name:
-            self._add('tau_drive', msg.effort[msg.name.index('segment_1')])
+            self._add('tau_drive', msg.effort[msg.name.index('segment_1')], msg.header.stamp)
 
     def stiffness_setpoint(self, t):
         return self.k_low if t < self.step_time else self.k_high
@@ -157,7 +165,7 @@ class ScenarioNode(Node):
                          f'overshoot {max(0.0, overshoot):.1f} N/m, final {after[-1][1]:.1f} N/m')
         else:
             lines.append('stiffness step: no /actuator/stiffness received')
-        errors = self.tracking_errors()
+        errors = [e for _, e in self.tracking_errors()]
         if errors:
             graph = math.sqrt(sum(e * e for e in errors) / len(errors))
             run = self.feedback_only()
@@ -174,10 +182,10 @@ class ScenarioNode(Node):
         return lines
 
     def tracking_errors(self):
-        """Set-point minus measured Ψ of segment_1 over the trajectory, rad."""
+        """(t s, set-point minus measured Ψ rad) of segment_1 over the trajectory."""
         end = self.trajectory_start + angle_trajectory.duration(self.trajectory)
-        return [angle_trajectory.setpoint(self.trajectory, t - self.trajectory_start)[0] - psi
-                for t, psi in self.series['psi'] if self.trajectory_start <= t <= end]
+        return [(t, angle_trajectory.setpoint(self.trajectory, t - self.trajectory_start)[0]
+                 - psi) for t, psi in self.series['psi'] if self.trajectory_start <= t <= end]
 
     def feedback_only(self):
         """Return the feedback-only controller on the same trajectory, in process (cached)."""
@@ -194,7 +202,8 @@ class ScenarioNode(Node):
         import matplotlib
         matplotlib.use('Agg')
         import matplotlib.pyplot as plt
-        fig, axes = plt.subplots(3, 1, figsize=(9, 9), sharex=True)
+        fig, axes = plt.subplots(4, 1, figsize=(9, 11), sharex=True,
+                                 gridspec_kw={'height_ratios': [1, 1, 1.3, 1]})
 
         def plot(ax, name, scale=1.0, **style):
             points = self.series[name]
@@ -206,13 +215,22 @@ class ScenarioNode(Node):
         plot(axes[1], 'p1', 1e-5, label='segment_1 chain 1')
         plot(axes[1], 'p2', 1e-5, label='segment_1 chain 2')
         axes[1].set_ylabel('pressure (bar abs)')
-        plot(axes[2], 'psi_setpoint', 180 / math.pi, color='k', ls='--', label='Ψ set-point')
-        plot(axes[2], 'psi', 180 / math.pi, label='Ψ, paper A feedforward (graph)')
+        deg = 180 / math.pi
         alone = self.feedback_only()
-        axes[2].plot(alone.t + self.trajectory_start, alone.psi * 180 / math.pi, lw=0.8,
+        start = self.trajectory_start
+        plot(axes[2], 'psi', deg, lw=1.5, label='Ψ, paper A feedforward (graph)')
+        axes[2].plot(alone.t + start, alone.psi * deg, lw=1.0,
                      label='Ψ, feedback only (in process)')
+        plot(axes[2], 'psi_setpoint', deg, color='k', ls='--', lw=1.0, label='Ψ set-point')
         axes[2].set_ylabel('segment_1 angle (deg)')
-        axes[2].set_xlabel('time (s)')
+        # The angles lie on top of each other at this scale: the errors show the difference.
+        graph = self.tracking_errors()
+        axes[3].plot([t for t, _ in graph], [e * deg for _, e in graph], lw=1.0,
+                     label='paper A feedforward (graph)')
+        axes[3].plot(alone.t + start, (alone.psi_d - alone.psi) * deg, lw=1.0,
+                     label='feedback only (in process)')
+        axes[3].set_ylabel('set-point − Ψ (deg)')
+        axes[3].set_xlabel('time (s)')
         for ax in axes:
             ax.grid(True)
             ax.legend(loc='best')
