@@ -166,7 +166,7 @@ def _buckling(values, source):
     bounds = {}
     for name, value in param_files.section(values, 'bounds').items():
         if not (isinstance(value, (list, tuple)) and len(value) == 2):
-            raise ParameterError(f'{source}: actuator.buckling.bounds.{name}: '
+            raise ParameterError(f"{source}: parameter 'actuator.buckling.bounds.{name}' "
                                  'expected [low, high]')
         bounds[name] = (float(value[0]), float(value[1]))
     plain = {k: v for k, v in values.items() if not k.startswith('bounds.')}
