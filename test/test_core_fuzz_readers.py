@@ -268,7 +268,7 @@ def test_parameter_file_reader_gives_plain_values_or_one_line(tmp_path, document
 
 
 def _dates_as_text(tree):
-    """What rcl reads an unquoted YAML date as: its text (rcl knows no date type)."""
+    """Return the tree as rcl reads it: an unquoted YAML date is its text (rcl has no dates)."""
     if isinstance(tree, dict):
         return {key: _dates_as_text(value) for key, value in tree.items()}
     if isinstance(tree, list):
