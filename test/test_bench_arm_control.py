@@ -21,6 +21,7 @@ import json
 import math
 
 import numpy as np
+import pytest
 
 from bellows_ros.bench import arm_control
 from bellows_ros.cli import main as bellows
@@ -30,6 +31,7 @@ NAMES = ['arm_control.rms.feedback_only', 'arm_control.rms.previous_model',
          'arm_control.rms.paper_a_model']
 
 
+@pytest.mark.slow  # three closed-loop runs of the whole trajectory
 def test_bench_figures_structure_and_order(capsys):
     assert bellows(['bench', '--only', 'arm_control', '--json', '--quick']) == 0
     results = json.loads(capsys.readouterr().out)

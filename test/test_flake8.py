@@ -31,6 +31,7 @@ PATHS = ['bellows_ros', 'test', 'launch', 'setup.py']
 
 
 @pytest.mark.linter
+@pytest.mark.slow  # the whole tree
 def test_flake8():
     result = subprocess.run(
         [sys.executable, '-m', 'flake8', '--no-show-source', *PATHS], cwd=ROOT,

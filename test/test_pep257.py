@@ -30,6 +30,7 @@ PATHS = ['bellows_ros', 'test', 'launch', 'setup.py']
 
 
 @pytest.mark.linter
+@pytest.mark.slow  # the whole tree
 def test_pep257():
     result = subprocess.run([sys.executable, '-m', 'pydocstyle', *PATHS], cwd=ROOT,
                             capture_output=True, text=True)

@@ -103,6 +103,7 @@ def receive(node, items, count, timeout=10.0):
     return items
 
 
+@pytest.mark.slow  # node processes
 def test_two_processes_talk_with_ros_args(tmp_path, env):
     talker = start(tmp_path, TALKER, ['--ros-args', '-p', 'rate:=200.0', '-p', 'offset:=1000.0',
                                       '-r', 'joint_states:=/remapped'], env)
@@ -121,6 +122,7 @@ def test_two_processes_talk_with_ros_args(tmp_path, env):
     assert talker.returncode == 0, err
 
 
+@pytest.mark.slow  # node processes
 def test_independent_cyclone_subscriber_sees_the_runtime(tmp_path, env):
     talker = start(tmp_path, TALKER, ['--ros-args', '-p', 'offset:=0.5'], env)
     (tmp_path / 'sub').mkdir()
@@ -140,6 +142,7 @@ def test_independent_cyclone_subscriber_sees_the_runtime(tmp_path, env):
     assert userdata == f'typehash={expected};'
 
 
+@pytest.mark.slow  # node processes
 def test_use_sim_time_follows_clock(tmp_path, env):
     talker = start(tmp_path, TALKER, ['--ros-args', '-p', 'use_sim_time:=true',
                                       '-p', 'rate:=100.0'], env)
@@ -194,6 +197,7 @@ def test_publisher_waits_until_readers_acknowledged(env):
     assert [m.position[0] for m in receive(node, received, 50)] == [float(i) for i in range(50)]
 
 
+@pytest.mark.slow  # node processes
 def test_waiting_for_a_dead_reader_times_out(env):
     """A reader killed without goodbye stays matched until its lease ends: never acknowledges."""
     dds_node.init([])

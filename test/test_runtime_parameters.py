@@ -174,6 +174,7 @@ def check_error(result, fragment):
     assert lines[0].startswith('parameter_probe.py: error: ') and fragment in lines[0], lines[0]
 
 
+@pytest.mark.slow  # a node process per case and runtime
 @pytest.mark.parametrize('case', CASES, ids=[case.id for case in CASES])
 def test_rcl_rules(case, runtime, files):
     result = probe(runtime, files, case.argv)
@@ -191,6 +192,7 @@ def test_rcl_rules(case, runtime, files):
         assert report['topics'][topic] == resolved, topic
 
 
+@pytest.mark.slow
 def test_array_of_another_type_later(runtime, files):
     """
     An rcl quirk, not copied: a later array of another element type is dropped by rcl.
