@@ -31,6 +31,7 @@ tests use them). `SegmentModel.step` is the 1 kHz fast path, hand-expanded becau
 overhead is larger than the whole step; `test/test_segment_model.py` holds it equal to the
 regressors over random states to 1e-12 relative.
 """
+import dataclasses
 from dataclasses import dataclass, fields
 import math
 from typing import NamedTuple
@@ -92,9 +93,7 @@ class SegmentParams:
 
     def replace(self, **changes):
         """Return a copy with some fields changed (tuples for vectors)."""
-        values = {f.name: getattr(self, f.name) for f in fields(self)}
-        values.update(changes)
-        return SegmentParams(**values)
+        return dataclasses.replace(self, **changes)
 
     def flat(self):
         """Return flat ROS 2 names (`segment.ogden.mu`, ...) -> values, for `params.write_file`."""

@@ -38,6 +38,7 @@ end stops at |Ψ| = `segment.plant.psi_limit`. Measured values carry Gaussian no
 standard deviations of `segment.plant.noise` unless `noise` overrides them.
 """
 from collections import namedtuple
+import dataclasses
 from dataclasses import dataclass, fields
 import math
 
@@ -89,9 +90,7 @@ class SegmentPlantParams:
 
     def replace(self, **changes):
         """Return a copy with some fields changed."""
-        values = {f.name: getattr(self, f.name) for f in fields(self)}
-        values.update(changes)
-        return SegmentPlantParams(**values)
+        return dataclasses.replace(self, **changes)
 
     def flat(self):
         """Return flat ROS 2 names (`segment.plant.noise.p`, ...) -> values."""
