@@ -105,3 +105,16 @@ def test_another_encapsulation_is_a_value_error():
     big_endian = b'\x00\x00\x00\x00' + struct.pack('>d', 2.0)
     with pytest.raises(ValueError, match='not little-endian plain CDR'):
         cdr.decode(steps, cls, big_endian)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.binary(max_size=120))
+def test_any_bytes_decode_to_a_message_or_a_value_error(tail):
+    cls = cdr.plain_class('diagnostic_msgs/msg/DiagnosticArray')
+    steps = cdr.plan(cls.__ros_type__, cdr.plain_class)
+    try:
+        message = cdr.decode(steps, cls, cdr.HEADER + tail)
+    except ValueError as error:
+        assert str(error).startswith('malformed CDR')
+        return
+    assert isinstance(message, cls)

@@ -113,10 +113,18 @@ def encode(steps, obj):
 
 
 def decode(steps, cls, data):
-    """Read a message of class `cls` from CDR bytes; ValueError for another encapsulation."""
+    """
+    Read a message of class `cls` from CDR bytes.
+
+    ValueError for another encapsulation and for bytes that are not a message of this type
+    (cut short, a length past the end, a string that is not UTF-8).
+    """
     if data[:2] != HEADER[:2]:
         raise ValueError(f'not little-endian plain CDR (encapsulation {bytes(data[:4]).hex()})')
-    return _read(steps, cls, bytes(data), 4)[0]
+    try:
+        return _read(steps, cls, bytes(data), 4)[0]
+    except (struct.error, UnicodeDecodeError) as error:
+        raise ValueError(f'malformed CDR ({len(data)} bytes): {error}') from None
 
 
 def _write(steps, obj, out):

@@ -109,13 +109,20 @@ class CdrNode(rclpy.node.Node):
         if not hasattr(msg_type, '__ros_type__'):
             return super().create_subscription(msg_type, topic, callback, qos_profile, **kwargs)
         steps, ros_type = _steps(msg_type), rclpy_type(msg_type)
+        malformed = [0]
 
         def on_bytes(data):
+            if data[:2] != cdr.HEADER[:2]:  # another encapsulation (big endian): rclpy re-encodes
+                data = rclpy.serialization.serialize_message(
+                    rclpy.serialization.deserialize_message(data, ros_type))
             try:
                 message = cdr.decode(steps, msg_type, data)
-            except ValueError:  # another encapsulation (big endian): rclpy re-encodes it
-                message = cdr.decode(steps, msg_type, rclpy.serialization.serialize_message(
-                    rclpy.serialization.deserialize_message(data, ros_type)))
+            except ValueError as error:  # not a message of this type: dropped, said once
+                malformed[0] += 1
+                if malformed[0] == 1:
+                    self.get_logger().warn(f'{topic}: message dropped: {error} (further ones '
+                                           'are dropped silently)')
+                return
             callback(message)
         return super().create_subscription(ros_type, topic, on_bytes, qos_profile, raw=True,
                                            **kwargs)
