@@ -232,7 +232,8 @@ def plain_class(ros_name):
     """
     if ros_name not in _plain:
         constants, fields = TYPESTORE.fielddefs[ros_name]
-        specs = [(name, object, dataclasses.field(default_factory=_default(desc)))
+        specs = [(name, object,
+                  dataclasses.field(default_factory=default_factory(desc, plain_class)))
                  for name, desc in fields]
         cls = dataclasses.make_dataclass(ros_name.split('/')[-1], specs, slots=True)
         for name, _type, value in constants:
@@ -242,14 +243,20 @@ def plain_class(ros_name):
     return _plain[ros_name]
 
 
-def _default(desc):
+def default_factory(desc, class_of):
+    """
+    Return the default factory of a field (a rosbags field description), as rclpy's defaults.
+
+    Zero, False or '' for a primitive; `class_of(ros_name)` for a nested message; a list of
+    defaults for a fixed array; an empty list for a sequence.
+    """
     kind, detail = desc
     if kind == Nodetype.BASE:
         zero = _ZERO.get(detail[0], 0)
         return lambda: zero
     if kind == Nodetype.NAME:
-        return plain_class(detail)
+        return class_of(detail)
     if kind == Nodetype.ARRAY:
-        inner = _default(detail[0])
+        inner = default_factory(detail[0], class_of)
         return lambda: [inner() for _ in range(detail[1])]
     return list

@@ -40,7 +40,6 @@ _BASE = {
     'int32': idl.int32, 'uint32': idl.uint32, 'int64': idl.int64, 'uint64': idl.uint64,
     'float32': idl.float32, 'float64': idl.float64, 'string': str,
 }
-_ZERO = {bool: False, str: '', idl.float32: 0.0, idl.float64: 0.0}
 
 
 def dds_type_name(ros_name):
@@ -114,21 +113,22 @@ def _add_fast_cdr(cls, ros_name):
 
 def _field(desc):
     """(IDL annotation, default factory) for one rosbags field description."""
+    return _annotation(desc), cdr.default_factory(desc, message_class)
+
+
+def _annotation(desc):
     kind, detail = desc
     if kind == Nodetype.BASE:
         base, bound = detail
-        annotation = idl.bounded_str[bound] if base == 'string' and bound else _BASE[base]
-        zero = _ZERO.get(_BASE[base], 0)
-        return annotation, lambda: zero
+        return idl.bounded_str[bound] if base == 'string' and bound else _BASE[base]
     if kind == Nodetype.NAME:
-        cls = message_class(detail)
-        return cls, cls
+        return message_class(detail)
     if kind in (Nodetype.ARRAY, Nodetype.SEQUENCE):
         inner, count = detail
-        annotation, default = _field(inner)
+        annotation = _annotation(inner)
         if kind == Nodetype.ARRAY:
-            return idl.array[annotation, count], lambda: [default() for _ in range(count)]
-        return (idl.sequence[annotation, count] if count else idl.sequence[annotation]), list
+            return idl.array[annotation, count]
+        return idl.sequence[annotation, count] if count else idl.sequence[annotation]
     raise TypeError(f'unsupported field kind {kind!r} in the type store')
 
 
