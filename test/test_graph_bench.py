@@ -70,7 +70,14 @@ def test_graph_bench_reports_every_figure_for_each_variant(capsys):
     results = {r['name']: r for r in json.loads(capsys.readouterr().out)}
     assert 'graph.platform.wakeup_lateness' in results
     assert 'graph.platform.wakeup_lateness_no_latency_limit' in results
-    for prefix in ('graph', 'graph.normal', 'graph.no_latency_limit'):
+    variants = {'graph': 'dds', 'graph.normal': 'dds', 'graph.no_latency_limit': 'dds'}
+    rclpy_missing = graph._rclpy_unavailable()
+    if rclpy_missing:
+        assert results['graph.rclpy.rate']['extra']['skipped'].endswith(rclpy_missing)
+    else:
+        variants.update(dict.fromkeys(('graph.rclpy', 'graph.rclpy.normal',
+                                       'graph.rclpy.sim_above'), 'rclpy'))
+    for prefix, runtime in variants.items():
         evaluated = results[f'{prefix}.fraction_evaluated']
         # samples flowed (3 s window; the rate is host-bound)
         assert evaluated['extra']['published'] > 100
@@ -78,7 +85,10 @@ def test_graph_bench_reports_every_figure_for_each_variant(capsys):
                                       / evaluated['extra']['published'])
         assert evaluated['value'] >= 0.99
         rate = results[f'{prefix}.rate']
+        assert rate['extra']['runtime'] == runtime
         assert set(rate['extra']['scheduling']) == set(graph.NODES)
+        assert rate['extra']['sim_arm_lateness_p99'] >= 0.0    # the stand-in reported its ticks
+        assert rate['extra']['sim_arm_deadline_misses'] >= 0
         assert 0.0 < rate['value'] <= 1100.0
         p50 = results[f'{prefix}.latency_p50']['value']
         p99 = results[f'{prefix}.latency_p99']['value']
@@ -86,7 +96,16 @@ def test_graph_bench_reports_every_figure_for_each_variant(capsys):
         assert 0.0 <= results[f'{prefix}.late_fraction']['value'] <= 1.0
         for name in graph.NODES:
             assert results[f'{prefix}.cpu.{name}']['value'] > 0.01    # every node was working
-    for prefix in ('graph.normal', 'graph.no_latency_limit'):
+    scheduling = results['graph.rate']['extra']['scheduling']
+    if scheduling['model_node'].startswith('SCHED_FIFO'):    # granted on this machine
+        # The stand-in for the arm at the host nodes' priority: neither preempts the other.
+        assert scheduling['sim_arm_node'] == scheduling['model_node']
+        if not rclpy_missing:
+            host = int(scheduling['model_node'].split()[1])
+            above = results['graph.rclpy.sim_above.rate']['extra']['scheduling']
+            assert above['sim_arm_node'] == f'SCHED_FIFO {host + 10}'
+            assert above['model_node'] == scheduling['model_node']
+    for prefix in [p for p in variants if p.endswith(('.normal', '.no_latency_limit'))]:
         assert all(v.startswith('SCHED_OTHER')
                    for v in results[f'{prefix}.rate']['extra']['scheduling'].values())
     if os.access(realtime.CPU_LATENCY_DEVICE, os.W_OK):    # the nodes could hold the limit

@@ -15,9 +15,16 @@
 """
 Benchmark of the node graph over real DDS: sim_arm_node -> driver_node -> model_node.
 
-Measured in one run (separate processes, the DDS runtime, CAN over udp_multicast), three times:
+Measured in one run (separate processes, CAN over udp_multicast), on the DDS runtime and, where
+rclpy imports, on rclpy (`graph.rclpy.*`):
 - `graph.*`: the host nodes at the SCHED_FIFO priority config/nodes_hw.yaml gives them on a robot,
-  the simulated arm 10 above (a real arm has its own processor: the host cannot delay it);
+  the simulated arm at the same priority. A real arm has a processor of its own: it neither delays
+  the host nor waits for it. On one machine its stand-in can be kept from one of the two only. At
+  equal SCHED_FIFO priority no thread preempts another: each runs until it blocks;
+- `graph.rclpy.sim_above.*` (rclpy only): the simulated arm 10 above the host nodes, so it preempts
+  them at every tick as a real arm never would. This was the bench's setting until that cost was
+  measured: each tick of the stand-in, about 0.4 ms of CPU on this machine, then lands on the
+  host path (docs/nodes.md, "rclpy beside the DDS runtime");
 - `graph.normal.*`: every node at normal scheduling (config/nodes_sim.yaml, or a machine that does
   not grant real-time priority);
 - `graph.no_latency_limit.*`: normal scheduling, and no node holding the CPU latency limit the
@@ -28,12 +35,14 @@ Figures:
   from their final counters;
 - end-to-end latency, sample stamp (driver, at arrival from the bus) -> driving torque published
   (model node), p50 and p99: the model node reports both per 1 s window on /diagnostics; the
-  figure is the median over the windows, the worst window's p99 in `extra` (target p99 <= 2 ms);
+  figure is the median over the windows, the worst window's p99 in `extra` (target p99 <= 1 ms);
 - late fraction: of all samples evaluated in the window, the fraction whose torque was published
   more than 2 ms after the sample's stamp (the model node counts them): p99 <= 2 ms over the
   whole window, not per 1 s window, is `late_fraction <= 0.01`;
 - CPU per node: utime + stime from /proc/<pid>/stat over the window, as a fraction of one core.
-The scheduling each node actually got (from its /diagnostics) is in `graph*.rate`'s extra.
+The scheduling each node actually got (from its /diagnostics) is in `graph*.rate`'s extra, with
+the simulated arm's own tick lateness (p99 over its last ticks, s) and its missed ticks since it
+started: the stand-in keeps its 1 kHz whatever its priority.
 References, measured in the same run:
 - `SegmentModel.step` for the same segments, in-process (the model's own cost, without DDS); the
   latency ratio is against it;
@@ -111,7 +120,8 @@ def run(quick=False, segments=4):
     results = [reference]
     host = {name: params.read_file(ROBOT_CONFIG, name)['realtime_priority']
             for name in ('driver_node', 'model_node')}
-    fifo = dict(host, sim_arm_node=max(host.values()) + 10)
+    fifo = dict(host, sim_arm_node=max(host.values()))
+    sim_above = dict(host, sim_arm_node=max(host.values()) + 10)
     normal = dict.fromkeys(NODES, 0)
     limit = params.read_file(CONFIG, 'model_node')['cpu_latency_limit']
     results.append(_wakeup_reference('graph.platform.wakeup_lateness', window,
@@ -123,7 +133,8 @@ def run(quick=False, segments=4):
     rclpy_missing = _rclpy_unavailable()
     if not rclpy_missing:
         variants += [('graph.rclpy', 'rclpy', fifo, limit),
-                     ('graph.rclpy.normal', 'rclpy', normal, limit)]
+                     ('graph.rclpy.normal', 'rclpy', normal, limit),
+                     ('graph.rclpy.sim_above', 'rclpy', sim_above, limit)]
     for prefix, runtime, priorities, latency in variants:
         results += _measure(prefix, runtime, window, segments, priorities, latency, reference)
     if rclpy_missing:
@@ -226,11 +237,16 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
     p99 = [float(w['latency_p99_us']) * 1e-6 for w in measured]
     scheduling = {name.split(':')[0]: values.get('scheduling', '?')
                   for name, values in final.items() if name.split(':')[0] in NODES}
+    arm = final.get('sim_arm_node: plant', {})
+    arm_lateness = float(arm.get('lateness_p99_us', 'nan')) * 1e-6
     results = [Result(f'{prefix}.rate', statistics.median(rates) if rates else 0.0, 'Hz',
                       len(rates), target=1000.0,
                       extra={'runtime': runtime, 'scheduling': scheduling, 'steal': stolen,
-                             'cpu_latency_limit': limit_in_force},
-                      extra_units={'steal': '', 'cpu_latency_limit': 's'})]
+                             'cpu_latency_limit': limit_in_force,
+                             'sim_arm_lateness_p99': arm_lateness,
+                             'sim_arm_deadline_misses': int(arm.get('deadline_misses', -1))},
+                      extra_units={'steal': '', 'cpu_latency_limit': 's',
+                                   'sim_arm_lateness_p99': 's', 'sim_arm_deadline_misses': ''})]
     results.append(Result(f'{prefix}.fraction_evaluated',
                           evaluated / published if published else 0.0, '', published,
                           target=0.99,
@@ -241,7 +257,7 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
     results.append(Result(f'{prefix}.latency_p50', latency50, 's', len(p50),
                           reference=reference.name, ratio=latency50 / reference.value))
     results.append(Result(f'{prefix}.latency_p99', statistics.median(p99) if p99 else float('nan'),
-                          's', len(p99), target=2e-3,
+                          's', len(p99), target=1e-3,
                           extra={'worst_window_p99': max(p99) if p99 else float('nan')}))
     if len(measured) >= 2:
         late = int(measured[-1]['late']) - int(measured[0]['late'])

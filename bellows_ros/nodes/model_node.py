@@ -110,31 +110,35 @@ class ModelNode(Node):
         if inputs is None:
             self.counts['rejected'] += 1
             return
-        dt = None if self._last_stamp is None else (stamp - self._last_stamp) * 1e-9
-        self._last_stamp = stamp
-        drive, external = [], []
-        for i, (model, (psi, psi_dot, p1, p2)) in enumerate(zip(self.models, inputs)):
-            tau_drive = model.step(psi, psi_dot, p1, p2).tau_drive
-            psi_ddot = self.psi_ddot[i] = rate(psi_dot, self.previous_psi_dot[i], dt or 0.0,
-                                               self.psi_ddot[i])
-            self.previous_psi_dot[i] = psi_dot
-            drive.append(tau_drive)
-            external.append(float(external_torque(self.params, psi, psi_dot, psi_ddot, tau_drive)))
+        drive = [model.step(psi, psi_dot, p1, p2).tau_drive
+                 for model, (psi, psi_dot, p1, p2) in zip(self.models, inputs)]
+        # The driving torque is what a controller waits for: it goes out before τ_ext is computed,
+        # and the latency is taken at its publication (docs/nodes.md, "Timing").
         # float64[] as array('d'): rclpy takes it without a per-element check.
         out_drive = self.msg.JointState(name=list(self.names), effort=array('d', drive))
-        out_external = self.msg.JointState(name=list(self.names), effort=array('d', external))
         out_drive.header = joints.header
-        out_external.header = joints.header
         self.drive_pub.publish(out_drive)
-        self.external_pub.publish(out_external)
-        self.counts['evaluated'] += 1
-        compute = time.perf_counter() - start
-        # Latency from the sample's stamp to the torque's publication, on the node clock.
-        latency = self.get_clock().now().nanoseconds - stamp
+        latency = self.get_clock().now().nanoseconds - stamp  # on the node clock
         self.latency.append(latency)
         if latency > self.latency_budget_ns:
             self.counts['late'] += 1
-        self.stats.record(dt or 0.0, 0.0, compute)
+        self.counts['evaluated'] += 1
+        dt = None if self._last_stamp is None else (stamp - self._last_stamp) * 1e-9
+        self._last_stamp = stamp
+        self.publish_external(joints.header, inputs, drive, dt or 0.0)
+        self.stats.record(dt or 0.0, 0.0, time.perf_counter() - start)
+
+    def publish_external(self, header, inputs, drive, dt):
+        """Publish τ_ext (2) per segment on /bellows/external_torque; Ψ̈ from successive Ψ̇."""
+        external = []
+        for i, ((psi, psi_dot, _, _), tau_drive) in enumerate(zip(inputs, drive)):
+            psi_ddot = self.psi_ddot[i] = rate(psi_dot, self.previous_psi_dot[i], dt,
+                                               self.psi_ddot[i])
+            self.previous_psi_dot[i] = psi_dot
+            external.append(float(external_torque(self.params, psi, psi_dot, psi_ddot, tau_drive)))
+        out = self.msg.JointState(name=list(self.names), effort=array('d', external))
+        out.header = header
+        self.external_pub.publish(out)
 
     def publish_diagnostics(self):
         values, rate, _ = self.report.values()

@@ -1,0 +1,118 @@
+# Copyright 2026 bellows_ros maintainers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+model_node's torques, in one process over the DDS runtime: what it publishes is the model's own.
+
+A feeder node publishes a made-up stream of paired samples (/joint_states, /bellows/chambers); the
+test steps its own `SegmentModel`s on the same stream and computes τ_ext (2) with Ψ̈ from
+successive Ψ̇ (`derivatives.rate`), under parameters with non-zero M, C and N, so τ_ext is not
+just −τ_drive. The node's two topics must carry those numbers, sample by sample, with the
+samples' stamps.
+"""
+from array import array
+import math
+import random
+import time
+
+import pytest
+import yaml
+
+from bellows_ros.config.segment import load_segment_params
+from bellows_ros.models.derivatives import rate
+from bellows_ros.models.segment import external_torque, SegmentModel
+from bellows_ros.nodes.model_node import ModelNode
+from bellows_ros.runtime import dds_node
+from bellows_ros.runtime.topics import SAMPLE_DEPTH
+
+DOMAIN = '194'
+DYNAMICS = {'segment': {'dynamics': {'inertia': 0.02, 'damping': 0.1, 'gravity': 0.3}}}
+
+
+@pytest.fixture
+def feeder(monkeypatch, tmp_path):
+    monkeypatch.setenv('ROS_DOMAIN_ID', DOMAIN)
+    params_file = tmp_path / 'dynamics.yaml'
+    params_file.write_text(yaml.safe_dump({'/**': {'ros__parameters': DYNAMICS}}))
+    dds_node.init(['--ros-args', '-p', f'model_node:params_file:={params_file}',
+                   '-p', 'model_node:segments:=[1, 2]'])
+    yield ModelNode(dds_node), dds_node.Node('feeder'), params_file
+    dds_node.shutdown()
+
+
+def _stream(count, seed=3):
+    """(stamp ns, Ψ, Ψ̇, chain pressures) per sample for two segments: a wandering motion."""
+    rng = random.Random(seed)
+    psi = [0.0, 0.1]
+    for k in range(count):
+        psi_dot = [0.8 * math.sin(0.02 * k + i) + 0.05 * rng.uniform(-1, 1) for i in range(2)]
+        psi = [a + 1e-3 * b for a, b in zip(psi, psi_dot)]
+        pressures = [2.0e5 + 1.0e5 * math.sin(0.01 * k + j) for j in range(4)]
+        yield 1_700_000_000_000_000_000 + k * 1_000_000, psi, psi_dot, pressures
+
+
+def test_the_topics_carry_the_models_torques_sample_by_sample(feeder):
+    node, peer, params_file = feeder
+    msg = dds_node.msg
+    received = {'/bellows/driving_torque': [], '/bellows/external_torque': []}
+    for topic, out in received.items():
+        peer.create_subscription(msg.JointState, topic, out.append, SAMPLE_DEPTH)
+    joints = peer.create_publisher(msg.JointState, '/joint_states', SAMPLE_DEPTH)
+    chambers = peer.create_publisher(msg.JointState, '/bellows/chambers', SAMPLE_DEPTH)
+    end = time.monotonic() + 10.0
+    while (joints.get_subscription_count() < 1 or chambers.get_subscription_count() < 1
+           or node.drive_pub.get_subscription_count() < 1) and time.monotonic() < end:
+        dds_node.spin_once(peer, timeout_sec=0.05)
+
+    stream = list(_stream(200))
+    names = ['segment_1', 'segment_2']
+    chains = [f'{n}/chain_{c}' for n in names for c in (1, 2)]
+    for stamp, psi, psi_dot, pressures in stream:
+        state = msg.JointState(name=list(names), position=array('d', psi),
+                               velocity=array('d', psi_dot))
+        chamber = msg.JointState(name=list(chains), effort=array('d', pressures))
+        for half in (state, chamber):
+            half.header.stamp.sec, half.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
+        joints.publish(state)
+        chambers.publish(chamber)
+        dds_node.spin_once(node._node, timeout_sec=0.0)   # the node serves as it would spinning
+    end = time.monotonic() + 10.0
+    while min(len(v) for v in received.values()) < len(stream) and time.monotonic() < end:
+        dds_node.spin_once(node._node, timeout_sec=0.01)
+        dds_node.spin_once(peer, timeout_sec=0.01)
+    assert [len(v) for v in received.values()] == [len(stream)] * 2
+    assert node.counts['evaluated'] == len(stream)
+
+    params = load_segment_params(params_file)
+    assert (params.dynamics_inertia, params.dynamics_damping) == (0.02, 0.1)
+    models = [SegmentModel(params) for _ in names]
+    previous, held, last_stamp = [None, None], [0.0, 0.0], None
+    for k, (stamp, psi, psi_dot, pressures) in enumerate(stream):
+        dt = 0.0 if last_stamp is None else (stamp - last_stamp) * 1e-9
+        last_stamp = stamp
+        drive, external = received['/bellows/driving_torque'][k], \
+            received['/bellows/external_torque'][k]
+        for message in (drive, external):
+            assert message.name == names
+            assert message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec == stamp
+        for i in range(2):
+            tau = models[i].step(psi[i], psi_dot[i], *pressures[2 * i:2 * i + 2]).tau_drive
+            held[i] = rate(psi_dot[i], previous[i], dt, held[i])
+            previous[i] = psi_dot[i]
+            assert drive.effort[i] == pytest.approx(tau, rel=1e-12, abs=1e-15)
+            assert external.effort[i] == pytest.approx(
+                external_torque(params, psi[i], psi_dot[i], held[i], tau), rel=1e-12, abs=1e-15)
+    # The motion made Ψ̈ and N matter: τ_ext is not merely −τ_drive.
+    assert max(abs(e.effort[0] + d.effort[0]) for d, e in
+               zip(*received.values())) > 1e-3
