@@ -33,7 +33,7 @@ import pytest
 
 from bellows_ros.config.hardware import arm_bus_config
 from bellows_ros.hardware import can_protocol as cp
-from bellows_ros.hardware.arm_bus import ArmBus, open_bus, open_can
+from bellows_ros.hardware.arm_bus import ArmBus, open_bus, open_can, RECEIVE_BUFFER
 from bellows_ros.hardware.faults import Faults
 from bellows_ros.hardware.sim_arm_bus import SimArmBus
 
@@ -238,6 +238,34 @@ def test_four_segments_at_1khz_between_two_processes_over_udp_multicast():
     assert len(received) / report['ticks'] >= 0.98, (len(received), report, arm.counters())
     assert report['setpoints'] == [2e5] * (2 * N)   # the other direction worked too
     assert report['counters']['rx_accepted'] > 0
+
+
+def test_a_stalled_reader_keeps_its_frames():
+    """
+    Frames that arrive while the reader is not scheduled wait in the kernel's buffer, not lost.
+
+    The default buffer held 256 frames (51 ms of the arm's traffic); the arm bus asks for about a
+    second's worth, which the kernel grants up to net.core.rmem_max.
+    """
+    with open('/proc/sys/net/core/rmem_max') as stream:
+        rmem_max = int(stream.read())
+    port = 44000 + random.randint(0, 999)
+    reader = open_can('udp_multicast', '239.74.166.12', port=port)
+    writer = open_can('udp_multicast', '239.74.166.12', port=port)
+    try:
+        granted = reader._multicast._socket.getsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF)
+        assert granted == 2 * min(RECEIVE_BUFFER, rmem_max)
+        sent = 2000 if rmem_max >= RECEIVE_BUFFER else 400    # 0.4 s of 4 segments + status
+        message = can.Message(arbitration_id=0x101, data=bytes(8), is_extended_id=False)
+        for _ in range(sent):                          # nobody reads meanwhile
+            writer.send(message)
+        kept = 0
+        while reader.recv(timeout=0.2) is not None:
+            kept += 1
+        assert kept == sent
+    finally:
+        reader.shutdown()
+        writer.shutdown()
 
 
 def test_a_bus_hears_only_its_own_multicast_group():
