@@ -22,23 +22,17 @@ import functools
 import os
 import signal
 import subprocess
-import sys
 
 import pytest
 
+from bellows_ros.runtime import node
 from bellows_ros.runtime.dds_node import LOOPBACK_ENVIRONMENT  # noqa: F401 (conftest's)
 
 
 @functools.lru_cache(maxsize=None)
 def rclpy_unavailable():
-    """Why rclpy cannot run nodes here ('' when it can), asked of a child Python."""
-    probe = subprocess.run([sys.executable, '-c', 'import rclpy, sensor_msgs.msg, '
-                            'diagnostic_msgs.msg, rosgraph_msgs.msg'],
-                           capture_output=True, text=True, timeout=60)
-    if probe.returncode == 0:
-        return ''
-    lines = probe.stderr.strip().splitlines()
-    return lines[-1] if lines else f'exit status {probe.returncode}'
+    """Why rclpy cannot run nodes here ('' when it can): `runtime.node.rclpy_unavailable`, once."""
+    return node.rclpy_unavailable()
 
 
 def require_rclpy():

@@ -30,6 +30,7 @@ from bellows_ros.bench import graph, Result
 from bellows_ros.cli import main
 from bellows_ros.cli.bench import format_table
 from bellows_ros.runtime import realtime
+from bellows_ros.runtime.node import rclpy_unavailable
 
 
 def test_the_wakeup_reference_measures_a_lone_1khz_loop():
@@ -71,7 +72,7 @@ def test_graph_bench_reports_every_figure_for_each_variant(capsys):
     assert 'graph.platform.wakeup_lateness' in results
     assert 'graph.platform.wakeup_lateness_no_latency_limit' in results
     variants = {'graph': 'dds', 'graph.normal': 'dds', 'graph.no_latency_limit': 'dds'}
-    rclpy_missing = graph._rclpy_unavailable()
+    rclpy_missing = rclpy_unavailable()
     if rclpy_missing:
         assert results['graph.rclpy.rate']['extra']['skipped'].endswith(rclpy_missing)
     else:

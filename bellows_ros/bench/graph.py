@@ -76,6 +76,7 @@ from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.loop_timing import LoopStats, PeriodicLoop
 from bellows_ros.models.segment import SegmentModel
 from bellows_ros.runtime import realtime
+from bellows_ros.runtime.node import rclpy_unavailable
 
 # The installed config (a pip or colcon install has no source tree beside the package).
 CONFIG = params.default_file('nodes_sim')
@@ -102,18 +103,6 @@ def _model_reference(segments):
     return timing(f'graph.model_step_inprocess_{segments}seg', step_all, 5000)
 
 
-def _rclpy_unavailable():
-    """
-    Tell why rclpy cannot run the nodes here ('' when it can), asking a child Python.
-
-    This process uses the DDS runtime for its probe: one Cyclone DDS library per process.
-    """
-    probe = subprocess.run([sys.executable, '-c', 'import rclpy, sensor_msgs.msg'],
-                           capture_output=True, text=True, timeout=60)
-    lines = probe.stderr.strip().splitlines()
-    return '' if probe.returncode == 0 else (lines[-1] if lines else 'import failed')
-
-
 def run(quick=False, segments=4):
     window = 3.0 if quick else 10.0
     reference = _model_reference(segments)
@@ -130,7 +119,7 @@ def run(quick=False, segments=4):
                                      host['model_node'], -1.0))
     variants = [('graph', 'dds', fifo, limit), ('graph.normal', 'dds', normal, limit),
                 ('graph.no_latency_limit', 'dds', normal, -1.0)]
-    rclpy_missing = _rclpy_unavailable()
+    rclpy_missing = rclpy_unavailable()
     if not rclpy_missing:
         variants += [('graph.rclpy', 'rclpy', fifo, limit),
                      ('graph.rclpy.normal', 'rclpy', normal, limit),

@@ -36,12 +36,15 @@ A runtime is a module with the same names in both implementations (`rclpy_runtim
 `NAME`, `msg`, `Time`, `Duration`, `SENSOR_DATA`, `init(args)`, `create_node(name)`,
 `spin_once(node, timeout_sec)`, `ok()`, `shutdown()`, `parameter_overrides(node)` and the
 exception tuples `INTERRUPTED` and `USER_ERRORS`. `select_runtime` picks one, once, in `run`:
-`$BELLOWS_RUNTIME` = `rclpy` or `dds`, else rclpy when it imports.
+`$BELLOWS_RUNTIME` = `rclpy` or `dds`, else rclpy when it imports. `rclpy_unavailable` asks
+a child Python whether rclpy could run the nodes here, for a process (the bench, the tests) that
+uses the DDS runtime itself.
 """
 import gc
 import importlib
 import os
 import signal
+import subprocess
 import sys
 from types import ModuleType
 from typing import Any, Callable, Optional, Sequence
@@ -68,6 +71,24 @@ def select_runtime(choice: Optional[str] = None) -> ModuleType:
                 raise ParameterError(f'BELLOWS_RUNTIME=rclpy: rclpy does not import ({exc}); '
                                      'source your ROS 2 setup.bash') from None
     return importlib.import_module(RUNTIMES['dds'])
+
+
+def rclpy_unavailable() -> str:
+    """
+    Tell why rclpy cannot run the nodes here ('' when it can), asking a child Python.
+
+    The child imports rclpy and the message package of every type the nodes use (cdr.USED_TYPES).
+    A child, because a process on the DDS runtime must not load a second Cyclone DDS library.
+    """
+    from bellows_ros.runtime.cdr import USED_TYPES
+    packages = sorted({ros_name.split('/')[0] for ros_name in USED_TYPES.values()})
+    probe = subprocess.run([sys.executable, '-c', 'import rclpy, '
+                            + ', '.join(f'{package}.msg' for package in packages)],
+                           capture_output=True, text=True, timeout=60)
+    if probe.returncode == 0:
+        return ''
+    lines = probe.stderr.strip().splitlines()
+    return lines[-1] if lines else f'exit status {probe.returncode}'
 
 
 def stamp_ns(stamp: Any) -> int:
