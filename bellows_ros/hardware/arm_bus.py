@@ -37,9 +37,6 @@ API
 """
 import dataclasses
 import logging
-import socket
-import struct
-import sys
 import threading
 import time
 
@@ -47,18 +44,11 @@ import can
 
 from bellows_ros.hardware import can_protocol as cp
 from bellows_ros.hardware.can_echo_filter import drop_own_frames
+from bellows_ros.hardware.loopback_can import LoopbackUdpMulticastBus
 from bellows_ros.hardware.safety import clamp_pressures, Watchdog
 from bellows_ros.hardware.sample_delivery import deliver, fresh
 
 log = logging.getLogger(__name__)
-
-
-# Linux's IP_MULTICAST_ALL (linux/in.h); Python's socket module does not export it.
-_IP_MULTICAST_ALL = 49
-_LOOPBACK = socket.inet_aton('127.0.0.1')
-# Bytes of kernel receive buffer asked for a udp_multicast bus; Linux doubles the request, within
-# net.core.rmem_max. 2 MiB kept 5041 frames of 6000 sent unread on this machine (4 MiB given).
-RECEIVE_BUFFER = 2 << 20
 
 
 def open_bus(config, **kwargs):
@@ -72,32 +62,15 @@ def open_bus(config, **kwargs):
 
 def open_can(interface, channel, **kwargs):
     """
-    `can.Bus(interface=..., channel=...)`; a udp_multicast bus is kept to its group and host.
+    `can.Bus(interface=..., channel=...)`; `udp_multicast`, the simulated bus, stays on loopback.
 
-    udp_multicast stands in for the arm's CAN bus between processes of one machine:
-    - its socket is bound to the wildcard address, and Linux then delivers to it every group that
-      any process on the host joined on that port: two simulated arms on one machine would hear
-      each other. IP_MULTICAST_ALL = 0 limits the socket to its own group;
-    - python-can joins the group on the default interface and sends through it, so every frame
-      (5000 a second) would also go out on the machine's network; joined on and sent through the
-      loopback interface instead, the simulated bus stays on the host, and each frame costs about
-      a third less CPU (measured: 53-56 us instead of 76-89 us per frame and echo);
-    - the kernel's default receive buffer holds 256 frames, 51 ms of the arm's 5000 frames a
-      second: a reader the host stalls for longer loses whole instants, and the model's strain
-      memory needs every one. `RECEIVE_BUFFER` holds about a second's frames where
-      net.core.rmem_max allows it (the DDS topics keep a second too: runtime/topics.py).
+    For `udp_multicast` the bus is `loopback_can.LoopbackUdpMulticastBus`: the channel must be an
+    IPv4 multicast address (ParameterError otherwise, before any socket or lookup), and the socket
+    is bound to loopback before it joins or sends anything (hardware/loopback_can.py).
     """
-    bus = can.Bus(interface=interface, channel=channel, **kwargs)
-    sock = getattr(getattr(bus, '_multicast', None), '_socket', None)
-    if sock is not None and sock.family == socket.AF_INET and sys.platform.startswith('linux'):
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, RECEIVE_BUFFER)
-        sock.setsockopt(socket.IPPROTO_IP, _IP_MULTICAST_ALL, 0)
-        group = socket.inet_aton(bus._multicast.group)
-        sock.setsockopt(socket.IPPROTO_IP, socket.IP_DROP_MEMBERSHIP,
-                        group + struct.pack('@I', socket.INADDR_ANY))
-        sock.setsockopt(socket.IPPROTO_IP, socket.IP_ADD_MEMBERSHIP, group + _LOOPBACK)
-        sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_IF, _LOOPBACK)
-    return bus
+    if interface == 'udp_multicast':
+        return LoopbackUdpMulticastBus(channel, **kwargs)
+    return can.Bus(interface=interface, channel=channel, **kwargs)
 
 
 @dataclasses.dataclass(frozen=True)
