@@ -97,9 +97,9 @@ def test_cpu_latency_limit_out_of_range(run):
 
 def test_arm_controller_bad_parameters(run):
     check(run('arm_controller_node', ['-p', 'feedforward:=paper_b']),
-          "'feedforward'", 'paper_a, previous, none', 'paper_b')
+          "'feedforward'", "'paper_a', 'previous', 'none'", 'paper_b')
     check(run('arm_controller_node', ['-p', 'trajectory:=zigzag']),
-          "unknown trajectory 'zigzag'", 'reversals, sweep')
+          "parameter 'trajectory'", "'reversals', 'sweep'", "got 'zigzag'")
     check(run('arm_controller_node', ['-p', 'control_every:=100']),
-          'control_every must be 1..25', 'got 100')
-    check(run('arm_controller_node', ['-p', 'pid.kp:=-1.0']), "'kp'", '>= 0')
+          "parameter 'control_every'", 'expected 1..25', 'got 100')
+    check(run('arm_controller_node', ['-p', 'pid.kp:=-1.0']), "parameter 'pid.kp'", 'expected 0..10000')

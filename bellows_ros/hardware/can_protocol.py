@@ -61,6 +61,12 @@ def load_dbc(path=None):
     return db
 
 
+@functools.lru_cache(maxsize=None)
+def dbc_segments(path=None):
+    """Return how many arm segments the CAN database defines (its ARM_SEG<i>_SAMPLE frames)."""
+    return sum(1 for m in load_dbc(path).messages if re.fullmatch(r'ARM_SEG\d+_SAMPLE', m.name))
+
+
 @functools.lru_cache(maxsize=None)  # the DBC's signal names are few and fixed
 def chamber_of(signal_name):
     """

@@ -37,12 +37,11 @@ python-can backend overrides a few methods of its base:
 import errno
 import ipaddress
 import socket
-import struct
 
 import can
 from can import BusABC, CanProtocol
-from can.interfaces.udp_multicast.bus import (GeneralPurposeUdpMulticastBus, SO_TIMESTAMPNS,
-                                             UdpMulticastBus)
+from can.interfaces.udp_multicast.bus import (
+    GeneralPurposeUdpMulticastBus, SO_TIMESTAMPNS, UdpMulticastBus)
 
 from bellows_ros.errors import ParameterError
 

@@ -52,15 +52,46 @@ import numpy as np
 from bellows_ros.config.hardware import arm_bus_config
 from bellows_ros.config.segment import load_segment_params
 from bellows_ros.control import angle_trajectory
-from bellows_ros.control.angle_tracking import AngleTracker, check_feedforward, TrackingGains
-from bellows_ros.errors import BellowsError
+from bellows_ros.control.angle_tracking import AngleTracker, FEEDFORWARDS, TrackingGains
+from bellows_ros.hardware.can_protocol import dbc_segments
 from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.nodes import diagnostics
 from bellows_ros.nodes.sample_pairing import CHAMBERS, JOINTS, SamplePairs, segment_rows
 from bellows_ros.runtime import Node, realtime, run
+from bellows_ros.runtime.parameters import Spec
 from bellows_ros.runtime.topics import SAMPLE_DEPTH
 
 SAMPLE_PERIOD = 1e-3  # s, the arm's sampling (the devices' 1 kHz clock)
+
+
+PARAMETERS = (
+    Spec('segments', [1], 'the arm segments to control (numbers on the CAN bus)', low=1,
+         high=dbc_segments(), items=(1, dbc_segments()), unique=True),
+    Spec('feedforward', 'paper_a', "model inverted as feedforward ('none' = feedback only)",
+         choices=FEEDFORWARDS),
+    Spec('trajectory', '', "built-in set-point trajectory ('' = hold, or /arm/psi_setpoint)",
+         choices=('', *angle_trajectory.TRAJECTORIES)),
+    Spec('trajectory_delay', 1.0, 'start of the built-in trajectory after the first sample, s',
+         low=0.0, high=3600.0),
+    Spec('pid.kp', 20.0, 'proportional gain, N·m/rad', low=0.0, high=1e4),
+    Spec('pid.ki', 200.0, 'integral gain, N·m/(rad·s)', low=0.0, high=1e5),
+    Spec('pid.kd', 1.0, 'derivative gain, N·m·s/rad', low=0.0, high=1e3),
+    Spec('pid.velocity_cutoff', 20.0, 'cut-off of the angle-rate filter, Hz', low=0.1,
+         high=500.0),
+    Spec('pid.integral_limit', 20.0, 'bound of the integral term, N·m', low=0.0, high=1e3),
+    Spec('feedforward_lead', 0.05, 'valve lag the feedforward anticipates, s (0 = none)',
+         low=0.0, high=1.0),
+    Spec('co_contraction', 0.0, 'pressure above ambient on both chains, Pa', low=0.0,
+         high=6.5e5),
+    Spec('control_every', 5, 'samples per pressure command (a command at least every quarter '
+         'of the driver watchdog)', low=1, high=int(arm_bus_config().command_timeout / 4
+                                                    / SAMPLE_PERIOD)),
+    Spec('params_file', '', "YAML laid over config/segment.yaml ('' = defaults)"),
+    Spec('max_pending', 100, 'unmatched half-samples kept before the oldest is dropped',
+         low=1, high=SAMPLE_DEPTH),
+    Spec('max_sample_age', 0.02, 'no command from a sample older than this, s', low=1e-3,
+         high=1.0),
+)
 
 
 class SegmentLoop:
@@ -95,35 +126,18 @@ class ArmControllerNode(Node):
 
     def __init__(self, runtime):
         super().__init__('arm_controller_node', runtime)
-        segments = self.declare_parameter('segments', [1]).value
-        feedforward = self.declare_parameter('feedforward', 'paper_a').value
-        trajectory = self.declare_parameter('trajectory', '').value
-        self.delay = self.declare_parameter('trajectory_delay', 1.0).value
-        kp = self.declare_parameter('pid.kp', 20.0).value
-        ki = self.declare_parameter('pid.ki', 200.0).value
-        kd = self.declare_parameter('pid.kd', 1.0).value
-        cutoff = self.declare_parameter('pid.velocity_cutoff', 20.0).value
-        integral_limit = self.declare_parameter('pid.integral_limit', 20.0).value
-        lead = self.declare_parameter('feedforward_lead', 0.05).value
-        co_contraction = self.declare_parameter('co_contraction', 0.0).value
-        self.control_every = self.declare_parameter('control_every', 5).value
-        params_file = self.declare_parameter('params_file', '').value or None
-        max_pending = self.declare_parameter('max_pending', 100).value
-        max_age = self.declare_parameter('max_sample_age', 0.02).value
+        given = self.declare_specs(PARAMETERS)
+        segments, feedforward = given['segments'], given['feedforward']
+        trajectory, self.delay = given['trajectory'], given['trajectory_delay']
+        kp, ki, kd = given['pid.kp'], given['pid.ki'], given['pid.kd']
+        cutoff, integral_limit = given['pid.velocity_cutoff'], given['pid.integral_limit']
+        lead, co_contraction = given['feedforward_lead'], given['co_contraction']
+        self.control_every, params_file = given['control_every'], given['params_file'] or None
+        max_pending, max_age = given['max_pending'], given['max_sample_age']
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
-        if not segments or any(s < 1 for s in segments):
-            raise BellowsError(f'arm_controller_node: parameter segments must list segment '
-                               f'numbers >= 1, got {list(segments)}')
-        check_feedforward(feedforward, 'arm_controller_node')
         path = angle_trajectory.by_name(trajectory) if trajectory else None
-        watchdog = arm_bus_config().command_timeout
-        most = int(watchdog / 4 / SAMPLE_PERIOD)  # a command at least every quarter watchdog
-        if not 1 <= self.control_every <= most:
-            raise BellowsError(f'arm_controller_node: parameter control_every must be 1..{most} '
-                               f'samples (the driver vents after {watchdog:g} s without a '
-                               f'command), got {self.control_every}')
-        self.watchdog_ns = round(watchdog * 1e9)
+        self.watchdog_ns = round(arm_bus_config().command_timeout * 1e9)
         params = load_segment_params(params_file)
         gains = TrackingGains(kp, ki, kd, cutoff, integral_limit, params.p0 + co_contraction,
                               lead)

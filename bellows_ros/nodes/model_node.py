@@ -37,29 +37,38 @@ from array import array
 import time
 
 from bellows_ros.config.segment import load_segment_params
-from bellows_ros.errors import BellowsError
+from bellows_ros.hardware.can_protocol import dbc_segments
 from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.models.derivatives import rate
 from bellows_ros.models.segment import external_torque, SegmentModel
 from bellows_ros.nodes import diagnostics
 from bellows_ros.nodes.sample_pairing import CHAMBERS, JOINTS, SamplePairs, segment_rows
 from bellows_ros.runtime import Node, realtime, run
+from bellows_ros.runtime.parameters import Spec
 from bellows_ros.runtime.topics import SAMPLE_DEPTH
+
+
+PARAMETERS = (
+    Spec('segments', [1, 2, 3, 4], 'the arm segments to evaluate (numbers on the CAN bus)',
+         low=1, high=dbc_segments(), items=(1, dbc_segments()), unique=True),
+    Spec('params_file', '', "identified parameters laid over config/segment.yaml ('' = "
+         'defaults)'),
+    Spec('max_pending', 100, 'unmatched half-samples kept before the oldest is dropped',
+         low=1, high=SAMPLE_DEPTH),
+    Spec('latency_budget', 0.002, 'a torque published later than this after its sample is '
+         'counted late, s', low=1e-4, high=1.0),
+)
 
 
 class ModelNode(Node):
 
     def __init__(self, runtime):
         super().__init__('model_node', runtime)
-        segments = self.declare_parameter('segments', [1, 2, 3, 4]).value
-        params_file = self.declare_parameter('params_file', '').value or None
-        max_pending = self.declare_parameter('max_pending', 100).value
-        latency_budget = self.declare_parameter('latency_budget', 0.002).value
+        given = self.declare_specs(PARAMETERS)
+        segments, max_pending = given['segments'], given['max_pending']
+        params_file, latency_budget = given['params_file'] or None, given['latency_budget']
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
-        if not segments or any(s < 1 for s in segments):
-            raise BellowsError(f'model_node: parameter segments must list segment numbers >= 1, '
-                               f'got {list(segments)}')
         self.params = load_segment_params(params_file)
         self.names = [f'segment_{i}' for i in segments]
         self.chains = [(f'{n}/chain_1', f'{n}/chain_2') for n in self.names]

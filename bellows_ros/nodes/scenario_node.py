@@ -43,21 +43,34 @@ from bellows_ros.control import angle_trajectory, closed_loop
 from bellows_ros.errors import BellowsError
 from bellows_ros.models.stiffness_map import stiffness_range
 from bellows_ros.runtime import Node, realtime, run, stamp_ns
+from bellows_ros.runtime.parameters import Spec
+
+
+PARAMETERS = (
+    Spec('duration', 40.0, 'length of the scenario, s', low=1.0, high=24 * 3600.0),
+    Spec('step_time', 5.0, 'time of the stiffness step, s', low=0.0, high=24 * 3600.0),
+    Spec('stiffness_low', 1400.0, 'stiffness before the step, N/m', low=0.0, high=1e6),
+    Spec('stiffness_high', 1900.0, 'stiffness after the step, N/m', low=0.0, high=1e6),
+    Spec('trajectory', 'sweep', 'built-in angle trajectory of segment_1',
+         choices=tuple(angle_trajectory.TRAJECTORIES)),
+    Spec('trajectory_start', 2.0, 'start of the trajectory, s', low=0.0, high=24 * 3600.0),
+    Spec('output_dir', 'scenario_out', 'directory of scenario.png and scenario.csv',
+         check=lambda path: '' if path else 'must not be empty'),
+    Spec('actuator_params', '', "YAML laid over config/actuator.yaml ('' = defaults)"),
+)
 
 
 class ScenarioNode(Node):
 
     def __init__(self, runtime):
         super().__init__('scenario_node', runtime)
-        self.duration = self.declare_parameter('duration', 40.0).value
-        self.step_time = self.declare_parameter('step_time', 5.0).value
-        k_low = self.declare_parameter('stiffness_low', 1400.0).value
-        self.k_high = self.declare_parameter('stiffness_high', 1900.0).value
-        self.trajectory = angle_trajectory.by_name(
-            self.declare_parameter('trajectory', 'sweep').value)
-        self.trajectory_start = self.declare_parameter('trajectory_start', 2.0).value
-        self.output_dir = Path(self.declare_parameter('output_dir', 'scenario_out').value)
-        actuator_params = self.declare_parameter('actuator_params', '').value or None
+        given = self.declare_specs(PARAMETERS)
+        self.duration, self.step_time = given['duration'], given['step_time']
+        k_low, self.k_high = given['stiffness_low'], given['stiffness_high']
+        self.trajectory = angle_trajectory.by_name(given['trajectory'])
+        self.trajectory_start = given['trajectory_start']
+        self.output_dir = Path(given['output_dir'])
+        actuator_params = given['actuator_params'] or None
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
         k_min, k_max = stiffness_range(load_actuator_params(actuator_params))

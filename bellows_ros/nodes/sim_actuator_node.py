@@ -42,30 +42,43 @@ import math
 
 from bellows_ros.config.actuator import load_actuator
 from bellows_ros.config.hardware import actuator_board_config
-from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.sim_actuator_board import SimActuatorBoard
-from bellows_ros.models.actuator_plant import ActuatorPlant
+from bellows_ros.models.actuator_plant import ACTUATOR_EFFECTS, ActuatorPlant
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime, run
+from bellows_ros.runtime.parameters import Spec
+
+
+PARAMETERS = (
+    Spec('port', '/tmp/bellows_actuator', "the pty symlink to create (the driver's "
+         'actuator.port)', check=lambda port: '' if port else 'must not be empty'),
+    Spec('actuator_params', '', "YAML laid over config/actuator.yaml ('' = defaults)"),
+    Spec('hardware_params', '', "YAML laid over config/hardware.yaml ('' = defaults)"),
+    Spec('effects', [''], "physical effects of the plant ([''] = the baseline plant)",
+         choices=('', *ACTUATOR_EFFECTS), unique=True),
+    Spec('seed', 1, 'seed of the sensor noise', low=0, high=2 ** 32 - 1),
+    Spec('x_c0', math.nan, "initial air-chamber compression, m (nan = the model's reference)",
+         low=-0.1, high=0.1),
+    Spec('spring.amplitude', 0.0, 'amplitude of the imposed spring motion, m', low=0.0,
+         high=0.05),
+    Spec('spring.period', 4.0, 'period of the imposed spring motion, s', low=0.01, high=3600.0),
+    Spec('clock_rate', 100.0, '/clock messages per second when use_sim_time is on', low=1.0,
+         high=1000.0),
+)
 
 
 class SimActuatorNode(Node):
 
     def __init__(self, runtime):
         super().__init__('sim_actuator_node', runtime)
-        port = self.declare_parameter('port', '/tmp/bellows_actuator').value
-        actuator_params = self.declare_parameter('actuator_params', '').value or None
-        hardware_params = self.declare_parameter('hardware_params', '').value or None
-        effects = [e for e in self.declare_parameter('effects', ['']).value if e]
-        seed = self.declare_parameter('seed', 1).value
-        x_c0 = self.declare_parameter('x_c0', math.nan).value
-        self.amplitude = self.declare_parameter('spring.amplitude', 0.0).value
-        self.spring_period = self.declare_parameter('spring.period', 4.0).value
-        clock_rate = self.declare_parameter('clock_rate', 100.0).value
+        given = self.declare_specs(PARAMETERS)
+        port, actuator_params = given['port'], given['actuator_params'] or None
+        hardware_params = given['hardware_params'] or None
+        effects, seed = [e for e in given['effects'] if e], given['seed']
+        x_c0, clock_rate = given['x_c0'], given['clock_rate']
+        self.amplitude, self.spring_period = given['spring.amplitude'], given['spring.period']
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
-        if not port:
-            raise BellowsError('sim_actuator_node: parameter port is empty')
         params, plant = load_actuator(actuator_params, hardware_params)
         self.plant = ActuatorPlant(params, plant, effects=effects, seed=seed,
                                    x_c0=None if math.isnan(x_c0) else x_c0)

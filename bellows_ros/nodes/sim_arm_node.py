@@ -36,24 +36,39 @@ Node parameters:
 from bellows_ros.config.segment import load_segment
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.arm_bus import open_can
+from bellows_ros.hardware.can_protocol import dbc_segments
 from bellows_ros.hardware.sim_arm_bus import SimArmBus
-from bellows_ros.models.segment_plant import SegmentPlant
+from bellows_ros.models.segment_plant import SEGMENT_EFFECTS, SegmentPlant
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime, run
+from bellows_ros.runtime.parameters import Spec
+
+
+PARAMETERS = (
+    Spec('can.interface', 'udp_multicast', 'python-can interface of the simulated bus'),
+    Spec('can.channel', '239.74.163.2', 'python-can channel (udp_multicast: an IPv4 multicast '
+         'group)'),
+    Spec('n_segments', 4, 'segments of the simulated arm', low=1, high=dbc_segments()),
+    Spec('segment_params', '', "YAML laid over config/segment.yaml ('' = defaults)"),
+    Spec('effects', [''], "physical effects of the plant ([''] = the baseline plant)",
+         choices=('', *SEGMENT_EFFECTS), unique=True),
+    Spec('seed', 1, 'seed of the sensor noise', low=0, high=2 ** 32 - 1 - dbc_segments()),
+    Spec('load_torque', 0.0, 'constant external torque on every segment, N·m', low=-100.0,
+         high=100.0),
+    Spec('clock_rate', 100.0, '/clock messages per second when use_sim_time is on', low=1.0,
+         high=1000.0),
+)
 
 
 class SimArmNode(Node):
 
     def __init__(self, runtime):
         super().__init__('sim_arm_node', runtime)
-        interface = self.declare_parameter('can.interface', 'udp_multicast').value
-        channel = self.declare_parameter('can.channel', '239.74.163.2').value
-        n_segments = self.declare_parameter('n_segments', 4).value
-        segment_params = self.declare_parameter('segment_params', '').value or None
-        effects = [e for e in self.declare_parameter('effects', ['']).value if e]
-        seed = self.declare_parameter('seed', 1).value
-        self.load_torque = self.declare_parameter('load_torque', 0.0).value
-        clock_rate = self.declare_parameter('clock_rate', 100.0).value
+        given = self.declare_specs(PARAMETERS)
+        interface, channel = given['can.interface'], given['can.channel']
+        n_segments, segment_params = given['n_segments'], given['segment_params'] or None
+        effects, seed = [e for e in given['effects'] if e], given['seed']
+        self.load_torque, clock_rate = given['load_torque'], given['clock_rate']
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
         params, plant, _ = load_segment(segment_params)

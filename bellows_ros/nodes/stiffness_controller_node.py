@@ -48,29 +48,44 @@ from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime, run, stamp_ns
+from bellows_ros.runtime.parameters import Spec
 from bellows_ros.runtime.topics import SAMPLE_DEPTH
+
+
+PARAMETERS = (
+    Spec('actuator_params', '', "YAML laid over config/actuator.yaml ('' = defaults)"),
+    Spec('pd.kp', 400.0, 'proportional gain on the compression error, 1/m', low=0.0, high=1e6),
+    Spec('pd.kd', 0.0, 'derivative gain, s/m', low=0.0, high=1e4),
+    Spec('pd.velocity_cutoff', 50.0, 'cut-off of the compression-rate filter, Hz', low=0.1,
+         high=500.0),
+    Spec('pd.duty_max', 0.8, 'largest motor duty', low=0.01, high=1.0),
+    Spec('pd.deadband', 2e-5, 'compression error within which the motor rests, m', low=0.0,
+         high=1e-3),
+    Spec('gas_time_constant', 2.0, 'time constant of the gas-amount estimate, s', low=0.01,
+         high=3600.0),
+    Spec('control_every', 5, 'samples per control step', low=1, high=100),
+    Spec('target_every', 4, 'control steps between re-computations of the target compression',
+         low=1, high=1000),
+    Spec('publish_every', 2, 'control steps per /actuator/stiffness message', low=1, high=1000),
+    Spec('initial_stiffness', 0.0, 'stiffness held from the start, N/m (0 = hold still until '
+         'the first set-point)', low=0.0, high=1e6),
+)
 
 
 class StiffnessControllerNode(Node):
 
     def __init__(self, runtime):
         super().__init__('stiffness_controller_node', runtime)
-        actuator_params = self.declare_parameter('actuator_params', '').value or None
-        gains = PDGains(kp=self.declare_parameter('pd.kp', 400.0).value,
-                        kd=self.declare_parameter('pd.kd', 0.0).value,
-                        velocity_cutoff=self.declare_parameter('pd.velocity_cutoff', 50.0).value,
-                        duty_max=self.declare_parameter('pd.duty_max', 0.8).value,
-                        deadband=self.declare_parameter('pd.deadband', 2e-5).value)
-        gas_time_constant = self.declare_parameter('gas_time_constant', 2.0).value
-        self.control_every = self.declare_parameter('control_every', 5).value
-        self.target_every = self.declare_parameter('target_every', 4).value
-        self.publish_every = self.declare_parameter('publish_every', 2).value
-        initial = self.declare_parameter('initial_stiffness', 0.0).value
+        given = self.declare_specs(PARAMETERS)
+        actuator_params = given['actuator_params'] or None
+        gains = PDGains(kp=given['pd.kp'], kd=given['pd.kd'],
+                        velocity_cutoff=given['pd.velocity_cutoff'],
+                        duty_max=given['pd.duty_max'], deadband=given['pd.deadband'])
+        gas_time_constant = given['gas_time_constant']
+        self.control_every, self.target_every = given['control_every'], given['target_every']
+        self.publish_every, initial = given['publish_every'], given['initial_stiffness']
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
-        if not (0 < gains.duty_max <= 1 and gains.kp >= 0 and gains.kd >= 0):
-            raise BellowsError('stiffness_controller_node: need 0 < pd.duty_max <= 1, '
-                               'pd.kp >= 0, pd.kd >= 0')
         self.setpoint = StiffnessSetpoint(load_actuator_params(actuator_params), gas_time_constant)
         self.pd = PDController(gains)
         k_low, k_high = self.setpoint.range()

@@ -509,6 +509,11 @@ def create_node(name):
     return Node(name)
 
 
+def descriptor(spec):
+    """A parameter's descriptor: the DDS runtime keeps the Spec itself (runtime/parameters.py)."""
+    return spec
+
+
 def parameter_overrides(node):
     """{name: value} of every parameter given to `node` (files, -p), declared or not."""
     return {name: value for name, (value, _) in node._overrides.items()}

@@ -147,6 +147,26 @@ class Node:
             check_override(self.get_name(), name, value, self._overrides[name])
         return self._node.declare_parameter(name, value)
 
+    def declare_specs(self, specs: Sequence[Any]) -> dict:
+        """
+        Declare every parameter of `specs` (runtime/parameters.py) and check its value.
+
+        The value given (file or -p), else the default, is checked against its Spec before it is
+        declared, the same way on both runtimes; rclpy also gets the Spec as the parameter's
+        descriptor. Returns {name: value}.
+        """
+        from bellows_ros.runtime.parameters import validate
+        values = {}
+        for spec in specs:
+            value = spec.default
+            if spec.name in self._overrides:
+                value = self._overrides[spec.name]
+                check_override(self.get_name(), spec.name, spec.default, value)
+            validate(self.get_name(), spec, value)
+            values[spec.name] = self._node.declare_parameter(
+                spec.name, spec.default, self.runtime.descriptor(spec)).value
+        return values
+
     def get_parameter(self, name: str) -> Any:
         return self._node.get_parameter(name)
 

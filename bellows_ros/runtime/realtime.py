@@ -50,7 +50,7 @@ API
 import os
 import struct
 
-from bellows_ros.errors import ParameterError
+from bellows_ros.runtime.parameters import Spec
 
 CPU_LATENCY_DEVICE = '/dev/cpu_dma_latency'
 CPU_LATENCY_MAX = 2000.0  # s: the kernel's ceiling (2e9 µs in a signed 32-bit word)
@@ -78,22 +78,26 @@ def set_fifo(priority):
     return threads
 
 
-def declare(node):
-    """
-    Declare and check `realtime_priority` and `cpu_latency_limit`; return the priority.
+def _priority_problem(priority):
+    return '' if priority == 0 or 1 <= priority <= 99 else 'expected 0 (off) or 1..99'
 
-    `realtime_priority`: 0 = normal scheduling, 1-99 = SCHED_FIFO; `cpu_latency_limit`: s,
-    negative = off, 0 = idle CPUs poll.
-    """
-    priority = node.declare_parameter('realtime_priority', 0).value
-    if priority != 0 and not 1 <= priority <= 99:
-        raise ParameterError(f"parameter 'realtime_priority': expected 0 (off) or 1..99, "
-                             f'got {priority}')
-    limit = node.declare_parameter('cpu_latency_limit', -1.0).value
-    if not (limit < 0 or 0 <= limit <= CPU_LATENCY_MAX):
-        raise ParameterError(f"parameter 'cpu_latency_limit': expected a negative value (off) or "
-                             f'0..{CPU_LATENCY_MAX:g} s, got {limit}')
-    return priority
+
+def _latency_problem(limit):
+    return '' if limit < 0 or 0 <= limit <= CPU_LATENCY_MAX else (
+        f'expected a negative value (off) or 0..{CPU_LATENCY_MAX:g} s')
+
+
+PARAMETERS = (
+    Spec('realtime_priority', 0, 'SCHED_FIFO priority of the node threads, 1..99; 0 = normal '
+         'scheduling', check=_priority_problem),
+    Spec('cpu_latency_limit', -1.0, 'CPU wake-up latency held while the node runs, s; 0 = idle '
+         'CPUs poll, negative = off', check=_latency_problem),
+)
+
+
+def declare(node):
+    """Declare and check `realtime_priority` and `cpu_latency_limit`; return the priority."""
+    return node.declare_specs(PARAMETERS)['realtime_priority']
 
 
 def request(node):

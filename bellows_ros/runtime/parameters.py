@@ -1,0 +1,100 @@
+# Copyright 2026 bellows_ros maintainers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+A node's parameters as a table: name, default, description, bounds; checked once, at start.
+
+Each node module lists its parameters as a tuple of `Spec` (`PARAMETERS`), and declares them with
+`Node.declare_specs(PARAMETERS)`. Every value, given or default, is then checked here, before
+the node opens a device or allocates anything: a wrong type (rcl's rule: no conversion), a number
+outside its bounds, a string or list element outside its choices, or a node-specific rule
+(`check`) is a ParameterError that names the node and the parameter and says what is allowed.
+The same table is what rclpy gets as each parameter's ParameterDescriptor (description,
+range, read_only), so `ros2 param describe` shows it, and what the docs and the hostile-input
+tests walk.
+
+`read_only` is True unless the node applies a change while it runs; a parameter the node reads
+once (a port, the segments) must say so, rather than accept a change that does nothing.
+"""
+from dataclasses import dataclass
+import math
+from typing import Any, Callable, Optional, Sequence
+
+from bellows_ros.errors import ParameterError
+
+
+@dataclass(frozen=True)
+class Spec:
+    """
+    One declared parameter.
+
+    low, high: inclusive bounds of a number, or of every element of a number array (None: open);
+    choices: the allowed values of a string, or of every element of a string array;
+    items: (fewest, most) elements of an array; unique: no element twice;
+    check: a rule of its own, `check(value) -> str` naming what is wrong ('' = fine).
+    """
+
+    name: str
+    default: Any
+    description: str
+    low: Optional[float] = None
+    high: Optional[float] = None
+    choices: Sequence[Any] = ()
+    items: Optional[tuple] = None
+    unique: bool = False
+    check: Optional[Callable[[Any], str]] = None
+    read_only: bool = True
+
+    def problem(self, value):
+        """Say what is wrong with `value` for this parameter ('' when nothing is)."""
+        elements = list(value) if isinstance(value, (list, tuple)) else [value]
+        if isinstance(value, (list, tuple)):
+            fewest, most = self.items or (0, math.inf)
+            if not fewest <= len(elements) <= most:
+                count = f'{fewest}' if fewest == most else (
+                    f'at least {fewest}' if most == math.inf else f'{fewest} to {most}')
+                return f'expected {count} elements, got {len(elements)}'
+            if self.unique and len(set(elements)) != len(elements):
+                return 'an element is given twice'
+        for element in elements:
+            if isinstance(element, float) and math.isnan(element) and not (
+                    isinstance(self.default, float) and math.isnan(self.default)):
+                return 'not a number (nan)'
+            if isinstance(element, (int, float)) and not isinstance(element, bool):
+                if (self.low is not None and element < self.low) or (
+                        self.high is not None and element > self.high):
+                    return f'expected {self.bounds()}, got {_number(element)}'
+            if self.choices and element not in self.choices:
+                return (f"expected one of {', '.join(map(repr, self.choices))}, "
+                        f'got {element!r}')
+        return self.check(value) if self.check else ''
+
+    def bounds(self):
+        """The bounds as text: '1..99', '>= 0', '<= 5'."""
+        low, high = (_number(bound) for bound in (self.low, self.high))
+        if self.low is not None and self.high is not None:
+            return f'{low}..{high}'
+        return f'>= {low}' if self.low is not None else f'<= {high}'
+
+
+def _number(value):
+    return str(value) if isinstance(value, int) else f'{value:g}'
+
+
+def validate(node_name, spec, value):
+    """Raise ParameterError naming node and parameter when `value` is not allowed by `spec`."""
+    problem = spec.problem(value)
+    if problem:
+        raise ParameterError(f"{node_name}: parameter '{spec.name}' = {value!r}: {problem} "
+                             f'[{spec.description}]')
