@@ -102,4 +102,5 @@ def test_arm_controller_bad_parameters(run):
           "parameter 'trajectory'", "'reversals', 'sweep'", "got 'zigzag'")
     check(run('arm_controller_node', ['-p', 'control_every:=100']),
           "parameter 'control_every'", 'expected 1..25', 'got 100')
-    check(run('arm_controller_node', ['-p', 'pid.kp:=-1.0']), "parameter 'pid.kp'", 'expected 0..10000')
+    check(run('arm_controller_node', ['-p', 'pid.kp:=-1.0']), "parameter 'pid.kp'",
+          'expected 0..10000')

@@ -137,8 +137,8 @@ STARTS = [
 
 @pytest.mark.slow
 @pytest.mark.parametrize('node, setting, name', STARTS, ids=[f'{n}:{s}' for n, s, _ in STARTS])
-def test_a_node_given_a_bad_value_says_so_in_one_line_and_exits_2(runtime, node, setting, name,
-                                                                   tmp_path):
+def test_a_node_given_a_bad_value_says_so_in_one_line_and_exits_2(
+        runtime, node, setting, name, tmp_path):
     env = node_env(runtime, ROS_DOMAIN_ID=str(random.randint(181, 200)))
     result = subprocess.run([str(BIN / node), '--ros-args', '-p', setting], capture_output=True,
                             text=True, timeout=60, env=env, cwd=tmp_path)
