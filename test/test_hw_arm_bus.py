@@ -34,8 +34,8 @@ import pytest
 from bellows_ros.config.hardware import arm_bus_config
 from bellows_ros.hardware import can_protocol as cp
 from bellows_ros.hardware.arm_bus import ArmBus, open_bus, open_can
-from bellows_ros.hardware.loopback_can import RECEIVE_BUFFER
 from bellows_ros.hardware.faults import Faults
+from bellows_ros.hardware.loopback_can import RECEIVE_BUFFER
 from bellows_ros.hardware.sim_arm_bus import SimArmBus
 
 CONFIG = arm_bus_config()
