@@ -37,6 +37,7 @@ LAUNCH_SIM = HERE.parent / 'scripts' / 'launch_sim.sh'
 
 SEND_AND_RECEIVE = """
 import sys
+import can
 from bellows_ros.hardware.arm_bus import open_can
 group, port, backend = sys.argv[1], int(sys.argv[2]), sys.argv[3]
 make = ((lambda: open_can('udp_multicast', group, port=port)) if backend == 'bellows'
