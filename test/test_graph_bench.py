@@ -21,6 +21,7 @@ that the counts the bench reports agree with each other.
 import json
 import math
 import os
+from pathlib import Path
 import time
 
 import pytest
@@ -33,15 +34,27 @@ from bellows_ros.runtime import realtime
 from bellows_ros.runtime.node import rclpy_unavailable
 
 
+def latency_requests_held():
+    """This process's open file descriptors on the PM QoS device: its requests in force."""
+    fds = Path('/proc/self/fd')
+    return [fd for fd in fds.iterdir()
+            if os.path.realpath(fd) == os.path.realpath(realtime.CPU_LATENCY_DEVICE)]
+
+
 def test_the_wakeup_reference_measures_a_lone_1khz_loop():
-    before = realtime.cpu_latency_in_force()
+    """
+    What the bench controls: its own PM QoS request, in force while it runs, withdrawn after.
+
+    The limit in force is the least of every process's request on the host: ours can only be
+    lowered by others, never raised, so the run saw at most what it asked for.
+    """
     start = time.perf_counter()
     result = graph._wakeup_reference('reference', 1.0, priority=50, latency_limit=123e-6)
     elapsed = time.perf_counter() - start
+    assert result.extra['cpu_latency_requested'] == 123e-6
     if os.access(realtime.CPU_LATENCY_DEVICE, os.W_OK):
-        assert result.extra['cpu_latency_limit'] == min(before, 123e-6)   # held while it ran
-    after = realtime.cpu_latency_in_force()  # and withdrawn after (nan: the device is unreadable)
-    assert after == before or (math.isnan(before) and math.isnan(after)), (before, after)
+        assert result.extra['cpu_latency_limit'] <= 123e-6   # held while it ran
+    assert latency_requests_held() == []                      # and withdrawn after
     ticks, slots = result.samples, result.extra['slots']
     # Every 1 ms slot the loop lived through either ticked or was counted missed; how many slots
     # that is depends on how long the (shared) machine took, so the bound is the time measured
@@ -66,7 +79,6 @@ def test_fractions_in_extra_are_shown_without_the_figures_unit():
 @pytest.mark.slow
 def test_graph_bench_reports_every_figure_for_each_variant(capsys):
     configured = params.read_file(graph.CONFIG, 'model_node')['cpu_latency_limit']
-    unlimited = realtime.cpu_latency_in_force()
     assert main(['bench', '--only', 'graph', '--quick', '--json']) == 0
     results = {r['name']: r for r in json.loads(capsys.readouterr().out)}
     assert 'graph.platform.wakeup_lateness' in results
@@ -109,9 +121,12 @@ def test_graph_bench_reports_every_figure_for_each_variant(capsys):
     for prefix in [p for p in variants if p.endswith(('.normal', '.no_latency_limit'))]:
         assert all(v.startswith('SCHED_OTHER')
                    for v in results[f'{prefix}.rate']['extra']['scheduling'].values())
-    if os.access(realtime.CPU_LATENCY_DEVICE, os.W_OK):    # the nodes could hold the limit
-        for name in ('graph.platform.wakeup_lateness', 'graph.rate', 'graph.normal.rate'):
-            assert results[name]['extra']['cpu_latency_limit'] == min(configured, unlimited), name
-        for name in ('graph.platform.wakeup_lateness_no_latency_limit',
-                     'graph.no_latency_limit.rate'):
-            assert results[name]['extra']['cpu_latency_limit'] == unlimited, name
+    # What the bench controls: the limit each variant asked for (the limit in force on the host
+    # is the least of every process's request, so a held request bounds it from above).
+    for name in ('graph.platform.wakeup_lateness', 'graph.rate', 'graph.normal.rate'):
+        assert results[name]['extra']['cpu_latency_requested'] == configured, name
+        if os.access(realtime.CPU_LATENCY_DEVICE, os.W_OK):    # the nodes could hold it
+            assert results[name]['extra']['cpu_latency_limit'] <= configured, name
+    for name in ('graph.platform.wakeup_lateness_no_latency_limit', 'graph.no_latency_limit.rate'):
+        assert results[name]['extra']['cpu_latency_requested'] < 0, name
+    assert latency_requests_held() == []

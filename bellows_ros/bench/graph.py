@@ -232,9 +232,11 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
                       len(rates), target=1000.0,
                       extra={'runtime': runtime, 'scheduling': scheduling, 'steal': stolen,
                              'cpu_latency_limit': limit_in_force,
+                             'cpu_latency_requested': float(latency_limit),
                              'sim_arm_lateness_p99': arm_lateness,
                              'sim_arm_deadline_misses': int(arm.get('deadline_misses', -1))},
                       extra_units={'steal': '', 'cpu_latency_limit': 's',
+                                   'cpu_latency_requested': 's',
                                    'sim_arm_lateness_p99': 's', 'sim_arm_deadline_misses': ''})]
     results.append(Result(f'{prefix}.fraction_evaluated',
                           evaluated / published if published else 0.0, '', published,
@@ -297,9 +299,10 @@ def _wakeup_reference(name, seconds, priority, latency_limit):
                          'slots': slots, 'slots_missed': summary['misses'] / slots,
                          'scheduling': f'SCHED_FIFO {priority}' if granted else 'SCHED_OTHER',
                          'steal': _steal_fraction(times, _cpu_times()),
-                         'cpu_latency_limit': limit_in_force},
+                         'cpu_latency_limit': limit_in_force,
+                         'cpu_latency_requested': float(latency_limit)},
                   extra_units={'slots': '', 'slots_missed': '', 'steal': '',
-                               'cpu_latency_limit': 's'})
+                               'cpu_latency_limit': 's', 'cpu_latency_requested': 's'})
 
 
 def _hold_latency_limit(limit):
