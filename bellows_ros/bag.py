@@ -20,7 +20,8 @@ The rows are the `/joint_states` samples of the wanted device group; pressures
 stamp, zero-order hold: each row takes the latest message stamped at or before it (the first
 message for rows before any). `t` is the sample stamp in seconds from the first row.
 
-Columns (see `bellows_ros.runtime.topics` for the wrench axes):
+Topic and joint names are the contract's (`bellows_ros.interfaces`, also for the wrench axes),
+in the root namespace. Columns:
 - segment (`segment_1`): psi, psi_dot = position, velocity of joint `segment_1`;
   p1, p2 = effort of chambers `segment_1/chain_1`, `segment_1/chain_2`;
   tau_ext = `wrench.torque.z` of the wrench with frame_id `segment_1`.
@@ -34,13 +35,14 @@ from rosbags.rosbag2 import Reader
 from rosbags.typesys import get_typestore, Stores
 import yaml
 
+from bellows_ros import interfaces
 from bellows_ros.errors import DataError
 from bellows_ros.table import check_increasing, COLUMNS, Table
 
-SEGMENT = 'segment_1'
-TYPES = {'/joint_states': 'sensor_msgs/msg/JointState',
-         '/bellows/chambers': 'sensor_msgs/msg/JointState',
-         '/bellows/wrench': 'geometry_msgs/msg/WrenchStamped'}
+SEGMENT = interfaces.segment_joint(1)
+JOINT_STATES, CHAMBERS, WRENCH = (topic.resolved() for topic in (
+    interfaces.JOINT_STATES, interfaces.CHAMBERS, interfaces.WRENCH))
+TYPES = {name: interfaces.by_name()[name] for name in (JOINT_STATES, CHAMBERS, WRENCH)}
 
 
 def _first_line(exc):
@@ -100,7 +102,7 @@ def _joint_rows(path, reader, typestore, topic, names, field_names):
 
 def _wrench_rows(path, reader, typestore, frame, axis):
     stamps, values = [], []
-    for msg in _messages(path, reader, typestore, '/bellows/wrench'):
+    for msg in _messages(path, reader, typestore, WRENCH):
         if msg.header.frame_id in (frame, ''):
             kind, component = axis
             stamps.append(_stamp(msg))
@@ -155,22 +157,22 @@ def read_bag_table(path, system):
     reader = _open(path)
     try:
         if system == 'segment':
-            stamps, joints = _joint_rows(path, reader, typestore, '/joint_states', [SEGMENT],
+            stamps, joints = _joint_rows(path, reader, typestore, JOINT_STATES, [SEGMENT],
                                          ('position', 'velocity'))
             chamber_stamps, chambers = _joint_rows(
-                path, reader, typestore, '/bellows/chambers',
-                [f'{SEGMENT}/chain_1', f'{SEGMENT}/chain_2'], ('effort',))
+                path, reader, typestore, CHAMBERS,
+                [interfaces.chain_chamber(1, 1), interfaces.chain_chamber(1, 2)], ('effort',))
             wrench_stamps, torque = _wrench_rows(path, reader, typestore, SEGMENT, ('torque', 'z'))
             pressures = _hold(stamps, chamber_stamps, chambers)
             columns = {'psi': joints[:, 0], 'psi_dot': joints[:, 1], 'p1': pressures[:, 0],
                        'p2': pressures[:, 1],
                        'tau_ext': _hold(stamps, wrench_stamps, torque)[:, 0]}
         elif system == 'actuator':
-            stamps, joints = _joint_rows(path, reader, typestore, '/joint_states',
-                                         ['air_chamber', 'spring'], ('position',))
-            chamber_stamps, pressure = _joint_rows(path, reader, typestore, '/bellows/chambers',
-                                                   ['actuator'], ('effort',))
-            wrench_stamps, force = _wrench_rows(path, reader, typestore, 'actuator',
+            stamps, joints = _joint_rows(path, reader, typestore, JOINT_STATES,
+                                         list(interfaces.ACTUATOR_JOINTS), ('position',))
+            chamber_stamps, pressure = _joint_rows(path, reader, typestore, CHAMBERS,
+                                                   [interfaces.ACTUATOR_CHAMBER], ('effort',))
+            wrench_stamps, force = _wrench_rows(path, reader, typestore, interfaces.ACTUATOR_FRAME,
                                                 ('force', 'z'))
             columns = {'x_c': joints[:, 0], 'x_s': joints[:, 1],
                        'p': _hold(stamps, chamber_stamps, pressure)[:, 0],

@@ -26,8 +26,10 @@ carrying the other side's values, and runs until SIGINT/SIGTERM.
 import json
 import sys
 
+from bellows_ros.interfaces import by_name
 from bellows_ros.runtime import Node, run
-from bellows_ros.runtime.topics import TOPICS
+
+TOPICS = by_name()
 
 # Each side's distinctive values: a tag (names, frame ids) and a number.
 SIDES = {'rclpy': ('from_rclpy', 1.25, 11), 'dds': ('from_dds', 2.5, 22)}

@@ -119,3 +119,25 @@ def test_every_equation_cited_as_a_or_b_in_the_code_is_in_equations_md():
     for path in (ROOT / 'bellows_ros').rglob('*.py'):
         cited.update(re.findall(r'\b([AB])\((\d+)\)', path.read_text()))
     assert cited <= documented, sorted(cited - documented)
+
+
+INTERFACES = ROOT / 'docs' / 'interfaces.md'
+
+
+def topic_rows():
+    """{topic: type} of the rows of the topic table in docs/interfaces.md."""
+    rows = re.findall(r'^\| `(/[\w/]+)` \| (\w+/msg/\w+) \|', INTERFACES.read_text(), re.MULTILINE)
+    return dict(rows)
+
+
+def test_the_topic_table_is_the_contract():
+    """docs/interfaces.md lists each topic of bellows_ros/interfaces.py, with its type, no more."""
+    from bellows_ros import interfaces
+    assert topic_rows() == interfaces.by_name()
+
+
+def test_the_documented_queue_depths_are_the_contract():
+    from bellows_ros import interfaces
+    text = INTERFACES.read_text()
+    assert f'depth {interfaces.SAMPLE_DEPTH} (`SAMPLE_DEPTH`' in text
+    assert f'depth {interfaces.COMMAND_DEPTH} (`COMMAND_DEPTH`' in text

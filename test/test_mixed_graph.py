@@ -34,7 +34,9 @@ import pytest
 from runtimes import node_env, require_rclpy, stop_all
 
 from bellows_ros import params
-from bellows_ros.runtime.topics import TOPICS
+from bellows_ros.interfaces import by_name
+
+TOPICS = by_name()
 
 pytestmark = pytest.mark.slow
 

@@ -30,11 +30,11 @@ import pytest
 import yaml
 
 from bellows_ros.config.segment import load_segment_params
+from bellows_ros.interfaces import SAMPLE_DEPTH
 from bellows_ros.models.derivatives import rate
 from bellows_ros.models.segment import external_torque, SegmentModel
 from bellows_ros.nodes.model_node import ModelNode
 from bellows_ros.runtime import dds_node
-from bellows_ros.runtime.topics import SAMPLE_DEPTH
 
 DOMAIN = '194'
 DYNAMICS = {'segment': {'dynamics': {'inertia': 0.02, 'damping': 0.1, 'gravity': 0.3}}}

@@ -49,6 +49,7 @@ import time
 
 import numpy as np
 
+from bellows_ros import interfaces
 from bellows_ros.config.hardware import arm_bus_config
 from bellows_ros.config.segment import load_segment_params
 from bellows_ros.control import angle_trajectory
@@ -59,7 +60,6 @@ from bellows_ros.nodes import diagnostics
 from bellows_ros.nodes.sample_pairing import CHAMBERS, JOINTS, SamplePairs, segment_rows
 from bellows_ros.runtime import Node, realtime, run
 from bellows_ros.runtime.parameters import Spec
-from bellows_ros.runtime.topics import SAMPLE_DEPTH
 
 SAMPLE_PERIOD = 1e-3  # s, the arm's sampling (the devices' 1 kHz clock)
 
@@ -88,7 +88,7 @@ PARAMETERS = (
                                                     / SAMPLE_PERIOD)),
     Spec('params_file', '', "YAML laid over config/segment.yaml ('' = defaults)"),
     Spec('max_pending', 100, 'unmatched half-samples kept before the oldest is dropped',
-         low=1, high=SAMPLE_DEPTH),
+         low=1, high=interfaces.SAMPLE_DEPTH),
     Spec('max_sample_age', 0.02, 'no command from a sample older than this, s', low=1e-3,
          high=1.0),
 )
@@ -97,9 +97,9 @@ PARAMETERS = (
 class SegmentLoop:
     """One segment's tracker, its set-point source and its error statistics."""
 
-    def __init__(self, name, tracker, trajectory):
-        self.name = name
-        self.chains = (f'{name}/chain_1', f'{name}/chain_2')
+    def __init__(self, segment, tracker, trajectory):
+        self.name = interfaces.segment_joint(segment)
+        self.chains = (interfaces.chain_chamber(segment, 1), interfaces.chain_chamber(segment, 2))
         self.tracker = tracker
         self.trajectory = trajectory
         self.topic_setpoint = None  # (Ψ_d, Ψ̇_d) from /arm/psi_setpoint
@@ -142,7 +142,7 @@ class ArmControllerNode(Node):
         gains = TrackingGains(kp, ki, kd, cutoff, integral_limit, params.p0 + co_contraction,
                               lead)
         self.lead = lead
-        self.loops = [SegmentLoop(f'segment_{i}', AngleTracker(params, gains, feedforward), path)
+        self.loops = [SegmentLoop(i, AngleTracker(params, gains, feedforward), path)
                       for i in segments]
         self.feedforward = feedforward
         self.pairs = SamplePairs(max_pending)
@@ -157,14 +157,11 @@ class ArmControllerNode(Node):
         self.report = diagnostics.LoopReport(self.stats)
         self._p_limit = 2.0 * params.p_max
 
-        self.command_pub = self.create_publisher(self.msg.JointState, '/bellows/pressure_command',
-                                                 10)
-        self.diag_pub = self.create_publisher(self.msg.DiagnosticArray, '/diagnostics', 10)
-        self.create_subscription(self.msg.JointState, '/joint_states', self.on_joint_states,
-                                 SAMPLE_DEPTH)
-        self.create_subscription(self.msg.JointState, '/bellows/chambers', self.on_chambers,
-                                 SAMPLE_DEPTH)
-        self.create_subscription(self.msg.JointState, '/arm/psi_setpoint', self.on_setpoint, 10)
+        self.command_pub = self.publisher(interfaces.PRESSURE_COMMAND)
+        self.diag_pub = self.publisher(interfaces.DIAGNOSTICS)
+        self.subscription(interfaces.JOINT_STATES, self.on_joint_states)
+        self.subscription(interfaces.CHAMBERS, self.on_chambers)
+        self.subscription(interfaces.PSI_SETPOINT, self.on_setpoint)
         self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
         self.get_logger().info(
             f"tracking {', '.join(loop.name for loop in self.loops)}, feedforward {feedforward}"

@@ -48,10 +48,10 @@ from bellows_ros.config.hardware import actuator_board_config, arm_bus_config
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware import actuator_board, arm_bus
 from bellows_ros.hardware.loop_timing import LoopStats
+from bellows_ros.interfaces import ACTUATOR_FRAME, SAMPLE_DEPTH
 from bellows_ros.models.derivatives import rate
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime, run
-from bellows_ros.runtime.topics import ACTUATOR_FRAME, SAMPLE_DEPTH
 
 _DISCOVERY_SETTLE = 0.5  # s, see DriverNode._wait_for_subscribers
 

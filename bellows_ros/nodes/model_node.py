@@ -36,6 +36,7 @@ A sample with a non-finite value or a pressure outside [0, 2 p_max] is rejected 
 from array import array
 import time
 
+from bellows_ros import interfaces
 from bellows_ros.config.segment import load_segment_params
 from bellows_ros.hardware.can_protocol import dbc_segments
 from bellows_ros.hardware.loop_timing import LoopStats
@@ -45,7 +46,6 @@ from bellows_ros.nodes import diagnostics
 from bellows_ros.nodes.sample_pairing import CHAMBERS, JOINTS, SamplePairs, segment_rows
 from bellows_ros.runtime import Node, realtime, run
 from bellows_ros.runtime.parameters import Spec
-from bellows_ros.runtime.topics import SAMPLE_DEPTH
 
 
 PARAMETERS = (
@@ -54,7 +54,7 @@ PARAMETERS = (
     Spec('params_file', '', "identified parameters laid over config/segment.yaml ('' = "
          'defaults)'),
     Spec('max_pending', 100, 'unmatched half-samples kept before the oldest is dropped',
-         low=1, high=SAMPLE_DEPTH),
+         low=1, high=interfaces.SAMPLE_DEPTH),
     Spec('latency_budget', 0.002, 'a torque published later than this after its sample is '
          'counted late, s', low=1e-4, high=1.0),
 )
@@ -70,8 +70,9 @@ class ModelNode(Node):
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
         self.params = load_segment_params(params_file)
-        self.names = [f'segment_{i}' for i in segments]
-        self.chains = [(f'{n}/chain_1', f'{n}/chain_2') for n in self.names]
+        self.names = [interfaces.segment_joint(i) for i in segments]
+        self.chains = [(interfaces.chain_chamber(i, 1), interfaces.chain_chamber(i, 2))
+                       for i in segments]
         self.models = [SegmentModel(self.params) for _ in segments]
         self.previous_psi_dot = [None] * len(segments)
         self.psi_ddot = [0.0] * len(segments)
@@ -84,15 +85,11 @@ class ModelNode(Node):
         self._last_stamp = None
         self._p_limit = 2.0 * self.params.p_max
 
-        self.drive_pub = self.create_publisher(self.msg.JointState, '/bellows/driving_torque',
-                                               SAMPLE_DEPTH)
-        self.external_pub = self.create_publisher(self.msg.JointState, '/bellows/external_torque',
-                                                  SAMPLE_DEPTH)
-        self.diag_pub = self.create_publisher(self.msg.DiagnosticArray, '/diagnostics', 10)
-        self.create_subscription(self.msg.JointState, '/joint_states', self.on_joint_states,
-                                 SAMPLE_DEPTH)
-        self.create_subscription(self.msg.JointState, '/bellows/chambers', self.on_chambers,
-                                 SAMPLE_DEPTH)
+        self.drive_pub = self.publisher(interfaces.DRIVING_TORQUE)
+        self.external_pub = self.publisher(interfaces.EXTERNAL_TORQUE)
+        self.diag_pub = self.publisher(interfaces.DIAGNOSTICS)
+        self.subscription(interfaces.JOINT_STATES, self.on_joint_states)
+        self.subscription(interfaces.CHAMBERS, self.on_chambers)
         self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
         self.get_logger().info(f"evaluating {', '.join(self.names)}"
                                + (f' with {params_file}' if params_file else ''))

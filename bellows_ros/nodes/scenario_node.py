@@ -38,6 +38,7 @@ import csv
 import math
 from pathlib import Path
 
+from bellows_ros import interfaces
 from bellows_ros.config.actuator import load_actuator_params
 from bellows_ros.control import angle_trajectory, closed_loop
 from bellows_ros.errors import BellowsError
@@ -45,6 +46,11 @@ from bellows_ros.models.stiffness_map import stiffness_range
 from bellows_ros.runtime import Node, realtime, run, stamp_ns
 from bellows_ros.runtime.parameters import Spec
 
+
+# The scenario drives and records segment 1 of the arm, and the actuator.
+SEGMENT = interfaces.segment_joint(1)
+CHAINS = (interfaces.chain_chamber(1, 1), interfaces.chain_chamber(1, 2))
+AIR_CHAMBER = interfaces.ACTUATOR_JOINTS[0]
 
 PARAMETERS = (
     Spec('duration', 40.0, 'length of the scenario, s', low=1.0, high=24 * 3600.0),
@@ -82,22 +88,19 @@ class ScenarioNode(Node):
             raise BellowsError(f'scenario_node: stiffness_high {self.k_high:.0f} N/m is outside '
                                f'the actuator range [{k_min:.0f}, {k_max:.0f}] N/m')
         self.output_dir.mkdir(parents=True, exist_ok=True)
-        self.setpoint_pub = self.create_publisher(self.msg.Float64, '/actuator/stiffness_setpoint',
-                                                  10)
-        self.angle_pub = self.create_publisher(self.msg.JointState, '/arm/psi_setpoint', 10)
+        self.setpoint_pub = self.publisher(interfaces.STIFFNESS_SETPOINT)
+        self.angle_pub = self.publisher(interfaces.PSI_SETPOINT)
         self.series = {name: [] for name in ('stiffness', 'x_c', 'psi', 'psi_setpoint', 'p1', 'p2',
                                              'tau_drive')}
-        self.create_subscription(self.msg.Float64, '/actuator/stiffness',
-                                 lambda m: self._add('stiffness', m.data), 10)
+        self.subscription(interfaces.STIFFNESS, lambda m: self._add('stiffness', m.data))
         # Best effort: the recorder must never hold up the driver's reliable writers (a reader
         # that does not acknowledge makes them block) and may miss samples when it falls behind.
         sensor = self.runtime.SENSOR_DATA
-        self.create_subscription(self.msg.JointState, '/joint_states', self.on_joint_states,
-                                 sensor)
-        self.create_subscription(self.msg.JointState, '/bellows/chambers', self.on_chambers,
-                                 sensor)
-        self.create_subscription(self.msg.JointState, '/bellows/driving_torque', self.on_torque,
-                                 sensor)
+        for topic, callback in ((interfaces.JOINT_STATES, self.on_joint_states),
+                                (interfaces.CHAMBERS, self.on_chambers),
+                                (interfaces.DRIVING_TORQUE, self.on_torque)):
+            self.create_subscription(getattr(self.msg, topic.message), topic.name, callback,
+                                     sensor)
         self.start_ns = self.get_clock().now().nanoseconds
         self.done = False
         self._last_setpoint, self._ticks = None, 0
@@ -114,19 +117,19 @@ class ScenarioNode(Node):
         self.series[name].append((self.elapsed(stamp), value))
 
     def on_joint_states(self, msg):
-        if 'segment_1' in msg.name:
-            self._add('psi', msg.position[msg.name.index('segment_1')], msg.header.stamp)
-        if 'air_chamber' in msg.name:
-            self._add('x_c', msg.position[msg.name.index('air_chamber')], msg.header.stamp)
+        if SEGMENT in msg.name:
+            self._add('psi', msg.position[msg.name.index(SEGMENT)], msg.header.stamp)
+        if AIR_CHAMBER in msg.name:
+            self._add('x_c', msg.position[msg.name.index(AIR_CHAMBER)], msg.header.stamp)
 
     def on_chambers(self, msg):
-        if 'segment_1/chain_1' in msg.name:
-            self._add('p1', msg.effort[msg.name.index('segment_1/chain_1')], msg.header.stamp)
-            self._add('p2', msg.effort[msg.name.index('segment_1/chain_2')], msg.header.stamp)
+        if CHAINS[0] in msg.name:
+            self._add('p1', msg.effort[msg.name.index(CHAINS[0])], msg.header.stamp)
+            self._add('p2', msg.effort[msg.name.index(CHAINS[1])], msg.header.stamp)
 
     def on_torque(self, msg):
-        if 'segment_1' in msg.name:
-            self._add('tau_drive', msg.effort[msg.name.index('segment_1')], msg.header.stamp)
+        if SEGMENT in msg.name:
+            self._add('tau_drive', msg.effort[msg.name.index(SEGMENT)], msg.header.stamp)
 
     def stiffness_setpoint(self, t):
         return self.k_low if t < self.step_time else self.k_high
@@ -145,7 +148,7 @@ class ScenarioNode(Node):
         if t >= self.trajectory_start:
             psi_d, psi_dot_d, _ = angle_trajectory.setpoint(self.trajectory,
                                                             t - self.trajectory_start)
-            setpoint = self.msg.JointState(name=['segment_1'], position=[psi_d],
+            setpoint = self.msg.JointState(name=[SEGMENT], position=[psi_d],
                                            velocity=[psi_dot_d])
             setpoint.header.stamp = self.get_clock().now().to_msg()
             self.angle_pub.publish(setpoint)

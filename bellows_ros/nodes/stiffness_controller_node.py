@@ -41,6 +41,7 @@ latency held while the node runs, 0 = idle CPUs poll, negative = off; runtime/re
 """
 import time
 
+from bellows_ros import interfaces
 from bellows_ros.config.actuator import load_actuator_params
 from bellows_ros.control.pd import PDController, PDGains
 from bellows_ros.control.stiffness import StiffnessSetpoint
@@ -49,7 +50,6 @@ from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime, run, stamp_ns
 from bellows_ros.runtime.parameters import Spec
-from bellows_ros.runtime.topics import SAMPLE_DEPTH
 
 
 PARAMETERS = (
@@ -104,15 +104,12 @@ class StiffnessControllerNode(Node):
         self.stats = LoopStats()
         self.report = diagnostics.LoopReport(self.stats)
 
-        self.motor_pub = self.create_publisher(self.msg.Float64, '/actuator/motor_command', 10)
-        self.stiffness_pub = self.create_publisher(self.msg.Float64, '/actuator/stiffness', 10)
-        self.diag_pub = self.create_publisher(self.msg.DiagnosticArray, '/diagnostics', 10)
-        self.create_subscription(self.msg.Float64, '/actuator/stiffness_setpoint',
-                                 self.on_setpoint, 10)
-        self.create_subscription(self.msg.JointState, '/bellows/chambers', self.on_chambers,
-                                 SAMPLE_DEPTH)
-        self.create_subscription(self.msg.JointState, '/joint_states', self.on_joint_states,
-                                 SAMPLE_DEPTH)
+        self.motor_pub = self.publisher(interfaces.MOTOR_COMMAND)
+        self.stiffness_pub = self.publisher(interfaces.STIFFNESS)
+        self.diag_pub = self.publisher(interfaces.DIAGNOSTICS)
+        self.subscription(interfaces.STIFFNESS_SETPOINT, self.on_setpoint)
+        self.subscription(interfaces.CHAMBERS, self.on_chambers)
+        self.subscription(interfaces.JOINT_STATES, self.on_joint_states)
         self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
 
     def on_setpoint(self, msg):
@@ -129,15 +126,16 @@ class StiffnessControllerNode(Node):
             f'stiffness set-point {msg.data:.1f} N/m -> x_c {self.target:.5f} m')
 
     def on_chambers(self, msg):
-        if 'actuator' in msg.name:
-            self.pressure = msg.effort[msg.name.index('actuator')]
+        if interfaces.ACTUATOR_CHAMBER in msg.name:
+            self.pressure = msg.effort[msg.name.index(interfaces.ACTUATOR_CHAMBER)]
 
     def on_joint_states(self, msg):
-        if 'air_chamber' not in msg.name:
+        chamber, spring = interfaces.ACTUATOR_JOINTS
+        if chamber not in msg.name:
             return
         start = time.perf_counter()
-        x_c = msg.position[msg.name.index('air_chamber')]
-        x_s = msg.position[msg.name.index('spring')]
+        x_c = msg.position[msg.name.index(chamber)]
+        x_s = msg.position[msg.name.index(spring)]
         stamp = stamp_ns(msg.header.stamp)
         dt = 1e-3 if self._last_stamp is None else max(1e-6, (stamp - self._last_stamp) * 1e-9)
         self._last_stamp = stamp

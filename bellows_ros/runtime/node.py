@@ -189,6 +189,15 @@ class Node:
                             qos_profile: Any) -> Any:
         return self._node.create_subscription(msg_type, topic, callback, qos_profile)
 
+    def publisher(self, topic: Any) -> Any:
+        """A publisher on a topic of the contract (bellows_ros/interfaces.py): type and depth."""
+        return self.create_publisher(getattr(self.msg, topic.message), topic.name, topic.depth)
+
+    def subscription(self, topic: Any, callback: Callable[[Any], None]) -> Any:
+        """A subscription to a topic of the contract (bellows_ros/interfaces.py)."""
+        return self.create_subscription(getattr(self.msg, topic.message), topic.name, callback,
+                                        topic.depth)
+
     def create_timer(self, period: float, callback: Callable[[], None]) -> Any:
         return self._node.create_timer(period, callback)
 

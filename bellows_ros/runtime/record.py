@@ -28,9 +28,11 @@ from rosbags.rosbag2 import Writer
 from rosbags.rosbag2.enums import StoragePlugin
 
 from bellows_ros.errors import BellowsError
+from bellows_ros.interfaces import by_name, SAMPLE_DEPTH
 from bellows_ros.runtime import dds_node
 from bellows_ros.runtime.messages import message_class, TYPESTORE
-from bellows_ros.runtime.topics import SAMPLE_DEPTH, TOPICS
+
+TOPICS = by_name()  # the contract's topics in the root namespace: {name: type}
 
 
 def record(output, topics=None, duration=None, ready=None):

@@ -1,0 +1,111 @@
+# Copyright 2026 bellows_ros maintainers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The interface contract: every topic with its type, QoS and naming rules, in one place.
+
+Nodes, the recorder, the bag reader, the scenario and the tests take topic names, message types,
+queue depths and joint names from here; docs/interfaces.md is the reference that a test holds to
+this module. Names are relative, so a node's namespace (`ros2 launch ... namespace:=arm_a`,
+`--ros-args -r __ns:=/arm_a`) moves the whole graph, and `-r` remaps any of them. Two are
+absolute on purpose, as ROS defines them: `/diagnostics` (one aggregator reads every node's
+status) and `/clock` (one time source).
+
+Message conventions:
+- `joint_states` and `bellows/chambers` carry one message per sample per device group (the arm's
+  segments in one message, the actuator's `air_chamber`/`spring` in another), both halves of a
+  sample with the same stamp;
+- `bellows/wrench`: `header.frame_id` names the sensor's device group. For an arm segment
+  (`frame_id` `segment_<i>`) the measured external torque tau_ext is `wrench.torque.z` (z along the
+  segment's bending axis, positive in the direction of positive Psi); for the actuator
+  (`frame_id` `actuator`) the spring force f is `wrench.force.z` (positive compressing the spring).
+"""
+from dataclasses import dataclass
+
+# Depth for the 1 kHz sample topics: a reader stalled by its host for up to a second (seen on a
+# shared 2-core machine under load) must not lose samples; 1000 samples of 4 segments is ~200 kB.
+SAMPLE_DEPTH = 1000
+# Depth for commands, set-points and status: only the newest few matter.
+COMMAND_DEPTH = 10
+
+
+@dataclass(frozen=True)
+class Topic:
+    """A topic of the contract: name (relative unless it starts with '/'), ROS type, QoS depth."""
+
+    name: str
+    ros_type: str
+    depth: int
+    content: str
+
+    @property
+    def message(self):
+        """The message's short name, as the runtimes' `msg` namespace holds it ('JointState')."""
+        return self.ros_type.rsplit('/', 1)[1]
+
+    def resolved(self, namespace='/'):
+        """The full name in `namespace` ('/joint_states' in the root namespace)."""
+        if self.name.startswith('/'):
+            return self.name
+        return namespace.rstrip('/') + '/' + self.name
+
+
+JOINT_STATES = Topic('joint_states', 'sensor_msgs/msg/JointState', SAMPLE_DEPTH,
+                     'arm: segment angles and rates; actuator: compressions x_c, x_s')
+CHAMBERS = Topic('bellows/chambers', 'sensor_msgs/msg/JointState', SAMPLE_DEPTH,
+                 'chamber pressures, Pa abs, in effort')
+WRENCH = Topic('bellows/wrench', 'geometry_msgs/msg/WrenchStamped', SAMPLE_DEPTH,
+               'external force/torque sensor: the actuator spring force, a segment torque')
+DRIVING_TORQUE = Topic('bellows/driving_torque', 'sensor_msgs/msg/JointState', SAMPLE_DEPTH,
+                       'driving torque per segment, N·m, A(2)')
+EXTERNAL_TORQUE = Topic('bellows/external_torque', 'sensor_msgs/msg/JointState', SAMPLE_DEPTH,
+                        'estimated external torque per segment, N·m, A(2)')
+PRESSURE_COMMAND = Topic('bellows/pressure_command', 'sensor_msgs/msg/JointState', COMMAND_DEPTH,
+                         'chamber pressure set-points, Pa abs, in effort')
+STIFFNESS_SETPOINT = Topic('actuator/stiffness_setpoint', 'std_msgs/msg/Float64', COMMAND_DEPTH,
+                           'actuator stiffness set-point, N/m')
+STIFFNESS = Topic('actuator/stiffness', 'std_msgs/msg/Float64', COMMAND_DEPTH,
+                  'present actuator stiffness from the measured state, N/m')
+MOTOR_COMMAND = Topic('actuator/motor_command', 'std_msgs/msg/Float64', COMMAND_DEPTH,
+                      'lead-screw motor duty, -1..1')
+PSI_SETPOINT = Topic('arm/psi_setpoint', 'sensor_msgs/msg/JointState', COMMAND_DEPTH,
+                     'segment angle set-points, rad, in position')
+DIAGNOSTICS = Topic('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', COMMAND_DEPTH,
+                    'every node: rates, loop timing, link health, counters')
+CLOCK = Topic('/clock', 'rosgraph_msgs/msg/Clock', COMMAND_DEPTH,
+              'simulated time, when use_sim_time is on')
+
+TOPICS = (JOINT_STATES, CHAMBERS, WRENCH, DRIVING_TORQUE, EXTERNAL_TORQUE, PRESSURE_COMMAND,
+          STIFFNESS_SETPOINT, STIFFNESS, MOTOR_COMMAND, PSI_SETPOINT, DIAGNOSTICS, CLOCK)
+
+
+def by_name(namespace='/'):
+    """{full topic name: ROS type} of the contract in `namespace` (the recorder, the bag)."""
+    return {topic.resolved(namespace): topic.ros_type for topic in TOPICS}
+
+
+# Joint, chamber and frame names.
+ACTUATOR_JOINTS = ('air_chamber', 'spring')
+ACTUATOR_CHAMBER = 'actuator'
+ACTUATOR_FRAME = 'actuator'
+
+
+def segment_joint(segment):
+    """Joint name of arm segment `segment` (1-based): 'segment_1'."""
+    return f'segment_{segment}'
+
+
+def chain_chamber(segment, chain):
+    """Chamber name of chain `chain` (1, 2) of segment `segment` (1-based): 'segment_1/chain_2'."""
+    return f'{segment_joint(segment)}/chain_{chain}'
