@@ -52,14 +52,17 @@ fi
 mkdir -p "$output/logs"
 output=$(cd "$output" && pwd)
 # A private pty link and multicast group per run, so two launches on one machine do not collide.
-port="${TMPDIR:-/tmp}/bellows_sim_actuator_$$"
+# The link lives in a directory of this run's own; the simulated board removes the link it made,
+# and the launcher then removes the directory only if it is empty (rmdir deletes no content).
+portdir=$(mktemp -d "${TMPDIR:-/tmp}/bellows_sim_actuator.XXXXXX")
+port="$portdir/board"
 group="239.74.163.$(( ($$ % 200) + 20 ))"
 common=(--ros-args --params-file "$params")
 
 node_logs="$output/logs"
 cleanup() {
   stop_nodes
-  rm -f "$port"
+  rmdir "$portdir" 2>/dev/null || true
 }
 trap cleanup EXIT
 trap 'exit 130' INT TERM

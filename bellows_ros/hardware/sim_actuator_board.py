@@ -47,8 +47,10 @@ import tempfile
 import threading
 import time
 import tty
+import uuid
 
 from bellows_ros.config.hardware import actuator_board_config
+from bellows_ros.errors import ParameterError
 from bellows_ros.hardware import serial_protocol as sp
 from bellows_ros.hardware.faults import Faults
 from bellows_ros.hardware.loop_timing import LoopStats, LoopThread, PeriodicLoop
@@ -72,6 +74,17 @@ class ActuatorState:
     f: float
 
 
+def _check_free(port):
+    """ParameterError unless `port` names nothing yet, in an existing directory."""
+    if os.path.lexists(port):
+        kind = ('a directory' if os.path.isdir(port) else 'a link' if os.path.islink(port)
+                else 'a device node' if not os.path.isfile(port) else 'a file')
+        raise ParameterError(f'port {port}: {kind} exists there; the simulated board creates its '
+                             'link only where nothing exists (choose a free path)')
+    if not os.path.isdir(os.path.dirname(os.path.abspath(port))):
+        raise ParameterError(f'port {port}: no such directory')
+
+
 class SimActuatorBoard:
     def __init__(self, step, config=None, link_path=None, faults=None, period=1e-3, record=False):
         if config is None:
@@ -88,6 +101,8 @@ class SimActuatorBoard:
             self._tmpdir = tempfile.mkdtemp(prefix='sim_actuator_')
             link_path = os.path.join(self._tmpdir, 'actuator_board')
         self.port = str(link_path)
+        _check_free(self.port)
+        self._tty = None  # where the link this board made points; None while it has none
         self._fd_lock = threading.Lock()
         self._master = self._slave = None
         self._decoder = sp.FrameDecoder()
@@ -100,16 +115,31 @@ class SimActuatorBoard:
         self.replug()
 
     # -- the pty and its symlink ------------------------------------------------------------
+    # The board touches only the link it made: it creates the link where nothing exists (the
+    # constructor refuses a path that is taken), repoints it only while it is still its own, and
+    # removes it only then. A port named by mistake (a real device node, a file) is never deleted.
+    def _owns_link(self):
+        try:
+            return self._tty is not None and os.readlink(self.port) == self._tty
+        except OSError:  # gone, or not a link any more
+            return False
+
     def replug(self):
         """Open a fresh pty and point the symlink at it atomically."""
+        if self._tty is not None and os.path.lexists(self.port) and not self._owns_link():
+            raise ParameterError(f'{self.port}: replaced by something this simulated board did '
+                                 'not make; left as it is')
+        if self._tty is None:
+            _check_free(self.port)
         master, slave = os.openpty()
         tty.setraw(slave)  # no echo or line editing: the driver sees the bytes the board sends
         os.set_blocking(master, False)
-        tmp_link = self.port + '.new'
-        if os.path.lexists(tmp_link):
-            os.unlink(tmp_link)
-        os.symlink(os.ttyname(slave), tmp_link)
+        name = os.ttyname(slave)
+        # A fresh name beside the port (symlink() never replaces), then one atomic rename.
+        tmp_link = f'{self.port}.{os.getpid()}.{uuid.uuid4().hex[:8]}.new'
+        os.symlink(name, tmp_link)
         os.replace(tmp_link, self.port)
+        self._tty = name
         with self._fd_lock:
             self._master, self._slave = master, slave
 
@@ -117,8 +147,9 @@ class SimActuatorBoard:
         """Make the device vanish: close the pty (the driver's reads fail), remove the symlink."""
         with self._fd_lock:
             master, slave, self._master, self._slave = self._master, self._slave, None, None
-        if os.path.lexists(self.port):
+        if self._owns_link():
             os.unlink(self.port)
+        self._tty = None
         for fd in (master, slave):
             if fd is not None:
                 os.close(fd)
