@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from bellows_ros.errors import DataError
+from bellows_ros.outputs import atomic_file
 from bellows_ros.table import check_increasing, COLUMNS, Table
 
 # Pressure columns of each system: absolute, in Pa.
@@ -216,7 +217,7 @@ def write_csv(path, table, outputs):
         else:
             columns.append(table.extras[name])
     try:
-        with open(path, 'w', newline='') as stream:
+        with atomic_file(path, 'w', newline='') as stream:
             writer = csv.writer(stream)
             writer.writerow(names)
             writer.writerows(zip(*columns))

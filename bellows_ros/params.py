@@ -36,6 +36,7 @@ import sys
 import yaml
 
 from bellows_ros.errors import ParameterError
+from bellows_ros.outputs import atomic_file
 
 WILDCARD = '/**'
 
@@ -350,7 +351,7 @@ def write_file(path, flat, header=None):
     tree = unflatten({name: plain(value) for name, value in flat.items()})
     text = yaml.safe_dump({WILDCARD: {'ros__parameters': tree}}, sort_keys=False,
                           default_flow_style=None)
-    with open(path, 'w') as stream:
+    with atomic_file(path) as stream:
         if header:
             stream.write(''.join(f'# {line}\n' for line in header.splitlines()))
         stream.write(text)

@@ -33,8 +33,16 @@ SUBCOMMANDS = {
 }
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse with its errors as one line (`bellows identify: error: ...`), exit status 2."""
+
+    def error(self, message):
+        print(f'{self.prog}: error: {message} (see {self.prog} --help)', file=sys.stderr)
+        sys.exit(2)
+
+
 def build_parser():
-    parser = argparse.ArgumentParser(prog='bellows', description=__doc__.splitlines()[0])
+    parser = Parser(prog='bellows', description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest='command', required=True, metavar='COMMAND')
     for name, help_text in SUBCOMMANDS.items():
         module = importlib.import_module(f'bellows_ros.cli.{name}')

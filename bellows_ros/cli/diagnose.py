@@ -21,7 +21,6 @@ takes data and returns a `Diagnosis`), and writes DIR/report.json, details.json,
 extended.yaml and the PNG plots (their contents: `bellows_ros.doctor.report`).
 """
 import json
-from pathlib import Path
 import time
 
 
@@ -40,6 +39,8 @@ def run(args):
     from bellows_ros.data import read_table
     from bellows_ros.doctor.diagnosis import diagnose
     from bellows_ros.doctor.report import summary_line
+    from bellows_ros.outputs import check_report_directory
+    check_report_directory(args.report, inputs=(args.data, args.params))  # before any work
     started = time.perf_counter()
     params = load_params(args.system, args.params)
     table = read_table(args.data, args.system)
@@ -60,28 +61,28 @@ def load_params(system, params_path):
     return load_segment(params_path)
 
 
-def write_report(d, directory):
-    """Write every output file of the diagnosis `d` into `directory` (created if needed)."""
+def write_report(d, report):
+    """
+    Write every output file of the diagnosis `d` as the report directory `report`.
+
+    The report is built in a new directory beside it and swapped in whole (outputs.py): a reader
+    never finds a new report.json beside an old report's plots.
+    """
     import matplotlib.pyplot as plt
 
     from bellows_ros import params as param_files
     from bellows_ros.doctor.plots import figures
     from bellows_ros.doctor.report import (details_dict, extended_header, EXTENDED_FILE,
                                            markdown, report_dict)
-    from bellows_ros.errors import BellowsError
-    directory = Path(directory)
-    try:
-        directory.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise BellowsError(
-            f'{directory}: cannot create the report directory ({exc.strerror})') from None
-    (directory / 'report.json').write_text(json.dumps(report_dict(d), indent=2) + '\n')
-    (directory / 'details.json').write_text(json.dumps(details_dict(d), indent=2,
-                                                       default=float) + '\n')
-    param_files.write_file(directory / EXTENDED_FILE, d.extended_flat, extended_header(d))
-    plots = []
-    for name, figure in figures(d):
-        figure.savefig(directory / name, dpi=90)
-        plt.close(figure)
-        plots.append(name)
-    (directory / 'report.md').write_text(markdown(d, plots))
+    from bellows_ros.outputs import report_directory
+    with report_directory(report) as directory:
+        (directory / 'report.json').write_text(json.dumps(report_dict(d), indent=2) + '\n')
+        (directory / 'details.json').write_text(json.dumps(details_dict(d), indent=2,
+                                                           default=float) + '\n')
+        param_files.write_file(directory / EXTENDED_FILE, d.extended_flat, extended_header(d))
+        plots = []
+        for name, figure in figures(d):
+            figure.savefig(directory / name, dpi=90)
+            plt.close(figure)
+            plots.append(name)
+        (directory / 'report.md').write_text(markdown(d, plots))

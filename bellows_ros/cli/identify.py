@@ -13,7 +13,10 @@
 # limitations under the License.
 
 """`bellows identify {segment|actuator} DATA --output P.yaml`."""
+import argparse
 import importlib
+
+from bellows_ros.outputs import check_output
 
 
 def add_arguments(parser):
@@ -23,10 +26,23 @@ def add_arguments(parser):
                         help='fitted parameters (ROS 2 YAML)')
     parser.add_argument('--params', metavar='P.yaml',
                         help='starting parameters laid over the defaults')
-    parser.add_argument('--seed', type=int, default=0, help='seed for the multi-start search')
+    parser.add_argument('--seed', type=seed, default=0,
+                        help='seed for the multi-start search (0 .. 2**32 - 1)')
     parser.add_argument('--quiet', action='store_true', help='no progress bar')
 
 
+def seed(text):
+    """A seed for NumPy's generators: a whole number 0 .. 2**32 - 1 (argparse type)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'expected a whole number, got {text!r}') from None
+    if not 0 <= value < 2 ** 32:
+        raise argparse.ArgumentTypeError(f'expected 0 .. 2**32 - 1, got {value}')
+    return value
+
+
 def run(args):
+    check_output(args.output, inputs=(args.data, args.params))  # before the fit, not after it
     system = importlib.import_module(f'bellows_ros.cli.{args.system}')
     return system.identify(args)

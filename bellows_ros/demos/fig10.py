@@ -25,9 +25,11 @@ import sys
 import numpy as np
 
 from bellows_ros.config.segment import load_segment
+from bellows_ros.errors import BellowsError
 from bellows_ros.models.segment import simulate_model
 from bellows_ros.models.segment_experiments import fig10_record
 from bellows_ros.models.segment_plant import FULL_MODEL, NO_NOISE
+from bellows_ros.outputs import atomic_file, check_output
 
 
 def main(argv=None):
@@ -39,7 +41,12 @@ def main(argv=None):
     parser.add_argument('--noise', action='store_true',
                         help='sensor noise from segment.plant.noise')
     args = parser.parse_args(argv)
-    params, plant, _ = load_segment(args.params)
+    try:
+        check_output(args.plot, inputs=(args.params,), what='--plot')
+        params, plant, _ = load_segment(args.params)
+    except BellowsError as exc:
+        print(f'fig10: error: {exc}', file=sys.stderr)
+        return 2
     record, before, after = fig10_record(params, plant, FULL_MODEL,
                                          None if args.noise else NO_NOISE, seed=0)
     model = simulate_model(params, record['psi'], record['p1'], record['p2'], record['psi_dot'])
@@ -80,7 +87,8 @@ def _plot(path, record, model, before, after):
     axes[3].set_xlabel('t, s')
     axes[3].legend()
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
+    with atomic_file(path, 'wb') as stream:
+        fig.savefig(stream, format='png', dpi=100)
     plt.close(fig)
 
 

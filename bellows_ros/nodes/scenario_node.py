@@ -43,6 +43,7 @@ from bellows_ros.config.actuator import load_actuator_params
 from bellows_ros.control import angle_trajectory, closed_loop
 from bellows_ros.errors import BellowsError
 from bellows_ros.models.stiffness_map import stiffness_range
+from bellows_ros.outputs import atomic_file
 from bellows_ros.runtime import Node, realtime, run, stamp_ns
 from bellows_ros.runtime.parameters import Spec
 
@@ -210,7 +211,7 @@ class ScenarioNode(Node):
         return self._feedback_only
 
     def write(self):
-        with open(self.output_dir / 'scenario.csv', 'w', newline='') as stream:
+        with atomic_file(self.output_dir / 'scenario.csv', 'w', newline='') as stream:
             writer = csv.writer(stream)
             writer.writerow(['series', 't', 'value'])
             for name, points in self.series.items():
@@ -251,7 +252,8 @@ class ScenarioNode(Node):
             ax.grid(True)
             ax.legend(loc='best')
         fig.tight_layout()
-        fig.savefig(self.output_dir / 'scenario.png', dpi=100)
+        with atomic_file(self.output_dir / 'scenario.png', 'wb') as stream:
+            fig.savefig(stream, format='png', dpi=100)
         plt.close(fig)
 
 
