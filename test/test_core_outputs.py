@@ -66,8 +66,8 @@ def one_error_line(capsys, *fragments):
 
 @pytest.mark.parametrize('how', ['same path', 'symlink', 'hard link', 'relative path'])
 @pytest.mark.parametrize('command', ['simulate', 'identify'])
-def test_an_output_that_is_the_input_is_refused_before_any_work(record, tmp_path, how, command,
-                                                                 capsys, monkeypatch):
+def test_an_output_that_is_the_input_is_refused_before_any_work(
+        record, tmp_path, how, command, capsys, monkeypatch):
     measured = tmp_path / 'r.csv'
     measured.write_bytes(Path(record).read_bytes())
     before = digest(measured)
@@ -87,8 +87,8 @@ def test_an_output_that_is_the_input_is_refused_before_any_work(record, tmp_path
 
 
 @pytest.mark.parametrize('command', ['simulate', 'identify', 'diagnose'])
-def test_a_missing_output_directory_is_an_error_before_any_work(record, tmp_path, command,
-                                                                capsys):
+def test_a_missing_output_directory_is_an_error_before_any_work(
+        record, tmp_path, command, capsys):
     missing = tmp_path / 'no' / 'such'
     args = {'simulate': ['simulate', 'actuator', '--input', record, '--output',
                          str(missing / 'o.csv')],
