@@ -159,6 +159,24 @@ def check_range(table, name, low, high, unit=''):
                         table.line(i), name)
 
 
+def check_moves(table, name, why):
+    """
+    Column `name` must move beyond its own noise, or the record cannot show `why`.
+
+    The noise is read from the data: sample-to-sample differences of white noise of deviation s
+    have deviation s·√2, and a still signal's range is then within a few s. A range under ten
+    times that is taken as a column that never moves.
+    """
+    column = table[name]
+    if len(column) < 3:
+        return
+    noise = float(np.std(np.diff(column))) / math.sqrt(2.0)
+    spread = float(np.ptp(column))
+    if spread <= 10.0 * noise:
+        raise DataError(table.path, f'never moves (range {spread:.3g}, within 10x its own noise '
+                        f'{noise:.2g}): {why}', column=name)
+
+
 def read_table(path, system, required=None):
     """
     Read a `system` ('segment' or 'actuator') file: CSV, or a rosbag2 directory.

@@ -78,8 +78,13 @@ def check_output(path, inputs=(), what='--output'):
 
 
 @contextlib.contextmanager
-def atomic_file(path, mode='w', **open_args):
-    """Open a temporary file beside `path` for writing; rename it over `path` on success."""
+def atomic_file(path, mode='w', check=None, **open_args):
+    """
+    Open a temporary file beside `path` for writing; rename it over `path` on success.
+
+    `check(temporary_path)`, when given, reads the finished file before it replaces anything; an
+    exception from it leaves `path` as it was (a writer never leaves a file its reader refuses).
+    """
     path = Path(path)
     fd, temporary = tempfile.mkstemp(dir=path.parent, prefix=f'.{path.name}.', suffix='.tmp')
     try:
@@ -87,6 +92,8 @@ def atomic_file(path, mode='w', **open_args):
             yield stream
             stream.flush()
             os.fsync(stream.fileno())
+        if check is not None:
+            check(temporary)
         if path.exists():  # keep the old file's permissions
             os.chmod(temporary, path.stat().st_mode & 0o7777)
         else:

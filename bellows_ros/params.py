@@ -103,10 +103,17 @@ class _RosLoader(yaml.SafeLoader):
         for first, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()}
 
     def construct_mapping(self, node, deep=False):
-        # Keys are parameter names, taken as written (`on:` is the name 'on', not True).
+        # Keys are parameter names, taken as written (`on:` is the name 'on', not True). A key
+        # given twice is an error, as rcl's parser makes it: YAML 1.1 would keep the last one,
+        # and a gain written twice would be one the user did not read.
+        seen = set()
         for key, _ in node.value:
             if isinstance(key, yaml.ScalarNode) and key.tag == 'tag:yaml.org,2002:str':
                 key.style = key.style or "'"
+                if key.value in seen:
+                    raise yaml.constructor.ConstructorError(
+                        None, None, f"key '{key.value}' is given twice", key.start_mark)
+                seen.add(key.value)
         return super().construct_mapping(node, deep=deep)
 
 
@@ -340,8 +347,12 @@ def build(cls, values, source):
     return cls(**kwargs)
 
 
-def write_file(path, flat, header=None):
-    """Write a flat parameter dict as a ROS 2 parameter file (section ``/**``)."""
+def write_file(path, flat, header=None, check=None):
+    """
+    Write a flat parameter dict as a ROS 2 parameter file (section ``/**``), atomically.
+
+    `check(path)` reads the finished file back (e.g. with its loader) before it replaces `path`.
+    """
     def plain(value):
         if isinstance(value, (list, tuple)):
             return [plain(v) for v in value]
@@ -351,7 +362,7 @@ def write_file(path, flat, header=None):
     tree = unflatten({name: plain(value) for name, value in flat.items()})
     text = yaml.safe_dump({WILDCARD: {'ros__parameters': tree}}, sort_keys=False,
                           default_flow_style=None)
-    with atomic_file(path) as stream:
+    with atomic_file(path, check=check) as stream:
         if header:
             stream.write(''.join(f'# {line}\n' for line in header.splitlines()))
         stream.write(text)

@@ -19,8 +19,9 @@ import numpy as np
 
 from bellows_ros import params as param_files
 from bellows_ros.config.actuator import load_actuator, params_to_flat
-from bellows_ros.data import check_range, read_table, write_csv
-from bellows_ros.identify.actuator import fit_actuator
+from bellows_ros.data import check_moves, check_range, read_table, write_csv
+from bellows_ros.errors import BellowsError, DataError, ParameterError
+from bellows_ros.identify.actuator import fit_actuator, parameter_count, STRUCTURE_LAG
 from bellows_ros.models.actuator import evaluate_array
 from bellows_ros.models.actuator_plant import ActuatorPlant, effect_parameters
 
@@ -67,6 +68,41 @@ def _run_plant(params, plant_params, effects, t, x_c, x_s):
     return p, f, k
 
 
+# Rows per fitted number: with fewer the fit follows the noise (and 1 row fits anything).
+ROWS_PER_PARAMETER = 10
+
+
+def _check_identifiable(table, params, run):
+    """Refuse a record that cannot determine the parameters: too short, or inputs that stay put."""
+    runs = 1 if run is None else len(np.unique(run))
+    needed = ROWS_PER_PARAMETER * parameter_count(params, runs)
+    if len(table) < needed:
+        raise DataError(table.path, f'only {len(table)} rows: identification fits '
+                        f'{parameter_count(params, runs)} numbers and needs at least {needed} '
+                        f'rows ({ROWS_PER_PARAMETER} per number)')
+    check_moves(table, 'x_c', 'the air-chamber compression must vary to separate the tube '
+                'volume from the gas amount')
+    check_moves(table, 'x_s', 'the spring compression must vary to fit its force')
+    check_moves(table, 'p', 'the pressure must vary with the compressions in a sealed volume')
+
+
+def _not_sealed(data, evidence):
+    """The refusal of a record that breaks the sealed-gas assumption, with its evidence."""
+    return BellowsError(
+        f'{data}: identification refused: the record does not behave as one sealed, isothermal '
+        f'gas volume ({evidence}; an air leak, heat exchange, a lagging sensor, backlash?); run '
+        '`bellows diagnose actuator` on it to find what it shows')
+
+
+def _check_fit(path, data):
+    """Read the fitted file back with the actuator loader; a refusal explains the record."""
+    try:
+        load_actuator(path)
+    except ParameterError as exc:
+        problem = str(exc).split(': ', 1)[-1]
+        raise _not_sealed(data, f'the fit gives an impossible value: {problem}') from None
+
+
 def identify(args):
     """Fit V_tube, P0 (p_ref), E_V, F_MTS and E_F to DATA; write them as a ROS 2 parameter file."""
     config = load_actuator(args.params)
@@ -74,14 +110,25 @@ def identify(args):
     table = read_table(args.data, 'actuator')
     _check_compressions(table, params)
     run = table['run'] if 'run' in table else None
-    fit = fit_actuator(params, table['x_c'], table['x_s'], table['p'], table['f'], run=run,
-                       seed=args.seed, progress=not args.quiet)
+    _check_identifiable(table, params, run)
+    rate = 1.0 / float(np.median(np.diff(table['t'])))
+    try:
+        fit = fit_actuator(params, table['x_c'], table['x_s'], table['p'], table['f'], run=run,
+                           seed=args.seed, progress=not args.quiet, rate=rate)
+    except ParameterError as exc:  # the fitted numbers describe no device (a gas law with no root)
+        raise _not_sealed(args.data, f'the fitted parameters are impossible: {exc}') from None
+    correlation, bound = fit.structure
+    if correlation > bound:
+        raise _not_sealed(args.data, f'the volume error stays correlated over {STRUCTURE_LAG:g} '
+                          f's: {correlation:.2f}, where noise stays below {bound:.3f}')
     fitted = fit.params
     header = (f'bellows identify actuator {args.data}\n'
               f'volume error rms {fit.volume_error_ml[0]:.3f} mL, '
               f'force error rms {fit.force_error_n[0]:.3f} N')
-    # The whole file (drive, sensors and effects as given): one file to read back.
-    param_files.write_file(args.output, params_to_flat(fitted, config.plant), header)
+    # The whole file (drive, sensors and effects as given): one file to read back. It replaces
+    # the output only once its own loader has read it (an impossible fit is refused, not written).
+    param_files.write_file(args.output, params_to_flat(fitted, config.plant), header,
+                           check=lambda path: _check_fit(path, args.data))
     rms, low, high = fit.volume_error_ml
     print(f'volume error: {low:+.2f} mL to {high:+.2f} mL (rms {rms:.3f} mL) '
           f'over {fit.rows} samples')

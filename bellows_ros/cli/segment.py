@@ -102,6 +102,9 @@ def identify(args):
     table = _read(args.data, params)
     if len(table) < 50:
         raise DataError(table.path, f'only {len(table)} rows: identification needs at least 50')
+    # The membrane's torque changes with the angle at a held pressure: only the angle must move.
+    data.check_moves(table, 'psi', 'the angle must move to show the restoring and friction '
+                     'torques')
     fit = fit_segment(params, table.values, config.identify.input_cutoff, seed=args.seed,
                       progress=not args.quiet)
     header = (f'bellows identify segment {args.data}\n'
@@ -110,7 +113,8 @@ def identify(args):
               f'{_filter_summary(fit, config.identify.input_cutoff)}')
     from bellows_ros.params import write_file
     # The whole file (the plant and identification settings as given): one file to read back.
-    write_file(args.output, config._replace(model=fit.params).flat(), header=header)
+    write_file(args.output, config._replace(model=fit.params).flat(), header=header,
+               check=load_segment)
     mu, gamma = fit.params.ogden_mu, fit.params.ogden_gamma
     print(f'fitted: mu = [{mu[0]:.6g}, {mu[1]:.6g}] N/m, '
           f'gamma = [{gamma[0]:.4g}, {gamma[1]:.4g}], '

@@ -65,13 +65,42 @@ class ActuatorFit:
     Result of `fit_actuator`: fitted parameters and the errors the paper reports.
 
     volume_error_ml: (rms, min, max) of model minus gas-law volume, mL;
-    force_error_n: (rms, min, max) of model minus measured force, N.
+    force_error_n: (rms, min, max) of model minus measured force, N;
+    structure: (correlation, bound) of the volume error with itself `STRUCTURE_LAG` s later,
+    and the largest such correlation white noise of that many rows shows (`leftover_structure`).
     """
 
     params: object
     volume_error_ml: tuple
     force_error_n: tuple
     rows: int
+    structure: tuple = (0.0, 1.0)
+
+
+# A sealed, isothermal gas leaves a volume error that is sensor noise: uncorrelated from sample to
+# sample beyond the sensors' own filtering (milliseconds). An air leak, heat exchange, a lagging
+# sensor or lead-screw backlash leave an error that persists for seconds. The lag sits between.
+STRUCTURE_LAG = 0.2  # s
+# Sample correlations of N rows of white noise scatter with deviation 1/sqrt(N): 5 deviations.
+STRUCTURE_DEVIATIONS = 5.0
+
+
+def leftover_structure(error, rate):
+    """
+    (correlation, bound): `error`'s correlation with itself STRUCTURE_LAG s later (rate in Hz),
+    and STRUCTURE_DEVIATIONS / sqrt(rows), what white noise stays below.
+    """
+    lag = max(1, int(round(STRUCTURE_LAG * rate)))
+    if len(error) < 2 * lag + 2 or np.std(error) == 0.0:
+        return 0.0, 1.0
+    correlation = float(np.corrcoef(error[:-lag], error[lag:])[0, 1])
+    return correlation, STRUCTURE_DEVIATIONS / np.sqrt(len(error) - lag)
+
+
+def parameter_count(params, runs=1, wall_bulging=True):
+    """How many numbers `fit_actuator` fits: gas amounts, V_tube, E_V terms, F_MTS and E_F."""
+    fitted_e_v = 2 * (len(E_V_TERMS) - len(_KEPT)) if wall_bulging else 0
+    return runs + 1 + fitted_e_v + len(params.f_mts) + len(params.e_f)
 
 
 def fit_volume(params, x_c, x_s, p, wall_bulging=True, run=None):
@@ -121,8 +150,10 @@ def fit_volume(params, x_c, x_s, p, wall_bulging=True, run=None):
     solution = solution * units
     amounts, v_tube = solution[:runs], solution[runs]
     if not (np.all(np.isfinite(amounts)) and np.all(amounts > 0.0)):
-        raise BellowsError('identification failed: the data do not determine the gas amount '
-                           '(does the pressure vary with the compressions?)')
+        raise BellowsError('identification refused: the fit finds no positive gas amount, so the '
+                           'record does not behave as one sealed gas volume (an air leak, heat '
+                           'exchange, a pressure that does not follow the compressions?); run '
+                           '`bellows diagnose actuator` on it to find what it shows')
     for value, (which, k) in zip(solution[first_ev:], names[first_ev:]):
         (e_c if which == 'chamber' else e_s)[k] = float(value)
     fitted = dataclasses.replace(
@@ -185,8 +216,12 @@ def _progress(total, label, enabled):
 
 
 def fit_actuator(params, x_c, x_s, p, f, run=None, wall_bulging=True, force_error=True, seed=0,
-                 progress=False):
-    """Both stages on arrays (m, m, Pa, N; `run` as in `fit_volume`); returns `ActuatorFit`."""
+                 progress=False, rate=1000.0):
+    """
+    Both stages on arrays (m, m, Pa, N; `run` as in `fit_volume`); returns `ActuatorFit`.
+
+    `rate`: the samples' rate, Hz, for the structure left in the volume error.
+    """
     x_c, x_s, p, f = (np.asarray(v, dtype=float) for v in (x_c, x_s, p, f))
     fitted, amount = fit_volume(params, x_c, x_s, p, wall_bulging, run)
     fitted = fit_force(fitted, x_s, p, f, force_error, seed, progress)
@@ -194,7 +229,8 @@ def fit_actuator(params, x_c, x_s, p, f, run=None, wall_bulging=True, force_erro
     gas = p_ref_of_amount(fitted, amount) if run is not None else None
     _, force_model, _ = evaluate_array(fitted, x_c, x_s, gas)
     force_error_n = force_model - f
-    return ActuatorFit(fitted, _summary(volume_error), _summary(force_error_n), len(p))
+    return ActuatorFit(fitted, _summary(volume_error), _summary(force_error_n), len(p),
+                       leftover_structure(volume_error, rate))
 
 
 def _summary(error):
