@@ -43,6 +43,7 @@ setup(
         'cantools>=39',
         'cobs>=1.2',
         'rosbags>=0.10',
+        'mcap>=1.1',  # bellows reindex reads a killed recording record by record
         # The DDS runtime used when rclpy is not importable; 11.x ships the C library in the wheel.
         'cyclonedds==11.0.1',
     ],

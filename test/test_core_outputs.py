@@ -99,12 +99,16 @@ def test_a_missing_output_directory_is_an_error_before_any_work(
     one_error_line(capsys, 'no such directory')
 
 
-def test_a_read_only_file_system_is_an_error_before_any_work(record, tmp_path):
+@pytest.mark.parametrize('command', ['identify actuator {record} --output {mount}/p.yaml',
+                                     'simulate actuator --input {record} --output {mount}/o.csv',
+                                     'diagnose actuator {record} --report {mount}/report',
+                                     'record --output {mount}/bag --duration 1'])
+def test_a_read_only_file_system_is_an_error_before_any_work(record, tmp_path, command):
     """A real read-only mount (permission bits do not stop root): one line, exit 2."""
     mount = tmp_path / 'ro'
     mount.mkdir()
-    script = (f'mount -t tmpfs -o ro tmpfs {mount} && exec {" ".join(BELLOWS)} identify actuator '
-              f'{record} --output {mount}/p.yaml')
+    script = (f'mount -t tmpfs -o ro tmpfs {mount} && exec {" ".join(BELLOWS)} '
+              + command.format(record=record, mount=mount))
     try:
         result = subprocess.run(['unshare', '-m', 'sh', '-c', script], capture_output=True,
                                 text=True, timeout=120)

@@ -30,6 +30,7 @@ SUBCOMMANDS = {
     'diagnose': 'find what the simulation gets wrong, name the cause, extend the model',
     'bench': 'benchmarks: medians and ratios against a reference measured in the same run',
     'record': 'record the bellows topics to a rosbag2 (MCAP) without ROS',
+    'reindex': 'rebuild what readers need in a recording that was killed (ros2 bag reindex)',
 }
 
 
