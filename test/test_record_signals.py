@@ -144,7 +144,7 @@ def test_a_killed_recording_is_rebuilt_by_reindex_up_to_the_last_second(recordin
     # Every message published more than a second (the flush period) and a margin for delivery
     # before the kill is in the rebuilt bag.
     due = sum(1 for sent in publisher.sent if sent < killed - 1.0 - 0.3)
-    assert set(range(due)) <= set(int(n) for n in numbers), (due, len(numbers))
+    assert set(range(due)) <= {int(n) for n in numbers}, (due, len(numbers))
     damaged = [p for p in bag.iterdir() if p.name.endswith('.mcap.damaged')]
     assert len(damaged) == 1                         # the original is kept, not deleted
     print(f'SIGKILL: published {len(publisher.sent)}, due (> 1.3 s before the kill) {due}, '
