@@ -132,6 +132,9 @@ STARTS = [
     ('sim_actuator_node', 'seed:=-1', 'seed'),
     ('scenario_node', 'duration:=-1.0', 'duration'),
     ('model_node', 'realtime_priority:=100', 'realtime_priority'),
+    ('driver_node', 'arm.n_segments:=5', 'arm.n_segments'),
+    ('driver_node', 'actuator.port:=/tmp', 'actuator.port'),
+    ('driver_node', 'startup_timeout:=0.0', 'startup_timeout'),
 ]
 
 

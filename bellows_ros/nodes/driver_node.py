@@ -41,17 +41,20 @@ Parameters (config/nodes_*.yaml, section `driver_node`):
 from array import array
 import dataclasses
 import os
+import stat
 import threading
 import time
 
+from bellows_ros import interfaces
 from bellows_ros.config.hardware import actuator_board_config, arm_bus_config
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware import actuator_board, arm_bus
+from bellows_ros.hardware.can_protocol import dbc_segments
 from bellows_ros.hardware.loop_timing import LoopStats
-from bellows_ros.interfaces import ACTUATOR_FRAME, SAMPLE_DEPTH
 from bellows_ros.models.derivatives import rate
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime, run
+from bellows_ros.runtime.parameters import Spec
 
 _DISCOVERY_SETTLE = 0.5  # s, see DriverNode._wait_for_subscribers
 
@@ -114,30 +117,50 @@ class NewestWriter:
             self._send(value)
 
 
+def _port_problem(port):
+    """A serial port is a character device, or absent (a board not plugged in yet); '' = ''."""
+    if port and os.path.exists(port) and not stat.S_ISCHR(os.stat(port).st_mode):
+        return 'not a character device (a serial port is one, or absent)'
+    return ''
+
+
+PARAMETERS = (
+    Spec('arm.enabled', False, 'drive the arm on CAN'),
+    Spec('actuator.enabled', False, 'drive the actuator board on serial'),
+    Spec('hardware_params', '', "YAML laid over config/hardware.yaml ('' = defaults)"),
+    Spec('actuator.port', '', "serial port of the actuator board ('' = hardware.yaml's)",
+         check=_port_problem),
+    Spec('arm.interface', '', "python-can interface ('' = hardware.yaml's)"),
+    Spec('arm.channel', '', "python-can channel ('' = hardware.yaml's)"),
+    Spec('arm.n_segments', 0, "segments on the bus, as the DBC defines them (0 = hardware.yaml's)",
+         low=0, high=dbc_segments()),
+    Spec('startup_timeout', 2.0, 'a device with no sample by then is an error, s', low=0.01,
+         high=600.0),
+    Spec('wait_for_subscribers', 0.0, 'wait this long for a subscriber before opening the '
+         'devices, s (0 = no wait)', low=0.0, high=600.0),
+)
+
+
 class DriverNode(Node):
 
     def __init__(self, runtime):
         super().__init__('driver_node', runtime)
-        self.use_arm = self.declare_parameter('arm.enabled', False).value
-        self.use_actuator = self.declare_parameter('actuator.enabled', False).value
-        hardware_params = self.declare_parameter('hardware_params', '').value or None
-        port = self.declare_parameter('actuator.port', '').value
-        interface = self.declare_parameter('arm.interface', '').value
-        channel = self.declare_parameter('arm.channel', '').value
-        n_segments = self.declare_parameter('arm.n_segments', 0).value
-        self.startup_timeout = self.declare_parameter('startup_timeout', 2.0).value
-        wait_for_subscribers = self.declare_parameter('wait_for_subscribers', 0.0).value
+        given = self.declare_specs(PARAMETERS)
+        self.use_arm, self.use_actuator = given['arm.enabled'], given['actuator.enabled']
+        hardware_params = given['hardware_params'] or None
+        port, interface = given['actuator.port'], given['arm.interface']
+        channel = given['arm.channel']
+        n_segments, self.startup_timeout = given['arm.n_segments'], given['startup_timeout']
+        wait_for_subscribers = given['wait_for_subscribers']
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
         if not (self.use_arm or self.use_actuator):
             raise BellowsError('driver_node: neither arm.enabled nor actuator.enabled is set')
 
-        self.state_pub = self.create_publisher(self.msg.JointState, '/joint_states', SAMPLE_DEPTH)
-        self.chamber_pub = self.create_publisher(self.msg.JointState, '/bellows/chambers',
-                                                 SAMPLE_DEPTH)
-        self.wrench_pub = self.create_publisher(self.msg.WrenchStamped, '/bellows/wrench',
-                                                SAMPLE_DEPTH)
-        self.diag_pub = self.create_publisher(self.msg.DiagnosticArray, '/diagnostics', 10)
+        self.state_pub = self.publisher(interfaces.JOINT_STATES)
+        self.chamber_pub = self.publisher(interfaces.CHAMBERS)
+        self.wrench_pub = self.publisher(interfaces.WRENCH)
+        self.diag_pub = self.publisher(interfaces.DIAGNOSTICS)
         self._publish_lock = threading.Lock()  # both reader threads publish
         self.arm = self.actuator = None
         self.reports = {}
@@ -154,10 +177,8 @@ class DriverNode(Node):
         except BaseException:
             self.close()
             raise
-        self.create_subscription(self.msg.JointState, '/bellows/pressure_command',
-                                 self.on_pressure_command, 10)
-        self.create_subscription(self.msg.Float64, '/actuator/motor_command',
-                                 self.on_motor_command, 10)
+        self.subscription(interfaces.PRESSURE_COMMAND, self.on_pressure_command)
+        self.subscription(interfaces.MOTOR_COMMAND, self.on_motor_command)
         self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
         self.get_logger().info(
             'driving ' + ' and '.join(name for name, on in (('arm', self.use_arm),
@@ -185,8 +206,9 @@ class DriverNode(Node):
         config = dataclasses.replace(config, interface=interface or config.interface,
                                      channel=channel or config.channel,
                                      n_segments=n_segments or config.n_segments)
-        self.arm_names = [f'segment_{i + 1}' for i in range(config.n_segments)]
-        self.chain_names = [f'{s}/chain_{j}' for s in self.arm_names for j in (1, 2)]
+        self.arm_names = [interfaces.segment_joint(i + 1) for i in range(config.n_segments)]
+        self.chain_names = [interfaces.chain_chamber(i + 1, j)
+                            for i in range(config.n_segments) for j in (1, 2)]
         self.arm_clock = SampleClock(1e-3)
         self.reports['arm'] = diagnostics.LoopReport(self.arm_clock.stats)
         self._last_arm = None
@@ -252,10 +274,11 @@ class DriverNode(Node):
     def on_actuator_sample(self, sample):
         start = time.monotonic()
         stamp = self.get_clock().now().to_msg()
-        state = self._header(self.msg.JointState(name=['air_chamber', 'spring'],
+        state = self._header(self.msg.JointState(name=list(interfaces.ACTUATOR_JOINTS),
                                                  position=[sample.x_c, sample.x_s]), stamp)
-        chambers = self._header(self.msg.JointState(name=['actuator'], effort=[sample.p]), stamp)
-        wrench = self._header(self.msg.WrenchStamped(), stamp, ACTUATOR_FRAME)
+        chambers = self._header(self.msg.JointState(name=[interfaces.ACTUATOR_CHAMBER],
+                                                    effort=[sample.p]), stamp)
+        wrench = self._header(self.msg.WrenchStamped(), stamp, interfaces.ACTUATOR_FRAME)
         wrench.wrench.force.z = sample.f
         with self._publish_lock:
             self.state_pub.publish(state)
