@@ -19,6 +19,7 @@ import pkgutil
 import sys
 
 import bellows_ros.bench as bench_package
+from bellows_ros.errors import BellowsError
 
 
 def add_arguments(parser):
@@ -31,11 +32,14 @@ def add_arguments(parser):
 
 def run(args):
     results = []
-    for info in sorted(pkgutil.iter_modules(bench_package.__path__), key=lambda m: m.name):
-        if args.only and args.only not in info.name:
-            continue
-        print(f'bench: {info.name} ...', file=sys.stderr)
-        module = importlib.import_module(f'bellows_ros.bench.{info.name}')
+    names = sorted(info.name for info in pkgutil.iter_modules(bench_package.__path__))
+    chosen = [name for name in names if not args.only or args.only in name]
+    if not chosen:
+        raise BellowsError(f"--only {args.only!r}: no benchmark module's name contains it "
+                           f"(modules: {', '.join(names)})")
+    for name in chosen:
+        print(f'bench: {name} ...', file=sys.stderr)
+        module = importlib.import_module(f'bellows_ros.bench.{name}')
         results.extend(module.run(quick=args.quick))
     if args.json:
         print(json.dumps([r.as_dict() for r in results], indent=2))
