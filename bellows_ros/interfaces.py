@@ -18,9 +18,9 @@ The interface contract: every topic with its type, QoS and naming rules, in one 
 Nodes, the recorder, the bag reader, the scenario and the tests take topic names, message types,
 queue depths and joint names from here; docs/interfaces.md is the reference that a test holds to
 this module. Names are relative, so a node's namespace (`ros2 launch ... namespace:=arm_a`,
-`--ros-args -r __ns:=/arm_a`) moves the whole graph, and `-r` remaps any of them. Two are
+`--ros-args -r __ns:=/arm_a`) moves the whole graph, and `-r` remaps any of them. Three are
 absolute on purpose, as ROS defines them: `/diagnostics` (one aggregator reads every node's
-status) and `/clock` (one time source).
+status) and `/clock` (one time source); and `/bellows/estop`, one stop for every driver.
 
 Message conventions:
 - `joint_states` and `bellows/chambers` carry one message per sample per device group (the arm's
@@ -48,6 +48,7 @@ class Topic:
     ros_type: str
     depth: int
     content: str
+    latched: bool = False  # reliable, transient local, depth 1: a late joiner gets the last one
 
     @property
     def message(self):
@@ -85,9 +86,13 @@ DIAGNOSTICS = Topic('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', COMMA
                     'every node: rates, loop timing, link health, counters')
 CLOCK = Topic('/clock', 'rosgraph_msgs/msg/Clock', COMMAND_DEPTH,
               'simulated time, when use_sim_time is on')
+# Absolute on purpose: one emergency stop reaches every driver, in whatever namespace. Latched, so
+# a driver that starts (or restarts) while it is held is stopped from its first moment.
+ESTOP = Topic('/bellows/estop', 'std_msgs/msg/Bool', 1,
+              'True: every driver vents and refuses commands until released', latched=True)
 
 TOPICS = (JOINT_STATES, CHAMBERS, WRENCH, DRIVING_TORQUE, EXTERNAL_TORQUE, PRESSURE_COMMAND,
-          STIFFNESS_SETPOINT, STIFFNESS, MOTOR_COMMAND, PSI_SETPOINT, DIAGNOSTICS, CLOCK)
+          STIFFNESS_SETPOINT, STIFFNESS, MOTOR_COMMAND, PSI_SETPOINT, DIAGNOSTICS, CLOCK, ESTOP)
 
 
 def by_name(namespace='/'):

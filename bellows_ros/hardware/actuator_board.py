@@ -89,10 +89,11 @@ class ActuatorBoard:
         self._duty = 0.0
         self._watchdog = Watchdog(config.command_timeout, time.monotonic())
         self._watchdog_tripped = True       # nothing commanded yet
+        self.latched = False    # stopped on request (stop()): duties refused until release()
         self._counts = dict.fromkeys(
             ['samples', 'callback_errors', 'dropped', 'duplicates', 'sequence_resets',
              'reconnects', 'disconnects', 'tx_errors', 'duty_clamps', 'duty_invalid',
-             'end_stop_stops', 'stale_stops', 'watchdog_stops'], 0)
+             'end_stop_stops', 'stale_stops', 'watchdog_stops', 'refused_while_stopped'], 0)
         self._reader = threading.Thread(target=self._read_loop, name='actuator-reader',
                                         daemon=True)
         self._heart = threading.Thread(target=self._heartbeat_loop, name='actuator-heartbeat',
@@ -120,8 +121,26 @@ class ActuatorBoard:
         return out
 
     # -- commands -------------------------------------------------------------------------------
+    def stop(self):
+        """
+        Stop the motor now and refuse duties until `release()` (the stop that latches).
+
+        The actuator's gas is sealed: there is no valve to vent, and the safe state is a still
+        lead screw (the pressure stays where it is). Should the stop frame not get through (a
+        stuck port), the board stops by itself once heartbeats and commands stop reaching it.
+        """
+        self.latched = True
+        self._command(0.0)
+
+    def release(self):
+        """Accept motor duties again."""
+        self.latched = False
+
     def send_duty(self, duty):
         """Limit and send a motor duty; kicks the command watchdog."""
+        if self.latched:
+            self._counts['refused_while_stopped'] += 1
+            return 0.0
         self._watchdog.kick(time.monotonic())
         self._watchdog_tripped = False
         return self._command(duty)

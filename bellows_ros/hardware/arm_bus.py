@@ -119,9 +119,10 @@ class ArmBus:
         self._lock = threading.Lock()
         self._watchdog = Watchdog(config.command_timeout, time.monotonic())
         self._vented = True         # nothing commanded yet: hold the vented state
+        self.latched = False        # vented on request (vent()): commands refused until release()
         self._counts = dict.fromkeys(
             ['samples', 'callback_errors', 'incomplete', 'resyncs', 'clamped_setpoints',
-             'invalid_setpoints', 'watchdog_vents', 'tx_errors'], 0)
+             'invalid_setpoints', 'watchdog_vents', 'tx_errors', 'refused_while_vented'], 0)
         self._stop = threading.Event()
         self._reader = threading.Thread(target=self._read_loop, name='arm-reader', daemon=True)
         self._writer = threading.Thread(target=self._tx_loop, name='arm-tx', daemon=True)
@@ -150,12 +151,32 @@ class ArmBus:
         values, clamped, invalid = clamp_pressures(pressures, self.config.pressure_min,
                                                    self.config.pressure_max)
         with self._lock:
+            if self.latched:
+                self._counts['refused_while_vented'] += 1
+                return None
             self._counts['clamped_setpoints'] += clamped
             self._counts['invalid_setpoints'] += invalid
             self._setpoints = values
             self._watchdog.kick(time.monotonic())
             self._vented = False
         return values
+
+    def vent(self):
+        """
+        Vent every chamber now and refuse set-points until `release()` (the stop that latches).
+
+        Takes effect at the transmit thread's next cycle, whatever the command path is doing:
+        nothing else needs to run for the valves to exhaust.
+        """
+        with self._lock:
+            self.latched = True
+            self._vented = True
+            self._setpoints = [self.config.pressure_min] * len(self._setpoints)
+
+    def release(self):
+        """Accept set-points again; the chambers stay vented until the next one arrives."""
+        with self._lock:
+            self.latched = False
 
     # -- threads --------------------------------------------------------------------------------
     def _send(self, message, values):

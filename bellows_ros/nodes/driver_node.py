@@ -179,6 +179,8 @@ class DriverNode(Node):
             raise
         self.subscription(interfaces.PRESSURE_COMMAND, self.on_pressure_command)
         self.subscription(interfaces.MOTOR_COMMAND, self.on_motor_command)
+        self.estop_held = False
+        self.subscription(interfaces.ESTOP, self.on_estop)
         self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
         self.get_logger().info(
             'driving ' + ' and '.join(name for name, on in (('arm', self.use_arm),
@@ -325,6 +327,36 @@ class DriverNode(Node):
         if self.actuator is not None:
             self.duty_writer.put(msg.data)
 
+    # --- the stop that latches (docs/protocols.md, "Safety states") ----------------------------
+    @property
+    def vented(self):
+        return any(device.latched for device in (self.arm, self.actuator) if device is not None)
+
+    def vent(self, why):
+        """Vent every chamber and stop the motor now; refuse commands until `release`."""
+        if self.arm is not None:
+            self.arm.vent()
+        if self.actuator is not None:
+            self.actuator.stop()
+        self.get_logger().warn(f'vented ({why}): commands refused until released')
+
+    def release(self):
+        """Accept commands again, unless the emergency stop is held; returns (done, why)."""
+        if self.estop_held:
+            return False, f'{interfaces.ESTOP.name} is held (True): release it first'
+        for device in (self.arm, self.actuator):
+            if device is not None:
+                device.release()
+        self.get_logger().info('released: commands accepted again (chambers stay vented until '
+                               'the next set-point)')
+        return True, 'released'
+
+    def on_estop(self, msg):
+        # True vents and latches; False only stops holding it: a release is a decision of its own.
+        if msg.data and not self.estop_held:
+            self.vent(f'{interfaces.ESTOP.name}')
+        self.estop_held = bool(msg.data)
+
     # --- diagnostics -----------------------------------------------------------------------------
     def publish_diagnostics(self, final=False):
         statuses = []
@@ -336,9 +368,14 @@ class DriverNode(Node):
             values.update(device.counters())
             values['published'] = str(self.published[name])
             values['stale'] = str(device.stale)
+            values['vented'] = str(device.latched)
+            values['estop_held'] = str(self.estop_held)
             level, message = diagnostics.OK, 'OK'
             if final:
                 level, message = diagnostics.STALE, 'driver stopped'
+            elif device.latched:
+                level, message = diagnostics.WARN, ('vented by the emergency stop' if
+                                                    self.estop_held else 'vented until released')
             elif device.stale:
                 level, message = diagnostics.ERROR, 'no data (link down or device stopped)'
             elif new_misses:

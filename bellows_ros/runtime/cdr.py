@@ -39,6 +39,7 @@ USED_TYPES = {
     'Time': 'builtin_interfaces/msg/Time',
     'Header': 'std_msgs/msg/Header',
     'Float64': 'std_msgs/msg/Float64',
+    'Bool': 'std_msgs/msg/Bool',
     'JointState': 'sensor_msgs/msg/JointState',
     'Vector3': 'geometry_msgs/msg/Vector3',
     'Wrench': 'geometry_msgs/msg/Wrench',

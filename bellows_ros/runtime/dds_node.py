@@ -207,9 +207,12 @@ class QoSProfile:
 
     depth: int = 10
     reliable: bool = True
+    transient_local: bool = False
 
 
 SENSOR_DATA = QoSProfile(depth=5, reliable=False)  # rclpy's qos_profile_sensor_data
+# Reliable, transient local, depth 1: a late joiner gets the last message (a latched state).
+LATCHED = QoSProfile(depth=1, reliable=True, transient_local=True)
 
 
 def _qos(profile, ros_type):
@@ -217,7 +220,9 @@ def _qos(profile, ros_type):
         profile = QoSProfile(depth=profile)
     reliability = (Policy.Reliability.Reliable(duration(milliseconds=100)) if profile.reliable
                    else Policy.Reliability.BestEffort)
-    return Qos(reliability, Policy.History.KeepLast(profile.depth), Policy.Durability.Volatile,
+    durability = (Policy.Durability.TransientLocal if profile.transient_local
+                  else Policy.Durability.Volatile)
+    return Qos(reliability, Policy.History.KeepLast(profile.depth), durability,
                Policy.DataRepresentation(use_cdrv0_representation=True),
                Policy.Userdata(data=f'typehash={type_hash(ros_type)};'.encode()))
 

@@ -33,7 +33,7 @@ subscriptions, timers, loggers and clocks are the runtime's own objects with rcl
 (`publish`, `wait_for_all_acked`, `get_subscription_count`, `now`, ...).
 
 A runtime is a module with the same names in both implementations (`rclpy_runtime`, `dds_node`):
-`NAME`, `msg`, `Time`, `Duration`, `SENSOR_DATA`, `init(args)`, `create_node(name)`,
+`NAME`, `msg`, `Time`, `Duration`, `SENSOR_DATA`, `LATCHED`, `init(args)`, `create_node(name)`,
 `spin_once(node, timeout_sec)`, `ok()`, `shutdown()`, `parameter_overrides(node)` and the
 exception tuples `INTERRUPTED` and `USER_ERRORS`. `select_runtime` picks one, once, in `run`:
 `$BELLOWS_RUNTIME` = `rclpy` or `dds`, else rclpy when it imports. `rclpy_unavailable` asks
@@ -190,13 +190,17 @@ class Node:
         return self._node.create_subscription(msg_type, topic, callback, qos_profile)
 
     def publisher(self, topic: Any) -> Any:
-        """A publisher on a topic of the contract (bellows_ros/interfaces.py): type and depth."""
-        return self.create_publisher(getattr(self.msg, topic.message), topic.name, topic.depth)
+        """A publisher on a topic of the contract (bellows_ros/interfaces.py): type and QoS."""
+        return self.create_publisher(getattr(self.msg, topic.message), topic.name,
+                                     self._qos(topic))
 
     def subscription(self, topic: Any, callback: Callable[[Any], None]) -> Any:
         """A subscription to a topic of the contract (bellows_ros/interfaces.py)."""
         return self.create_subscription(getattr(self.msg, topic.message), topic.name, callback,
-                                        topic.depth)
+                                        self._qos(topic))
+
+    def _qos(self, topic: Any) -> Any:
+        return self.runtime.LATCHED if topic.latched else topic.depth
 
     def create_timer(self, period: float, callback: Callable[[], None]) -> Any:
         return self._node.create_timer(period, callback)

@@ -55,6 +55,9 @@ msg = types.SimpleNamespace(**{short: cdr.plain_class(ros_name)
 Time = rclpy.time.Time
 Duration = rclpy.duration.Duration
 SENSOR_DATA = rclpy.qos.qos_profile_sensor_data
+# Reliable, transient local, depth 1: a late joiner gets the last message (a latched state).
+LATCHED = rclpy.qos.QoSProfile(depth=1, reliability=rclpy.qos.ReliabilityPolicy.RELIABLE,
+                               durability=rclpy.qos.DurabilityPolicy.TRANSIENT_LOCAL)
 
 # Raised by a spinning executor when something else shut rclpy's context down.
 INTERRUPTED = (rclpy.executors.ExternalShutdownException,)

@@ -1,0 +1,118 @@
+# Copyright 2026 bellows_ros maintainers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+"""
+The emergency stop under load: `/bellows/estop` vents the arm and it stays vented.
+
+A simulated arm and the driver run on the runtime under test; this process floods pressure
+commands (4 bar on every chamber, 1 kHz) and watches `/bellows/chambers`. Once the chambers
+are up, it publishes `/bellows/estop` True (latched, from the DDS runtime: across runtimes when
+the driver runs on rclpy). The chambers must fall to ambient and stay there while the commands
+keep coming; `False` alone must not release them. The driver's /diagnostics say it is vented.
+"""
+from pathlib import Path
+import random
+import subprocess
+import sys
+import time
+
+import pytest
+from runtimes import node_env, override
+
+from bellows_ros import interfaces
+from bellows_ros.runtime import dds_node
+from bellows_ros.runtime.messages import msg
+
+pytestmark = pytest.mark.slow  # two node processes, ~15 s per runtime
+
+BIN = Path(sys.executable).parent
+CONFIG = Path(__file__).resolve().parent.parent / 'config' / 'nodes_sim.yaml'
+AMBIENT = 101325.0
+COMMAND = 4.0e5
+
+
+def launch(name, args, env, log_dir):
+    log = open(log_dir / f'{name}.log', 'w')
+    return subprocess.Popen([str(BIN / name), '--ros-args', '--params-file', str(CONFIG), *args],
+                            env=env, stdout=log, stderr=subprocess.STDOUT)
+
+
+def logs(tmp_path):
+    return '\n'.join(f'--- {p.name}\n{p.read_text()[-1500:]}' for p in tmp_path.glob('*.log'))
+
+
+def test_estop_vents_under_a_command_flood_and_false_does_not_release(runtime, tmp_path,
+                                                                       monkeypatch):
+    domain = str(random.randint(100, 180))
+    group = f'239.74.168.{random.randint(2, 250)}'
+    monkeypatch.setenv('ROS_DOMAIN_ID', domain)
+    env = node_env(runtime, ROS_DOMAIN_ID=domain)
+    normal = [('realtime_priority', 0)]
+    processes = [
+        launch('sim_arm_node', sum((override('sim_arm_node', k, v) for k, v in
+                                    [('can.channel', group), ('n_segments', 1)] + normal), []),
+               env, tmp_path),
+        launch('driver_node', sum((override('driver_node', k, v) for k, v in
+                                   [('arm.channel', group), ('arm.n_segments', 1),
+                                    ('actuator.enabled', 'false')] + normal), []),
+               env, tmp_path)]
+    dds_node.init([])
+    try:
+        probe = dds_node.Node('estop_probe')
+        pressures, status = [], {}
+        probe.create_subscription(msg.JointState, interfaces.CHAMBERS.resolved(),
+                                  lambda m: pressures.append((time.monotonic(), max(m.effort))),
+                                  1000)
+        probe.create_subscription(
+            msg.DiagnosticArray, '/diagnostics',
+            lambda a: status.update({s.name: {kv.key: kv.value for kv in s.values}
+                                     for s in a.status}), 50)
+        commands = probe.create_publisher(msg.JointState, interfaces.PRESSURE_COMMAND.resolved(),
+                                          10)
+        estop = probe.create_publisher(msg.Bool, interfaces.ESTOP.resolved(), dds_node.LATCHED)
+        command = msg.JointState(name=[interfaces.chain_chamber(1, 1),
+                                       interfaces.chain_chamber(1, 2)],
+                                 effort=[COMMAND, COMMAND])
+
+        def flood(seconds):
+            end = time.monotonic() + seconds
+            while time.monotonic() < end:
+                commands.publish(command)
+                dds_node.spin_once(probe, timeout_sec=0.001)
+
+        flood(0.5)
+        deadline = time.monotonic() + 40
+        while (not pressures or pressures[-1][1] < 0.9 * COMMAND) and time.monotonic() < deadline:
+            flood(0.2)
+        assert pressures and pressures[-1][1] > 0.9 * COMMAND, logs(tmp_path)
+        estop.publish(msg.Bool(data=True))
+        stopped = time.monotonic()
+        flood(3.0)
+        after = [p for t, p in pressures if t > stopped + 1.5]
+        assert after and max(after) < AMBIENT + 0.05 * (COMMAND - AMBIENT), logs(tmp_path)
+        estop.publish(msg.Bool(data=False))
+        flood(1.5)
+        held = [p for t, p in pressures if t > stopped + 3.2]
+        assert held and max(held) < AMBIENT + 0.05 * (COMMAND - AMBIENT)
+        arm = status.get('driver_node: arm', {})
+        assert arm.get('vented') == 'True' and int(arm['refused_while_vented']) > 100, arm
+    finally:
+        for process in processes:
+            if process.poll() is None:
+                process.send_signal(2)
+        for process in processes:
+            try:
+                process.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                process.kill()
+        dds_node.shutdown()
