@@ -51,8 +51,8 @@ def logs(tmp_path):
     return '\n'.join(f'--- {p.name}\n{p.read_text()[-1500:]}' for p in tmp_path.glob('*.log'))
 
 
-def test_estop_vents_under_a_command_flood_and_false_does_not_release(runtime, tmp_path,
-                                                                       monkeypatch):
+def test_estop_vents_under_a_command_flood_and_false_does_not_release(
+        runtime, tmp_path, monkeypatch):
     domain = str(random.randint(100, 180))
     group = f'239.74.168.{random.randint(2, 250)}'
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)

@@ -36,6 +36,7 @@ STAMP = {'sec': -7, 'nanosec': 999_999_999}
 CASES = [
     ('builtin_interfaces/msg/Time', STAMP),
     ('std_msgs/msg/Float64', {'data': -1.5e-300}),
+    ('std_msgs/msg/Bool', {'data': True}),
     ('sensor_msgs/msg/JointState', {
         'header': {'stamp': STAMP, 'frame_id': 'base_ü'},
         'name': ['segment_1', '', 'a' * 13], 'position': [0.25, -3.0, 1e300],
