@@ -12,13 +12,16 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 """
-The emergency stop under load: `/bellows/estop` vents the arm and it stays vented.
+The stop that latches, under load: `/bellows/estop` and `~/vent` vent the arm until `~/release`.
 
 A simulated arm and the driver run on the runtime under test; this process floods pressure
 commands (4 bar on every chamber, 1 kHz) and watches `/bellows/chambers`. Once the chambers
 are up, it publishes `/bellows/estop` True (latched, from the DDS runtime: across runtimes when
 the driver runs on rclpy). The chambers must fall to ambient and stay there while the commands
-keep coming; `False` alone must not release them. The driver's /diagnostics say it is vented.
+keep coming; `False` alone must not release them, and `~/release` is refused while the stop is
+held. Then `~/vent` and `~/release` (std_srvs/Trigger, called with the real `ros2 service call`
+of ROS 2: across runtimes when the driver runs on the DDS runtime) vent and release it.
+The driver's /diagnostics say it is vented.
 """
 from pathlib import Path
 import random
@@ -27,7 +30,7 @@ import sys
 import time
 
 import pytest
-from runtimes import node_env, override
+from runtimes import node_env, override, require_rclpy
 
 from bellows_ros import interfaces
 from bellows_ros.runtime import dds_node
@@ -45,6 +48,16 @@ def launch(name, args, env, log_dir):
     log = open(log_dir / f'{name}.log', 'w')
     return subprocess.Popen([str(BIN / name), '--ros-args', '--params-file', str(CONFIG), *args],
                             env=env, stdout=log, stderr=subprocess.STDOUT)
+
+
+def call(service, env):
+    """`ros2 service call /driver_node/SERVICE std_srvs/srv/Trigger`: its output."""
+    require_rclpy()  # the ros2 command line is ROS 2's own
+    result = subprocess.run(['ros2', 'service', 'call', f'/driver_node/{service}',
+                             'std_srvs/srv/Trigger'], capture_output=True, text=True, timeout=60,
+                            env=env)
+    assert result.returncode == 0, result.stderr
+    return result.stdout
 
 
 def logs(tmp_path):
@@ -106,6 +119,19 @@ def test_estop_vents_under_a_command_flood_and_false_does_not_release(
         assert held and max(held) < AMBIENT + 0.05 * (COMMAND - AMBIENT)
         arm = status.get('driver_node: arm', {})
         assert arm.get('vented') == 'True' and int(arm['refused_while_vented']) > 100, arm
+        estop.publish(msg.Bool(data=True))
+        flood(0.3)
+        assert 'success=False' in call('release', env), 'released while the stop is held'
+        estop.publish(msg.Bool(data=False))
+        flood(0.3)
+        assert 'success=True' in call('release', env)
+        flood(3.0)
+        assert max(p for t, p in pressures[-200:]) > 0.9 * COMMAND   # commands act again
+        assert 'success=True' in call('vent', env)
+        vented = time.monotonic()
+        flood(3.0)
+        after = [p for t, p in pressures if t > vented + 1.5]
+        assert after and max(after) < AMBIENT + 0.05 * (COMMAND - AMBIENT)
     finally:
         for process in processes:
             if process.poll() is None:

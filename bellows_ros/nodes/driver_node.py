@@ -181,6 +181,8 @@ class DriverNode(Node):
         self.subscription(interfaces.MOTOR_COMMAND, self.on_motor_command)
         self.estop_held = False
         self.subscription(interfaces.ESTOP, self.on_estop)
+        self.create_service(self.srv.Trigger, '~/vent', self.on_vent)
+        self.create_service(self.srv.Trigger, '~/release', self.on_release)
         self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
         self.get_logger().info(
             'driving ' + ' and '.join(name for name, on in (('arm', self.use_arm),
@@ -350,6 +352,15 @@ class DriverNode(Node):
         self.get_logger().info('released: commands accepted again (chambers stay vented until '
                                'the next set-point)')
         return True, 'released'
+
+    def on_vent(self, request, response):
+        self.vent('~/vent called')
+        response.success, response.message = True, 'vented: commands refused until ~/release'
+        return response
+
+    def on_release(self, request, response):
+        response.success, response.message = self.release()
+        return response
 
     def on_estop(self, msg):
         # True vents and latches; False only stops holding it: a release is a decision of its own.

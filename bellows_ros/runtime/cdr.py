@@ -50,6 +50,13 @@ USED_TYPES = {
     'Clock': 'rosgraph_msgs/msg/Clock',
 }
 
+# The services the nodes offer: (request fields, response fields), as in their .srv files (the
+# DDS runtime builds them: runtime/services.py; rclpy has its own classes).
+USED_SERVICES = {
+    'std_srvs/srv/Trigger': ([], [('success', 'bool'), ('message', 'string')]),
+    'std_srvs/srv/SetBool': ([('data', 'bool')], [('success', 'bool'), ('message', 'string')]),
+}
+
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
 
 LITTLE_ENDIAN = sys.byteorder == 'little'

@@ -41,6 +41,7 @@ import os
 import sys
 import threading
 import time
+import uuid
 
 from cyclonedds.core import (DDSException, GuardCondition, InstanceState, Policy, Qos,
                              ReadCondition, SampleState, ViewState, WaitSet)
@@ -56,6 +57,7 @@ from bellows_ros.runtime import ros_args
 from bellows_ros.runtime.messages import (message_class, msg,  # noqa: F401 (msg: the interface)
                                           type_hash)
 from bellows_ros.runtime.node import check_override
+from bellows_ros.runtime.services import fields_of, srv  # noqa: F401 (srv: the interface)
 
 NAME = 'dds'
 INTERRUPTED = ()  # SIGINT arrives as KeyboardInterrupt, as in plain Python
@@ -191,8 +193,10 @@ def _publish_graph():
     """Publish this participant's nodes and their endpoints on `ros_discovery_info`."""
     node_info = message_class('rmw_dds_common/msg/NodeEntitiesInfo')
     nodes = [node_info(node_namespace=node.get_namespace(), node_name=node.get_name(),
-                       reader_gid_seq=[_gid(s.reader) for s in node._subscriptions],
-                       writer_gid_seq=[_gid(w) for w in node._writers])
+                       reader_gid_seq=[_gid(e.reader)
+                                       for e in node._subscriptions + node._services],
+                       writer_gid_seq=[_gid(w) for w in node._writers]
+                       + [_gid(s.writer) for s in node._services])
              for node in _context.nodes]
     _context.graph_writer.write(message_class(_GRAPH_TYPE)(
         gid=_gid(_context.participant), node_entities_info_seq=nodes))
@@ -215,7 +219,7 @@ SENSOR_DATA = QoSProfile(depth=5, reliable=False)  # rclpy's qos_profile_sensor_
 LATCHED = QoSProfile(depth=1, reliable=True, transient_local=True)
 
 
-def _qos(profile, ros_type):
+def _qos(profile, ros_type, user_data=''):
     if isinstance(profile, int):
         profile = QoSProfile(depth=profile)
     reliability = (Policy.Reliability.Reliable(duration(milliseconds=100)) if profile.reliable
@@ -224,7 +228,7 @@ def _qos(profile, ros_type):
                   else Policy.Durability.Volatile)
     return Qos(reliability, Policy.History.KeepLast(profile.depth), durability,
                Policy.DataRepresentation(use_cdrv0_representation=True),
-               Policy.Userdata(data=f'typehash={type_hash(ros_type)};'.encode()))
+               Policy.Userdata(data=f'{user_data}typehash={type_hash(ros_type)};'.encode()))
 
 
 # --- time
@@ -349,6 +353,39 @@ class Subscription:
         return self.reader.get_subscription_matched_status().current_count
 
 
+class Service:
+    """
+    A service on the wire of rmw_cyclonedds_cpp (runtime/services.py): requests taken, answered.
+
+    Answered in the spinning thread, one request at a time, as rclpy's executor does.
+    """
+
+    # How long an answer waits for the client's reply reader to be matched (rmw_cyclonedds_cpp
+    # waits the same in rmw_send_response before it gives up on a request).
+    MATCH_WAIT = 0.1  # s
+
+    def __init__(self, srv_type, name, callback, reader, writer):
+        self.srv_type, self.service_name, self.callback = srv_type, name, callback
+        self.reader, self.writer = reader, writer
+        self.condition = ReadCondition(reader, SampleState.NotRead | ViewState.Any
+                                       | InstanceState.Alive)
+
+    def serve(self):
+        for request in self.reader.take(N=8, condition=self.condition):
+            if isinstance(request, InvalidSample):
+                continue
+            plain = self.srv_type.Request(**fields_of(request))
+            response = self.callback(plain, self.srv_type.Response())
+            reply = self.srv_type.WireResponse(client_guid=request.client_guid,
+                                               sequence_number=request.sequence_number,
+                                               **fields_of(response))
+            end = time.monotonic() + self.MATCH_WAIT
+            while not self.writer.get_publication_matched_status().current_count \
+                    and time.monotonic() < end:
+                time.sleep(0.005)
+            self.writer.write(reply)
+
+
 class Timer:
     """Periodic callback on the steady clock (low-rate work only: diagnostics, set-points)."""
 
@@ -375,6 +412,7 @@ class Node:
         self._overrides = ros_args.parameter_overrides(args, fqn)
         self._parameters = {}
         self._subscriptions, self._timers, self._writers = [], [], []
+        self._services = []
         self._waitset = WaitSet(_context.participant)
         self._wakeup = GuardCondition(_context.participant)
         self._waitset.attach(self._wakeup)
@@ -456,6 +494,23 @@ class Node:
         _publish_graph()
         return subscription
 
+    def create_service(self, srv_type, srv_name, callback, qos_profile=10):
+        """A service answering `callback(request, response) -> response` (runtime/services.py)."""
+        resolved = self.resolve_topic_name(srv_name)
+        # One id for the pair, as rmw_cyclonedds_cpp writes it: clients match reader to writer.
+        service_id = f'serviceid={uuid.uuid4().hex[:16]};'
+        request_topic = Topic(_context.participant, f'rq{resolved}Request', srv_type.WireRequest)
+        reply_topic = Topic(_context.participant, f'rr{resolved}Reply', srv_type.WireResponse)
+        reader = DataReader(_context.participant, request_topic,
+                            qos=_qos(qos_profile, srv_type.name + '_Request', service_id))
+        writer = DataWriter(_context.participant, reply_topic,
+                            qos=_qos(qos_profile, srv_type.name + '_Response', service_id))
+        service = Service(srv_type, resolved, callback, reader, writer)
+        self._waitset.attach(service.condition)
+        self._services.append(service)
+        _publish_graph()
+        return service
+
     def create_timer(self, timer_period_sec, callback):
         timer = Timer(timer_period_sec, callback)
         self._timers.append(timer)
@@ -469,7 +524,7 @@ class Node:
 
     def destroy_node(self):
         self._wakeup.set(True)
-        self._subscriptions, self._timers, self._writers = [], [], []
+        self._subscriptions, self._timers, self._writers, self._services = [], [], [], []
         if self in _context.nodes and _context.graph_writer is not None:
             _context.nodes.remove(self)
             _publish_graph()
@@ -497,6 +552,8 @@ class Node:
                         subscription.callback(sample)
             if not full:
                 break
+        for service in self._services:
+            service.serve()
         now = time.monotonic()
         for timer in timers:
             if now >= timer.next_due:

@@ -137,6 +137,7 @@ class Node:
     def __init__(self, node_name: str, runtime: ModuleType) -> None:
         self.runtime = runtime
         self.msg = runtime.msg
+        self.srv = runtime.srv
         self._node = runtime.create_node(node_name)
         self._overrides = runtime.parameter_overrides(self._node)
 
@@ -201,6 +202,10 @@ class Node:
 
     def _qos(self, topic: Any) -> Any:
         return self.runtime.LATCHED if topic.latched else topic.depth
+
+    def create_service(self, srv_type: Any, name: str, callback: Callable[[Any, Any], Any]) -> Any:
+        """A service from `self.srv`; `callback(request, response) -> response`, as in rclpy."""
+        return self._node.create_service(srv_type, name, callback)
 
     def create_timer(self, period: float, callback: Callable[[], None]) -> Any:
         return self._node.create_timer(period, callback)

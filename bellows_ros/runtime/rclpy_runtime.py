@@ -51,6 +51,10 @@ NAME = 'rclpy'
 
 msg = types.SimpleNamespace(**{short: cdr.plain_class(ros_name)
                                for short, ros_name in cdr.USED_TYPES.items()})
+# The service types the nodes offer (cdr.USED_SERVICES), as rclpy's own classes.
+srv = types.SimpleNamespace(**{
+    name.rsplit('/', 1)[1]: getattr(importlib.import_module(name.rsplit('/', 1)[0].replace(
+        '/', '.')), name.rsplit('/', 1)[1]) for name in cdr.USED_SERVICES})
 
 Time = rclpy.time.Time
 Duration = rclpy.duration.Duration
