@@ -20,8 +20,10 @@ Where rclpy does not import, tests on it are skipped with the reason, unless
 """
 import functools
 import os
+from pathlib import Path
 import signal
 import subprocess
+import sys
 
 import pytest
 
@@ -54,6 +56,22 @@ def node_env(runtime, **extra):
 def override(node, name, value):
     """`-p node:name:=value`: wins over the node's own section of a params file (rcl's rule)."""
     return ['-p', f'{node}:{name}:={value}']
+
+
+BIN = Path(sys.executable).parent
+SIM_CONFIG = Path(__file__).resolve().parent.parent / 'config' / 'nodes_sim.yaml'
+
+
+def launch(name, args, env, log_dir):
+    """Start node `name` with config/nodes_sim.yaml and `args`, its log in LOG_DIR/name.log."""
+    log = open(log_dir / f'{name}.log', 'w')
+    return subprocess.Popen([str(BIN / name), '--ros-args', '--params-file', str(SIM_CONFIG),
+                             *args], env=env, stdout=log, stderr=subprocess.STDOUT)
+
+
+def logs(log_dir):
+    """The end of every node log in `log_dir`, for an assertion's message."""
+    return '\n'.join(f'--- {p.name}\n{p.read_text()[-1500:]}' for p in log_dir.glob('*.log'))
 
 
 def stop_all(processes, timeout=10.0):

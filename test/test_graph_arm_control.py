@@ -27,27 +27,15 @@ the driver's watchdog never vented the arm while it tracked (the controller keep
 its rate).
 """
 import math
-from pathlib import Path
 import random
-import subprocess
-import sys
 import time
 
 import pytest
-from runtimes import node_env, override, stop_all
+from runtimes import launch, node_env, override, stop_all
 
 from bellows_ros.control import angle_trajectory
 from bellows_ros.runtime import dds_node
 from bellows_ros.runtime.messages import msg
-
-BIN = Path(sys.executable).parent
-CONFIG = Path(__file__).resolve().parent.parent / 'config' / 'nodes_sim.yaml'
-
-
-def launch(name, args, env, log_dir):
-    log = open(log_dir / f'{name}.log', 'w')
-    return subprocess.Popen([str(BIN / name), '--ros-args', '--params-file', str(CONFIG), *args],
-                            env=env, stdout=log, stderr=subprocess.STDOUT)
 
 
 def interpolate(points, t):

@@ -23,14 +23,12 @@ held. Then `~/vent` and `~/release` (std_srvs/Trigger, called with the real `ros
 of ROS 2: across runtimes when the driver runs on the DDS runtime) vent and release it.
 The driver's /diagnostics say it is vented.
 """
-from pathlib import Path
 import random
 import subprocess
-import sys
 import time
 
 import pytest
-from runtimes import node_env, override, require_rclpy
+from runtimes import launch, logs, node_env, override, require_rclpy
 
 from bellows_ros import interfaces
 from bellows_ros.runtime import dds_node
@@ -38,16 +36,8 @@ from bellows_ros.runtime.messages import msg
 
 pytestmark = pytest.mark.slow  # two node processes, ~15 s per runtime
 
-BIN = Path(sys.executable).parent
-CONFIG = Path(__file__).resolve().parent.parent / 'config' / 'nodes_sim.yaml'
 AMBIENT = 101325.0
 COMMAND = 4.0e5
-
-
-def launch(name, args, env, log_dir):
-    log = open(log_dir / f'{name}.log', 'w')
-    return subprocess.Popen([str(BIN / name), '--ros-args', '--params-file', str(CONFIG), *args],
-                            env=env, stdout=log, stderr=subprocess.STDOUT)
 
 
 def call(service, env):
@@ -58,10 +48,6 @@ def call(service, env):
                             env=env)
     assert result.returncode == 0, result.stderr
     return result.stdout
-
-
-def logs(tmp_path):
-    return '\n'.join(f'--- {p.name}\n{p.read_text()[-1500:]}' for p in tmp_path.glob('*.log'))
 
 
 def test_estop_vents_under_a_command_flood_and_false_does_not_release(

@@ -25,7 +25,6 @@ final count of published arm samples must equal the model node's count of evalua
 """
 import math
 import os
-from pathlib import Path
 import random
 import subprocess
 import sys
@@ -34,14 +33,12 @@ import time
 
 from plain_cyclone import JOINT_STATE_SUBSCRIBER
 import pytest
-from runtimes import node_env, override
+from runtimes import launch, logs, node_env, override, SIM_CONFIG
 
 from bellows_ros import params
 from bellows_ros.runtime import dds_node, realtime
 from bellows_ros.runtime.messages import msg
 
-BIN = Path(sys.executable).parent
-CONFIG = Path(__file__).resolve().parent.parent / 'config' / 'nodes_sim.yaml'
 
 PLAIN_SUBSCRIBER = JOINT_STATE_SUBSCRIBER + textwrap.dedent("""\
     qos = Qos(Policy.Reliability.Reliable(0), Policy.History.KeepLast(50))
@@ -109,12 +106,6 @@ PLAIN_GRAPH_READER = JOINT_STATE_SUBSCRIBER + textwrap.dedent("""\
 """)
 
 
-def launch(name, args, env, log_dir):
-    log = open(log_dir / f'{name}.log', 'w')
-    return subprocess.Popen([str(BIN / name), '--ros-args', '--params-file', str(CONFIG), *args],
-                            env=env, stdout=log, stderr=subprocess.STDOUT)
-
-
 def stop(process, timeout=10):
     if process.poll() is None:
         process.send_signal(2)
@@ -179,10 +170,6 @@ def graph(runtime, tmp_path, monkeypatch):
         dds_node.shutdown()
 
 
-def logs(tmp_path):
-    return '\n'.join(f'--- {p.name}\n{p.read_text()[-1500:]}' for p in tmp_path.glob('*.log'))
-
-
 def test_graph_publishes_and_every_sample_is_evaluated(graph):
     processes, domain, tmp_path, node, final = graph
     plain = subprocess.run([sys.executable, '-c', PLAIN_SUBSCRIBER, domain, '/joint_states',
@@ -224,7 +211,7 @@ def test_graph_publishes_and_every_sample_is_evaluated(graph):
     # The CPU latency limit the config asks for was in force while the nodes ran (each reports
     # the limit in force on /diagnostics), where the nodes could request it.
     if os.access(realtime.CPU_LATENCY_DEVICE, os.W_OK):
-        limit = params.read_file(CONFIG, 'model_node')['cpu_latency_limit']
+        limit = params.read_file(SIM_CONFIG, 'model_node')['cpu_latency_limit']
         reported = {name.split(':')[0]: values['cpu_latency_limit_us']
                     for name, values in final.items() if 'cpu_latency_limit_us' in values}
         assert set(reported) == {'sim_arm_node', 'sim_actuator_node', 'driver_node', 'model_node'}

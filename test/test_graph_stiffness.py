@@ -32,14 +32,11 @@ The low set-point is 1400 N/m where the actuator model can reach it; with the pr
 config/actuator.yaml its range starts above 1400 N/m, so the step starts 1 % above the bottom of
 the range instead (reported in the assertion messages).
 """
-from pathlib import Path
 import random
-import subprocess
-import sys
 import time
 
 import pytest
-from runtimes import node_env, override, stop_all
+from runtimes import launch, node_env, override, stop_all
 
 from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.config.hardware import actuator_board_config
@@ -48,16 +45,8 @@ from bellows_ros.models.stiffness_map import compression_for_stiffness, stiffnes
 from bellows_ros.runtime import dds_node
 from bellows_ros.runtime.messages import msg
 
-BIN = Path(sys.executable).parent
-CONFIG = Path(__file__).resolve().parent.parent / 'config' / 'nodes_sim.yaml'
 K_HIGH = 1900.0
 HOLD = 60.0
-
-
-def launch(name, args, env, log_dir):
-    log = open(log_dir / f'{name}.log', 'w')
-    return subprocess.Popen([str(BIN / name), '--ros-args', '--params-file', str(CONFIG), *args],
-                            env=env, stdout=log, stderr=subprocess.STDOUT)
 
 
 @pytest.mark.slow
