@@ -35,9 +35,14 @@ from bellows_ros.table import check_increasing, COLUMNS, Table
 
 # Pressure columns of each system: absolute, in Pa.
 PRESSURES = {'segment': ('p1', 'p2'), 'actuator': ('p',)}
-# No bellows works near vacuum: a pressure column that never reaches 2 kPa abs was written in kPa
-# or bar (ambient is 101.3 kPa = 1.013 bar), and read as Pa it would be fitted without complaint.
-MIN_PLAUSIBLE_PRESSURE = 2e3
+# No bellows works near vacuum, and ambient air is at least ~50 kPa (5000 m above sea level): a
+# pressure column that never reaches 20 kPa abs was written in hPa, kPa or bar (ambient is
+# 1013 hPa = 101.3 kPa = 1.013 bar; 7.5 bar is 7500 hPa), and read as Pa it would be fitted
+# without complaint.
+MIN_PLAUSIBLE_PRESSURE = 2e4
+# A value below 30 kPa abs in a column that does reach pressure is a gauge (relative) reading:
+# its ambient reads 0. Pneumatic bellows are driven above ambient and vent to it.
+MIN_ABSOLUTE_PRESSURE = 3e4
 # The segment's bending angle cannot pass a half turn; larger values are degrees.
 MAX_ANGLE = math.pi
 
@@ -212,8 +217,15 @@ def check_units(table, system, names=None):
             if highest < MIN_PLAUSIBLE_PRESSURE:
                 raise DataError(
                     table.path, f'every value is below {MIN_PLAUSIBLE_PRESSURE:g} Pa (largest '
-                    f'{highest:g}): pressures are absolute, in Pa - was the file written in kPa '
-                    'or bar?', column=name)
+                    f'{highest:g}): pressures are absolute, in Pa - was the file written in '
+                    'hPa, kPa or bar?', column=name)
+            low = np.flatnonzero(table[name] < MIN_ABSOLUTE_PRESSURE)
+            if low.size:
+                first = int(low[0])
+                raise DataError(
+                    table.path, f'{table[name][first]:g} Pa is below {MIN_ABSOLUTE_PRESSURE:g} '
+                    'Pa: pressures are absolute (ambient is about 101325 Pa) - was the file '
+                    'written as gauge pressure?', table.line(first), name)
     if system == 'segment' and 'psi' in table:
         beyond = np.flatnonzero(np.abs(table['psi']) > MAX_ANGLE)
         if beyond.size:

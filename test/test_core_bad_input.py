@@ -180,16 +180,26 @@ def test_stamps_that_repeat_are_refused(tmp_path):
 
 # --- units --------------------------------------------------------------------------------------
 
-@pytest.mark.parametrize('scale, unit', [(1e-3, 'kPa'), (1e-5, 'bar')])
+@pytest.mark.parametrize('scale, unit', [(1e-2, 'hPa'), (1e-3, 'kPa'), (1e-5, 'bar')])
 def test_pressures_in_kpa_or_bar_are_named_as_a_unit_mistake(tmp_path, capsys, scale, unit):
     path = write_csv(tmp_path / f'in_{unit}.csv', 't,psi,p1,p2,tau_ext',
                      segment_rows(p_scale=scale))
     status, err = run_cli(['identify', 'segment', str(path), '--output', str(tmp_path / 'o.yaml'),
                            '--quiet'], capsys)
     assert status == 2
-    assert_one_line(err, f"in_{unit}.csv: column 'p1': every value is below 2000 Pa",
-                    'pressures are absolute, in Pa - was the file written in kPa or bar?')
+    assert_one_line(err, f"in_{unit}.csv: column 'p1': every value is below 20000 Pa",
+                    'pressures are absolute, in Pa - was the file written in hPa, kPa or bar?')
     assert not (tmp_path / 'o.yaml').exists()
+
+
+def test_gauge_pressures_are_named_as_a_unit_mistake(tmp_path, capsys):
+    # A gauge sensor reads 0 at ambient: the chains start vented, then pressurise.
+    rows = [(t, psi, p1 - 301325.0, p2, tau) for t, psi, p1, p2, tau in segment_rows()]
+    path = write_csv(tmp_path / 'gauge.csv', 't,psi,p1,p2,tau_ext', rows)
+    status, err = run_cli(['identify', 'segment', str(path), '--output', str(tmp_path / 'o.yaml'),
+                           '--quiet'], capsys)
+    assert status == 2
+    assert_one_line(err, "gauge.csv:2: column 'p1'", 'was the file written as gauge pressure?')
 
 
 @pytest.mark.parametrize('scale', [1e-3, 1e-5])
@@ -199,7 +209,7 @@ def test_actuator_pressures_in_kpa_or_bar_are_refused_from_csv_and_bag(tmp_path,
                      [((ns - rows[0][0]) * 1e-9, *rest) for ns, *rest in rows])
     write_actuator_bag(tmp_path / 'bag', rows)
     for source in (path, tmp_path / 'bag'):
-        with pytest.raises(DataError, match="column 'p': every value is below 2000 Pa"):
+        with pytest.raises(DataError, match="column 'p': every value is below 20000 Pa"):
             data.read_table(source, 'actuator')
 
 

@@ -177,7 +177,8 @@ def test_bag_reader_returns_the_values_written_or_one_line(samples):
     rows = [(int(ns), *rest) for ns, (_, *rest) in zip(stamps, samples)]
     columns = np.array([row[1:] for row in rows], float)
     bad = (np.any(np.diff(stamps) <= 0) or not np.isfinite(columns).all()
-           or columns[:, 2].max() < data.MIN_PLAUSIBLE_PRESSURE)
+           or columns[:, 2].max() < data.MIN_PLAUSIBLE_PRESSURE
+           or columns[:, 2].min() < data.MIN_ABSOLUTE_PRESSURE)
     with tempfile.TemporaryDirectory() as directory:
         bag = Path(directory) / 'bag'
         write_actuator_bag(bag, rows, log_time=lambda k, ns: k + 1)
@@ -235,6 +236,7 @@ def test_spoilt_bags_are_one_line_or_a_table_that_passes_every_check(
     for name in ('x_c', 'x_s', 'p', 'f'):
         assert np.isfinite(table[name]).all()
     assert table['p'].max() >= data.MIN_PLAUSIBLE_PRESSURE
+    assert table['p'].min() >= data.MIN_ABSOLUTE_PRESSURE
 
 
 # --- parameter YAML -----------------------------------------------------------------------------

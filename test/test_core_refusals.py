@@ -134,3 +134,16 @@ def test_a_file_its_loader_refuses_is_never_written(tmp_path):
         param_files.write_file(path, {'actuator.gas.v_tube': -2.7e-5}, check=loader)
     assert path.read_text() == 'old\n'
     assert [p.name for p in Path(tmp_path).iterdir()] == ['p.yaml']
+
+
+@pytest.mark.parametrize('value', ['1.01325', '101.325', '1013.25'])
+def test_an_ambient_pressure_in_bar_kpa_or_hpa_is_refused(value, tmp_path, capsys):
+    params = tmp_path / 'p.yaml'
+    params.write_text(f'/**:\n  ros__parameters:\n    segment:\n      p0: {value}\n')
+    t = np.arange(100) * 1e-3
+    data = write_csv(tmp_path / 's.csv', {'t': t, 'psi': 0.1 * np.sin(t), 'p1': 2e5 + 0 * t,
+                                          'p2': 1.5e5 + 0 * t, 'tau_ext': 0 * t})
+    assert main(['simulate', 'segment', '--input', data, '--output', str(tmp_path / 'o.csv'),
+                 '--params', str(params)]) == 2
+    line = error_line(capsys)
+    assert "parameter 'segment.p0'" in line and 'ambient' in line, line

@@ -112,6 +112,10 @@ DOTTED.update({f.name: f.name.replace('_', '.', 1) for f in fields(SegmentParams
 UNDOTTED = {dotted: name for name, dotted in DOTTED.items()}
 
 
+# Ambient pressure, Pa abs: about 50 kPa 5000 m up to 108 kPa at the lowest places on earth.
+AMBIENT_RANGE = (5e4, 1.1e5)
+
+
 def check_params(p, source='parameters'):
     """Raise ParameterError for values the model cannot use (names the parameter)."""
 
@@ -125,8 +129,11 @@ def check_params(p, source='parameters'):
         fail('actuator_theta', 'needs 8 values (29)')
     if len(p.previous_theta) != 4:
         fail('previous_theta', 'needs 4 values (34)')
-    if not p.p_max > p.p0 > 0:
-        fail('p_max', 'must exceed p0 > 0')
+    if not AMBIENT_RANGE[0] <= p.p0 <= AMBIENT_RANGE[1]:
+        fail('p0', f'must be an ambient pressure, {AMBIENT_RANGE[0]:g}..{AMBIENT_RANGE[1]:g} '
+             f'Pa abs, got {p.p0:g} (in bar or kPa?)')
+    if not p.p_max > p.p0:
+        fail('p_max', 'must exceed p0')
     for name in ('geometry_l0', 'geometry_s0', 'geometry_sa_max'):
         if not getattr(p, name) > 0:
             fail(name, 'must be > 0')
