@@ -165,6 +165,7 @@ class DriverNode(Node):
         self.arm = self.actuator = None
         self.reports = {}
         self.published = {'arm': 0, 'actuator': 0}
+        self.estop_held = False  # before the devices open: close() reports it
         if wait_for_subscribers > 0:
             self._wait_for_subscribers(wait_for_subscribers)
         try:
@@ -179,7 +180,6 @@ class DriverNode(Node):
             raise
         self.subscription(interfaces.PRESSURE_COMMAND, self.on_pressure_command)
         self.subscription(interfaces.MOTOR_COMMAND, self.on_motor_command)
-        self.estop_held = False
         self.subscription(interfaces.ESTOP, self.on_estop)
         self.create_service(self.srv.Trigger, '~/vent', self.on_vent)
         self.create_service(self.srv.Trigger, '~/release', self.on_release)
