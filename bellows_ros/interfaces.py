@@ -56,7 +56,7 @@ class Topic:
         return self.ros_type.rsplit('/', 1)[1]
 
     def resolved(self, namespace='/'):
-        """The full name in `namespace` ('/joint_states' in the root namespace)."""
+        """Return the full name in `namespace` ('/joint_states' in the root namespace)."""
         if self.name.startswith('/'):
             return self.name
         return namespace.rstrip('/') + '/' + self.name

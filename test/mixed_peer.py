@@ -50,6 +50,8 @@ def build(msg, ros_type, side):
     if kind == 'DiagnosticArray':
         return msg.DiagnosticArray(header=msg.Header(frame_id=tag), status=[msg.DiagnosticStatus(
             name=tag, message=str(number), values=[msg.KeyValue(key='side', value=tag)])])
+    if kind == 'Bool':
+        return msg.Bool(data=tag == 'from_dds')
     if kind == 'Clock':
         return msg.Clock(clock=msg.Time(sec=seconds, nanosec=int(number * 1000)))
     raise ValueError(ros_type)

@@ -70,7 +70,7 @@ def launch(name, args, env, log_dir):
 
 
 def logs(log_dir):
-    """The end of every node log in `log_dir`, for an assertion's message."""
+    """Return the end of every node log in `log_dir`, for an assertion's message."""
     return '\n'.join(f'--- {p.name}\n{p.read_text()[-1500:]}' for p in log_dir.glob('*.log'))
 
 

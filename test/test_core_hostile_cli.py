@@ -34,7 +34,7 @@ from bellows_ros.models.actuator_experiments import actuator_record
 
 @pytest.fixture(scope='module')
 def workdir(tmp_path_factory):
-    """A directory with a measurement (r.csv), a segment record (s.csv) and files to protect."""
+    """Make a directory with a measurement (r.csv), a segment record and files to protect."""
     root = tmp_path_factory.mktemp('hostile')
     record = actuator_record(load_actuator_params(), load_actuator_plant_params(), seed=3,
                              duration=2.0)

@@ -49,7 +49,7 @@ def error_line(capsys):
 
 
 def drawn_device(seed):
-    """A device and a record setting drawn over wide ranges (documented in the test's ids)."""
+    """Draw a device and a record setting over wide ranges."""
     rng = np.random.default_rng(seed)
     params = dataclasses.replace(PARAMS, v_tube=float(rng.uniform(1e-6, 30e-6)))
     return params, {'gas': float(rng.uniform(0.85, 1.15)) * PARAMS.p_ref,

@@ -35,7 +35,7 @@ from bellows_ros.runtime.node import rclpy_unavailable
 
 
 def latency_requests_held():
-    """This process's open file descriptors on the PM QoS device: its requests in force."""
+    """Return this process's open file descriptors on the PM QoS device (its requests)."""
     fds = Path('/proc/self/fd')
     return [fd for fd in fds.iterdir()
             if os.path.realpath(fd) == os.path.realpath(realtime.CPU_LATENCY_DEVICE)]

@@ -39,7 +39,7 @@ def plant(dt, duty):
 
 
 def snapshot(path):
-    """What a path is now: kind, target or contents, mode, inode (a change shows)."""
+    """Return what a path is now: kind, target or contents, mode, inode (a change shows)."""
     info = os.lstat(path)
     if stat.S_ISLNK(info.st_mode):
         return ('link', os.readlink(path), info.st_ino)
@@ -50,7 +50,7 @@ def snapshot(path):
 
 @pytest.fixture
 def taken(tmp_path, request):
-    """A path that something other than the board holds: a file, a dir, a link, a fifo."""
+    """Make a path that something other than the board holds: a file, dir, link or fifo."""
     path = tmp_path / 'port'
     kind = request.param
     if kind == 'file':

@@ -246,4 +246,5 @@ def test_shell_launcher_from_a_pip_install(ros, tmp_path):
         assert counts.get(series, 0) > 0, counts
     # The launcher's private pty path (node:name:=value) beat the file's sim_actuator_node port.
     board = (out / 'logs' / 'sim_actuator_node.log').read_text()
-    assert re.search(r'simulated actuator board on \S+/bellows_sim_actuator_\d+,', board), board
+    assert re.search(r'simulated actuator board on \S+/bellows_sim_actuator\.\w+/board,', board), \
+        board

@@ -87,7 +87,7 @@ def _check_identifiable(table, params, run):
 
 
 def _not_sealed(data, evidence):
-    """The refusal of a record that breaks the sealed-gas assumption, with its evidence."""
+    """Refuse a record that breaks the sealed-gas assumption, naming the evidence."""
     return BellowsError(
         f'{data}: identification refused: the record does not behave as one sealed, isothermal '
         f'gas volume ({evidence}; an air leak, heat exchange, a lagging sensor, backlash?); run '

@@ -32,7 +32,7 @@ def add_arguments(parser):
 
 
 def seed(text):
-    """A seed for NumPy's generators: a whole number 0 .. 2**32 - 1 (argparse type)."""
+    """Read a seed for NumPy's generators: a whole number 0 .. 2**32 - 1 (argparse type)."""
     try:
         value = int(text)
     except ValueError:

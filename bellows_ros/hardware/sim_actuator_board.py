@@ -75,7 +75,7 @@ class ActuatorState:
 
 
 def _check_free(port):
-    """ParameterError unless `port` names nothing yet, in an existing directory."""
+    """Raise ParameterError unless `port` names nothing yet, in an existing directory."""
     if os.path.lexists(port):
         kind = ('a directory' if os.path.isdir(port) else 'a link' if os.path.islink(port)
                 else 'a device node' if not os.path.isfile(port) else 'a file')

@@ -87,8 +87,10 @@ STRUCTURE_DEVIATIONS = 5.0
 
 def leftover_structure(error, rate):
     """
-    (correlation, bound): `error`'s correlation with itself STRUCTURE_LAG s later (rate in Hz),
-    and STRUCTURE_DEVIATIONS / sqrt(rows), what white noise stays below.
+    Return (correlation, bound) of the structure left in `error` (rate in Hz).
+
+    correlation: `error`'s correlation with itself STRUCTURE_LAG s later; bound:
+    STRUCTURE_DEVIATIONS / sqrt(rows), what white noise stays below.
     """
     lag = max(1, int(round(STRUCTURE_LAG * rate)))
     if len(error) < 2 * lag + 2 or np.std(error) == 0.0:

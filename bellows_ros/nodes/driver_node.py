@@ -118,7 +118,7 @@ class NewestWriter:
 
 
 def _port_problem(port):
-    """A serial port is a character device, or absent (a board not plugged in yet); '' = ''."""
+    """Say what is wrong with a serial port: it must be a character device, or absent."""
     if port and os.path.exists(port) and not stat.S_ISCHR(os.stat(port).st_mode):
         return 'not a character device (a serial port is one, or absent)'
     return ''

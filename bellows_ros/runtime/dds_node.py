@@ -495,7 +495,7 @@ class Node:
         return subscription
 
     def create_service(self, srv_type, srv_name, callback, qos_profile=10):
-        """A service answering `callback(request, response) -> response` (runtime/services.py)."""
+        """Offer a service answering `callback(request, response) -> response` (services.py)."""
         resolved = self.resolve_topic_name(srv_name)
         # One id for the pair, as rmw_cyclonedds_cpp writes it: clients match reader to writer.
         service_id = f'serviceid={uuid.uuid4().hex[:16]};'
@@ -572,7 +572,7 @@ def create_node(name):
 
 
 def descriptor(spec):
-    """A parameter's descriptor: the DDS runtime keeps the Spec itself (runtime/parameters.py)."""
+    """Return a parameter's descriptor: the DDS runtime keeps the Spec itself (parameters.py)."""
     return spec
 
 

@@ -191,12 +191,12 @@ class Node:
         return self._node.create_subscription(msg_type, topic, callback, qos_profile)
 
     def publisher(self, topic: Any) -> Any:
-        """A publisher on a topic of the contract (bellows_ros/interfaces.py): type and QoS."""
+        """Create a publisher on a topic of the contract (bellows_ros/interfaces.py)."""
         return self.create_publisher(getattr(self.msg, topic.message), topic.name,
                                      self._qos(topic))
 
     def subscription(self, topic: Any, callback: Callable[[Any], None]) -> Any:
-        """A subscription to a topic of the contract (bellows_ros/interfaces.py)."""
+        """Create a subscription to a topic of the contract (bellows_ros/interfaces.py)."""
         return self.create_subscription(getattr(self.msg, topic.message), topic.name, callback,
                                         self._qos(topic))
 
@@ -204,7 +204,7 @@ class Node:
         return self.runtime.LATCHED if topic.latched else topic.depth
 
     def create_service(self, srv_type: Any, name: str, callback: Callable[[Any, Any], Any]) -> Any:
-        """A service from `self.srv`; `callback(request, response) -> response`, as in rclpy."""
+        """Offer a service of `self.srv`; `callback(request, response) -> response`, as rclpy."""
         return self._node.create_service(srv_type, name, callback)
 
     def create_timer(self, period: float, callback: Callable[[], None]) -> Any:

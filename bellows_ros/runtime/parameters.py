@@ -81,7 +81,7 @@ class Spec:
         return self.check(value) if self.check else ''
 
     def bounds(self):
-        """The bounds as text: '1..99', '>= 0', '<= 5'."""
+        """Return the bounds as text: '1..99', '>= 0', '<= 5'."""
         low, high = (_number(bound) for bound in (self.low, self.high))
         if self.low is not None and self.high is not None:
             return f'{low}..{high}'

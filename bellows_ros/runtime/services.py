@@ -58,7 +58,7 @@ _register()
 
 
 def _wire_class(ros_name):
-    """The DDS type of a request or reply: the request header, then the message's fields."""
+    """Build the DDS type of a request or reply: the request header, then the message's fields."""
     plain = message_class(ros_name)
     class_name = ros_name.split('/')[-1]
     namespace = IdlMeta.__prepare__(class_name, (IdlStruct,), typename=dds_type_name(ros_name))
@@ -87,7 +87,7 @@ class ServiceType:
 
 
 def service_type(ros_name):
-    """The ServiceType of 'std_srvs/srv/Trigger'."""
+    """Return the ServiceType of a service name such as 'std_srvs/srv/Trigger'."""
     return ServiceType(ros_name, message_class(ros_name + '_Request'),
                        message_class(ros_name + '_Response'), _wire_class(ros_name + '_Request'),
                        _wire_class(ros_name + '_Response'))
