@@ -94,10 +94,11 @@ def controller_settings():
 
 def identify(device):
     """
-    `bellows identify actuator` on an excitation record of `device` -> (ActuatorParams or None, why).
+    `bellows identify actuator` on an excitation record of `device` -> (ActuatorParams, why).
 
-    None when the fit fails or gives a map that cannot be used (no pressure root, V_tube <= 0):
-    the identification assumes a sealed, constant gas amount, which the device's leak breaks.
+    The params are None when the fit fails or its map cannot be used (no pressure root,
+    V_tube <= 0, no rising branch of K(x_c)); `why` says which. The identification assumes a
+    sealed, constant gas amount, which the device's leak breaks.
     """
     record = actuator_record(device.params, device.plant, device.effects, None, seed=device.seed,
                              duration=RECORD)
@@ -107,14 +108,17 @@ def identify(device):
                               seed=0).params
         if not fitted.v_tube > 0:
             return None, f'V_tube = {fitted.v_tube:.3g} m^3'
-        stiffness_range(fitted)
+        k_min, k_max = stiffness_range(fitted)
+        if not k_max > 1.01 * k_min:
+            return None, (f'the map has no usable rising branch (range {k_min:.0f}-{k_max:.0f} '
+                          'N/m)')
     except BellowsError as exc:
         return None, str(exc)
     return fitted, ''
 
 
 def steps_on(device, controller_params):
-    """Run the set-point steps on `device` with the map of `controller_params`; per-step figures."""
+    """Run the set-point steps on `device` with the map of `controller_params` -> per step."""
     gains, gas_tau, control_every, target_every = controller_settings()
     plant = ActuatorPlant(device.params, device.plant, device.effects, seed=device.seed + 1)
     truth = plant.params
