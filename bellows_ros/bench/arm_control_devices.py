@@ -34,11 +34,11 @@ for the model-based ones the median and worst per-device ratio to feedback only 
 device. Targets (issue 21): paper A's median ratio <= 0.5, its worst ratio <= 1. Control effort
 (`control.effort`) as extras.
 """
-import math
+from collections import namedtuple
 
 import numpy as np
 
-from bellows_ros.bench import Result
+from bellows_ros.bench import log_uniform, Result
 from bellows_ros.bench.arm_control import effort_figures, TARGET_RATIO
 from bellows_ros.config.segment import load_segment
 from bellows_ros.control import angle_trajectory, closed_loop
@@ -58,11 +58,9 @@ BUDGET = {'starts': 2, 'max_evaluations': 80, 'screen': 16, 'polish_evaluations'
 QUICK_BUDGET = {'starts': 1, 'max_evaluations': 40, 'screen': 8, 'polish_evaluations': 0}
 
 
-class Device:
-    """A drawn segment: physics (SegmentParams), plant (SegmentPlantParams), effects, seed."""
-
-    def __init__(self, physics, plant, effects, seed):
-        self.physics, self.plant, self.effects, self.seed = physics, plant, effects, seed
+Device = namedtuple('Device', 'physics plant effects seed')
+Device.__doc__ = ('A drawn segment: true physics (SegmentParams), SegmentPlantParams, effects '
+                  '(name -> parameters), seed of its records and noise.')
 
 
 def draw_segment(seed):
@@ -72,7 +70,7 @@ def draw_segment(seed):
     base, plant = config.model, config.plant
 
     def scale(low, high):
-        return float(np.exp(rng.uniform(math.log(low), math.log(high))))
+        return log_uniform(rng, low, high)
     theta = list(base.actuator_theta)
     theta[1] *= scale(0.7, 1.4)
     physics = base.replace(

@@ -33,13 +33,14 @@ position and gas, `models.actuator.stiffness` of the plant's physics) stays with
 STEP_BAND of the set-point; and the error at the end of the hold (mean over the last second),
 relative to the set-point. Reported: median and worst over all steps of all devices.
 """
+from collections import namedtuple
 import dataclasses
 import math
 
 import numpy as np
 
 from bellows_ros import params as parameters
-from bellows_ros.bench import Result
+from bellows_ros.bench import log_uniform, Result
 from bellows_ros.config.actuator import load_actuator
 from bellows_ros.control.pd import PDController, PDGains
 from bellows_ros.control.stiffness import StiffnessSetpoint
@@ -59,11 +60,9 @@ STEP_BAND = 0.02  # relative band around the set-point for the step time
 DT = 1e-3
 
 
-class Device:
-    """A drawn actuator: model physics (ActuatorParams), plant params, effects, gas, seed."""
-
-    def __init__(self, params, plant, effects, seed):
-        self.params, self.plant, self.effects, self.seed = params, plant, effects, seed
+Device = namedtuple('Device', 'params plant effects seed')
+Device.__doc__ = ('A drawn actuator: true physics (ActuatorParams, its p_ref the sealed gas), '
+                  'ActuatorPlantParams, effects (name -> parameters), seed.')
 
 
 def draw_actuator(seed):
@@ -74,10 +73,9 @@ def draw_actuator(seed):
     params = dataclasses.replace(params, p_ref=params.p_ref * rng.uniform(0.9, 1.1),
                                  v_tube=params.v_tube * rng.uniform(0.7, 1.4))
     drive = dataclasses.replace(plant.drive, viscous_friction=plant.drive.viscous_friction
-                                * math.exp(rng.uniform(math.log(0.5), math.log(3.0))))
+                                * log_uniform(rng, 0.5, 3.0))
     plant = dataclasses.replace(plant, drive=drive)
-    effects = {'air_leak': {'conductance': math.exp(rng.uniform(math.log(2e-12),
-                                                                math.log(3e-11)))},
+    effects = {'air_leak': {'conductance': log_uniform(rng, 2e-12, 3e-11)},
                'wall_bulging': {'scale': rng.uniform(0.5, 1.5)},
                'buckling': {'scale': rng.uniform(0.5, 1.5)}}
     return Device(params, plant, effects, seed)
