@@ -35,6 +35,7 @@ device. Targets (issue 21): paper A's median ratio <= 0.5, its worst ratio <= 1.
 (`control.effort`) as extras.
 """
 from collections import namedtuple
+import sys
 
 import numpy as np
 
@@ -174,6 +175,10 @@ def run(quick=False):
                            for t in tracked.t.tolist()]
             per_mode[name].append(closed_loop.rms(tracked.psi_d - tracked.psi))
             efforts[name].append(effort_figures(tracked, holding))
+        print(f'  device {index}: held-out {heldout[-1]:.4f} N·m, RMS '
+              + ', '.join(f'{name} {values[-1]:.5f}' for name, values in per_mode.items())
+              + ''.join(f', doctor ({e[1]}) {e[3]:.5f}' for e in extended if e[0] == index)
+              + ' rad', file=sys.stderr, flush=True)
     results = summarise(per_mode, efforts, heldout)
     feedback = per_mode['feedback_only']
     for index, causes, mode, value in extended:
