@@ -29,17 +29,28 @@ from bellows_ros.control import angle_trajectory
 
 NAMES = ['arm_control.rms.feedback_only', 'arm_control.rms.previous_model',
          'arm_control.rms.paper_a_model']
+# `--only arm_control` also runs the drawn-device rows (bench/arm_control_devices.py), after these
+DEVICE_NAMES = ['arm_control.devices.feedback_only', 'arm_control.devices.previous_model',
+                'arm_control.devices.paper_a_model']
 
 
-@pytest.mark.slow  # three closed-loop runs of the whole trajectory
+@pytest.mark.slow  # three closed-loop runs, and two identified devices with three each
 def test_bench_figures_structure_and_order(capsys):
     assert bellows(['bench', '--only', 'arm_control', '--json', '--quick']) == 0
-    results = json.loads(capsys.readouterr().out)
-    assert [r['name'] for r in results] == NAMES
+    everything = json.loads(capsys.readouterr().out)
+    assert [r['name'] for r in everything] == NAMES + DEVICE_NAMES
+    results, devices = everything[:3], everything[3:]
+    for r in devices:
+        assert r['unit'] == 'rad' and r['samples'] == 2  # --quick: two devices
+        assert 0.0 < r['value'] <= r['extra']['worst_rms'] < 0.1
+        assert r['extra']['median_command_variation'] > 0 and r['extra']['median_air_used'] > 0
+    assert devices[2]['target'] == 0.5 and devices[2]['reference'] == DEVICE_NAMES[0]
     feedback, previous, paper_a = results
     steps = round(angle_trajectory.duration(arm_control.short_trajectory()) * 1000)
     for r in results:
         assert r['unit'] == 'rad' and r['samples'] == steps
+        assert r['extra']['command_variation'] > 0 and r['extra']['air_used'] > 0
+        assert 0 < r['extra']['hold_chatter'] <= r['extra']['hold_chatter_worst']
         assert math.isfinite(r['value']) and 0.0 < r['value'] < 0.1
         windows = [r['extra'][f'rms_{k}'] for k in ('holds', 'moves', 'reversals')]
         assert all(math.isfinite(w) and w > 0 for w in windows)

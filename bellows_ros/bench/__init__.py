@@ -23,6 +23,8 @@ from dataclasses import asdict, dataclass, field
 import statistics
 import time
 
+import numpy as np
+
 
 @dataclass
 class Result:
@@ -67,6 +69,11 @@ def per_call(fn, calls, warmup=1000):
         append(clock() - start)
     durations.sort()
     return [d * 1e-9 for d in durations]
+
+
+def log_uniform(rng, low, high):
+    """Draw from `low` to `high` uniformly in the logarithm (numpy Generator `rng`)."""
+    return float(np.exp(rng.uniform(np.log(low), np.log(high))))
 
 
 def median(values):

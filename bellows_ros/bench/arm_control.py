@@ -45,13 +45,27 @@ import numpy as np
 
 from bellows_ros.bench import Result
 from bellows_ros.config.segment import load_segment_params
-from bellows_ros.control import angle_trajectory, closed_loop
+from bellows_ros.control import angle_trajectory, closed_loop, effort
 from bellows_ros.models.contact import contact_angle
 from bellows_ros.models.segment import SegmentModel, SegmentOutput, simulate_model, strain_memory
 
 MODES = (('feedback_only', 'none'), ('previous_model', 'previous'), ('paper_a_model', 'paper_a'))
 TARGET_RATIO = 0.5
 SEED = 0
+EFFORT_UNITS = {'command_variation': 'Pa/s', 'air_used': 'NL/L', 'hold_chatter': 'Pa',
+                'hold_chatter_worst': 'Pa'}
+
+
+def effort_figures(run, holding):
+    """
+    Control effort of a run (`control.effort`): command variation Pa/s, air used NL per L of chain.
+
+    Also the median and worst hold chatter, Pa. `holding`: bool per sample, set-point holding.
+    """
+    chatter, worst = effort.hold_chatter(run.t, holding, (run.p1_cmd, run.p2_cmd))
+    return {'command_variation': effort.command_variation(run.t, run.p1_cmd, run.p2_cmd),
+            'air_used': effort.air_used(run.p1, run.p2),
+            'hold_chatter': chatter, 'hold_chatter_worst': worst}
 
 
 def windows(run, trajectory, error=None):
@@ -158,6 +172,10 @@ def run(quick=False):
         result.extra['max_error'] = float(abs(tracked.psi_d - tracked.psi).max())
         result.extra['saturated_fraction'] = float(tracked.saturated.mean())
         result.extra_units['saturated_fraction'] = ''
+        holding = [angle_trajectory.phases(trajectory, t) == ('hold', None)
+                   for t in tracked.t.tolist()]
+        result.extra.update(effort_figures(tracked, holding))
+        result.extra_units.update(EFFORT_UNITS)
         if mode != 'none' and not quick:
             ablations = [('no_lead', {'lead': False}),
                          ('quasi_static', {'lead': False, 'rigid_body': False})]
