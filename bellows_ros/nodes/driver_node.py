@@ -22,13 +22,25 @@ sample arrives, stamped with the node clock at arrival; there is no ROS timer at
 Commands (`/bellows/pressure_command`, `/actuator/motor_command`) pass through the hardware layer's
 safety limits (clamping, end stops, watchdogs).
 
+A managed (lifecycle) node, as ros2_control's hardware is (runtime/lifecycle.py, docs/protocols.md
+"Safety states"): `configure` opens the devices and waits for their first samples (inactive: the
+samples are published, the chambers are vented, commands are refused and counted); `activate`
+accepts commands; `deactivate` vents and refuses them; `cleanup` closes the devices; `shutdown`
+(and the end of the process) vents and waits until every chamber reads ambient, or says that it
+did not within `shutdown_timeout`. `~/vent` and `/bellows/estop` vent and latch in any state.
+
 Parameters (config/nodes_*.yaml, section `driver_node`):
   arm.enabled, actuator.enabled (bool): which device groups to run.
   hardware_params (str): a hardware YAML laid over config/hardware.yaml ('' = defaults).
   actuator.port (str): serial port ('' = hardware.actuator_board.port).
   arm.interface, arm.channel (str): python-can bus ('' = hardware.arm_bus.*).
   arm.n_segments (int): segments on the bus (0 = hardware.arm_bus.n_segments).
-  startup_timeout (s): a device with no sample by then is an error (exit status 2).
+  startup_timeout (s): a device with no sample by then fails `configure` (with autostart: exit
+      status 2).
+  autostart (bool): configure and activate at start, as launch_sim.sh asks; false = wait in
+      `unconfigured` for `ros2 lifecycle set` (the launch files send the transitions).
+  shutdown_timeout (s), ambient_tolerance (Pa): shutdown waits up to shutdown_timeout for every
+      chamber to read within ambient_tolerance of ambient (the segment's p0).
   wait_for_subscribers (s): before opening the devices, wait up to this long for `/joint_states`
       and `/bellows/chambers` to have a subscriber (like `ros2 topic pub
       --wait-matching-subscriptions`), so that a consumer started first sees every sample; 0 = no
@@ -54,6 +66,7 @@ from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.models.derivatives import rate
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime, run
+from bellows_ros.runtime.lifecycle import FAILURE, Lifecycle, SUCCESS
 from bellows_ros.runtime.parameters import Spec
 
 _DISCOVERY_SETTLE = 0.5  # s, see DriverNode._wait_for_subscribers
@@ -138,6 +151,13 @@ PARAMETERS = (
          high=600.0),
     Spec('wait_for_subscribers', 0.0, 'wait this long for a subscriber before opening the '
          'devices, s (0 = no wait)', low=0.0, high=600.0),
+    Spec('autostart', False, 'configure and activate at start (false: wait for ros2 lifecycle)'),
+    Spec('shutdown_timeout', 5.0, 'shutdown waits this long for the chambers to read ambient, s',
+         low=0.0, high=600.0),
+    # Above a pressure sensor's noise (a few hundred Pa), far below what moves a bellows: 0.05
+    # bar gauge holds a 7.5 bar segment within a percent of its range.
+    Spec('ambient_tolerance', 5000.0, 'a chamber this close to ambient reads ambient, Pa',
+         low=1.0, high=1e5),
 )
 
 
@@ -145,13 +165,10 @@ class DriverNode(Node):
 
     def __init__(self, runtime):
         super().__init__('driver_node', runtime)
-        given = self.declare_specs(PARAMETERS)
-        self.use_arm, self.use_actuator = given['arm.enabled'], given['actuator.enabled']
-        hardware_params = given['hardware_params'] or None
-        port, interface = given['actuator.port'], given['arm.interface']
-        channel = given['arm.channel']
-        n_segments, self.startup_timeout = given['arm.n_segments'], given['startup_timeout']
-        wait_for_subscribers = given['wait_for_subscribers']
+        self.given = self.declare_specs(PARAMETERS)
+        self.use_arm = self.given['arm.enabled']
+        self.use_actuator = self.given['actuator.enabled']
+        self.startup_timeout = self.given['startup_timeout']
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
         if not (self.use_arm or self.use_actuator):
@@ -165,29 +182,117 @@ class DriverNode(Node):
         self.arm = self.actuator = None
         self.reports = {}
         self.published = {'arm': 0, 'actuator': 0}
-        self.estop_held = False  # before the devices open: close() reports it
-        if wait_for_subscribers > 0:
-            self._wait_for_subscribers(wait_for_subscribers)
-        try:
-            if self.use_actuator:
-                self._open_actuator(actuator_board_config(hardware_params), port)
-            if self.use_arm:
-                self._open_arm(arm_bus_config(hardware_params), interface, channel,
-                               n_segments)
-            self._wait_for_samples()
-        except BaseException:
-            self.close()
-            raise
+        self.refused = 0              # commands that arrived while not active
+        self.estop_held = False       # /bellows/estop is True
+        self.vent_requested = False   # ~/vent or the estop latched a vent: ~/release ends it
+        self.failure = ''             # why the last configure failed
+        self.vent_time = None         # s from shutdown to every chamber at ambient
+        self.lifecycle = Lifecycle(self)
         self.subscription(interfaces.PRESSURE_COMMAND, self.on_pressure_command)
         self.subscription(interfaces.MOTOR_COMMAND, self.on_motor_command)
         self.subscription(interfaces.ESTOP, self.on_estop)
         self.create_service(self.srv.Trigger, '~/vent', self.on_vent)
         self.create_service(self.srv.Trigger, '~/release', self.on_release)
         self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
-        self.get_logger().info(
-            'driving ' + ' and '.join(name for name, on in (('arm', self.use_arm),
-                                                            ('actuator', self.use_actuator))
-                                      if on))
+        if self.given['autostart']:
+            # A device that does not answer is then a start error (one line, exit status 2).
+            if self.lifecycle.trigger('configure') != SUCCESS:
+                raise BellowsError(self.failure or 'driver_node: configure failed')
+            self.lifecycle.trigger('activate')
+
+    @property
+    def active(self):
+        return self.lifecycle.state == 'active'
+
+    # --- lifecycle (runtime/lifecycle.py): each returns SUCCESS or FAILURE -----------------------
+    def on_configure(self, previous):
+        """Open the devices and wait for their first samples; they start vented, refusing."""
+        given = self.given
+        if given['wait_for_subscribers'] > 0:
+            self._wait_for_subscribers(given['wait_for_subscribers'])
+        hardware_params = given['hardware_params'] or None
+        try:
+            if self.use_actuator:
+                self._open_actuator(actuator_board_config(hardware_params), given['actuator.port'])
+            if self.use_arm:
+                self._open_arm(arm_bus_config(hardware_params), given['arm.interface'],
+                               given['arm.channel'], given['arm.n_segments'])
+            self._wait_for_samples()
+        except BellowsError as error:
+            self.failure = str(error)
+            self.get_logger().error(f'configure failed: {error}')
+            self._close_devices()
+            return FAILURE
+        self._hold_vented()
+        self.get_logger().info(f'configured: {self._devices()} open, vented until activated')
+        return SUCCESS
+
+    def on_activate(self, previous):
+        """Accept commands, unless a vent is latched (then from ~/release on)."""
+        if not (self.vent_requested or self.estop_held):
+            self._release_devices()
+        self.get_logger().info(f'driving {self._devices()}'
+                               + (' (vented until ~/release)' if self.vented else ''))
+        return SUCCESS
+
+    def on_deactivate(self, previous):
+        self._hold_vented()
+        self.get_logger().info('deactivated: vented, commands refused')
+        return SUCCESS
+
+    def on_cleanup(self, previous):
+        self._close_devices()
+        return SUCCESS
+
+    def on_shutdown(self, previous):
+        self._hold_vented()
+        self._wait_for_ambient()
+        self._close_devices()
+        return SUCCESS
+
+    def on_error(self, previous):
+        self._hold_vented()
+        self._close_devices()
+        return SUCCESS
+
+    def _devices(self):
+        return ' and '.join(name for name, on in (('arm', self.use_arm),
+                                                  ('actuator', self.use_actuator)) if on)
+
+    def _hold_vented(self):
+        """Vent every chamber and stop the motor at the devices: they refuse commands."""
+        if self.arm is not None:
+            self.arm.vent()
+        if self.actuator is not None:
+            self.actuator.stop()
+
+    def _release_devices(self):
+        for device in (self.arm, self.actuator):
+            if device is not None:
+                device.release()
+
+    def _wait_for_ambient(self):
+        """Wait until every arm chamber reads ambient (the vent pressure p0), or the timeout."""
+        if self.arm is None:
+            return  # the actuator's gas is sealed: a still lead screw is its safe state
+        ambient, tolerance = self.arm.config.pressure_min, self.given['ambient_tolerance']
+        timeout = self.given['shutdown_timeout']
+        start = time.monotonic()
+        while True:
+            sample = self.arm.latest()
+            worst = None if sample is None else max(abs(p - ambient) for p in sample.pressures)
+            waited = time.monotonic() - start
+            if worst is not None and worst <= tolerance:
+                self.vent_time = waited
+                self.get_logger().info(f'shutdown: every chamber within {tolerance:g} Pa of '
+                                       f'ambient after {waited:.3f} s')
+                return
+            if waited >= timeout:
+                reading = 'no samples' if worst is None else f'{worst:.0f} Pa from ambient'
+                self.get_logger().error(f'shutdown: chambers not at ambient after {timeout:g} s '
+                                        f'({reading}): check the valves before touching the arm')
+                return
+            time.sleep(0.005)
 
     # --- devices
     # -----------------------------------------------------------------------------------
@@ -254,8 +359,15 @@ class DriverNode(Node):
         time.sleep(_DISCOVERY_SETTLE)
 
     def close(self):
+        """End of the process: shut down (vent, wait for ambient) from wherever it is."""
+        if self.lifecycle.state in ('inactive', 'active'):
+            self.lifecycle.trigger('shutdown')
+        self._close_devices()
+
+    def _close_devices(self):
         if getattr(self, 'duty_writer', None) is not None:
             self.duty_writer.close()
+            self.duty_writer = None
         devices = [(n, d) for n, d in (('actuator', self.actuator), ('arm', self.arm)) if d]
         for _, device in devices:
             device.close()
@@ -268,6 +380,7 @@ class DriverNode(Node):
                 left = max(0.0, end - time.monotonic())
                 publisher.wait_for_all_acked(self.runtime.Duration(seconds=left))
         self.actuator = self.arm = None
+        self.reports = {}
 
     # --- samples -> topics (called from the drivers' reader threads) ----------------------------
     def _header(self, msg, stamp, frame=''):
@@ -314,10 +427,10 @@ class DriverNode(Node):
             self.published['arm'] += 1
         self.arm_clock.tick(sample.index, sample.t_receive, time.monotonic() - start)
 
-    # --- commands
-    # ------------------------------------------------------------------------------------
+    # --- commands (refused by the devices unless active and released) ---------------------------
     def on_pressure_command(self, msg):
         if self.arm is None:
+            self.refused += 1
             return
         # A command may name some chambers only; the others keep their last set-point.
         for name, value in zip(msg.name, msg.effort):
@@ -326,8 +439,10 @@ class DriverNode(Node):
         self.arm.send_pressures([self.setpoints[name] for name in self.chain_names])
 
     def on_motor_command(self, msg):
-        if self.actuator is not None:
-            self.duty_writer.put(msg.data)
+        if self.actuator is None:
+            self.refused += 1
+            return
+        self.duty_writer.put(msg.data)
 
     # --- the stop that latches (docs/protocols.md, "Safety states") ----------------------------
     @property
@@ -336,22 +451,22 @@ class DriverNode(Node):
 
     def vent(self, why):
         """Vent every chamber and stop the motor now; refuse commands until `release`."""
-        if self.arm is not None:
-            self.arm.vent()
-        if self.actuator is not None:
-            self.actuator.stop()
+        self.vent_requested = True
+        self._hold_vented()
         self.get_logger().warn(f'vented ({why}): commands refused until released')
 
     def release(self):
-        """Accept commands again, unless the emergency stop is held; returns (done, why)."""
+        """End a latched vent, unless the emergency stop is held; returns (done, why)."""
         if self.estop_held:
             return False, f'{interfaces.ESTOP.name} is held (True): release it first'
-        for device in (self.arm, self.actuator):
-            if device is not None:
-                device.release()
-        self.get_logger().info('released: commands accepted again (chambers stay vented until '
-                               'the next set-point)')
-        return True, 'released'
+        self.vent_requested = False
+        if not self.active:
+            why = f'released: commands accepted once active (now {self.lifecycle.state})'
+        else:
+            self._release_devices()
+            why = 'released: commands accepted again (vented until the next set-point)'
+        self.get_logger().info(why)
+        return True, why
 
     def on_vent(self, request, response):
         self.vent('~/vent called')
@@ -379,21 +494,25 @@ class DriverNode(Node):
             values.update(device.counters())
             values['published'] = str(self.published[name])
             values['stale'] = str(device.stale)
+            values['lifecycle'] = self.lifecycle.state
             values['vented'] = str(device.latched)
             values['estop_held'] = str(self.estop_held)
+            values['refused_unconfigured'] = str(self.refused)
             level, message = diagnostics.OK, 'OK'
             if final:
                 level, message = diagnostics.STALE, 'driver stopped'
-            elif device.latched:
-                level, message = diagnostics.WARN, ('vented by the emergency stop' if
-                                                    self.estop_held else 'vented until released')
             elif device.stale:
                 level, message = diagnostics.ERROR, 'no data (link down or device stopped)'
+            elif self.estop_held:
+                level, message = diagnostics.WARN, 'vented by the emergency stop'
+            elif self.vent_requested:
+                level, message = diagnostics.WARN, 'vented until released'
             elif new_misses:
                 level, message = diagnostics.WARN, f'{new_misses} samples missed'
+            elif not self.active:
+                message = f'{self.lifecycle.state}: vented, commands refused'
             statuses.append(diagnostics.status(self, f'driver_node: {name}', values, level,
-                                               message,
-                                               hardware_id=link))
+                                               message, hardware_id=link))
         diagnostics.publish(self, self.diag_pub, statuses)
 
 

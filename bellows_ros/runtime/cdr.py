@@ -48,13 +48,20 @@ USED_TYPES = {
     'DiagnosticStatus': 'diagnostic_msgs/msg/DiagnosticStatus',
     'DiagnosticArray': 'diagnostic_msgs/msg/DiagnosticArray',
     'Clock': 'rosgraph_msgs/msg/Clock',
+    'TransitionEvent': 'lifecycle_msgs/msg/TransitionEvent',
 }
 
-# The services the nodes offer: (request fields, response fields), as in their .srv files (the
-# DDS runtime builds them: runtime/services.py; rclpy has its own classes).
+# The services the nodes offer, as their .srv files define them (request --- response); the
+# DDS runtime builds them (runtime/services.py), rclpy has its own classes.
 USED_SERVICES = {
-    'std_srvs/srv/Trigger': ([], [('success', 'bool'), ('message', 'string')]),
-    'std_srvs/srv/SetBool': ([('data', 'bool')], [('success', 'bool'), ('message', 'string')]),
+    'std_srvs/srv/Trigger': '---\nbool success\nstring message',
+    'std_srvs/srv/SetBool': 'bool data\n---\nbool success\nstring message',
+    # A managed node's services (rcl_lifecycle's; runtime/lifecycle.py serves them).
+    'lifecycle_msgs/srv/ChangeState': 'lifecycle_msgs/Transition transition\n---\nbool success',
+    'lifecycle_msgs/srv/GetState': '---\nlifecycle_msgs/State current_state',
+    'lifecycle_msgs/srv/GetAvailableStates': '---\nlifecycle_msgs/State[] available_states',
+    'lifecycle_msgs/srv/GetAvailableTransitions':
+        '---\nlifecycle_msgs/TransitionDescription[] available_transitions',
 }
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)

@@ -60,6 +60,12 @@ from bellows_ros.runtime.node import check_override
 from bellows_ros.runtime.services import fields_of, srv  # noqa: F401 (srv: the interface)
 
 NAME = 'dds'
+
+
+def service_message(ros_name):
+    """The class of a message type that travels inside a service (lifecycle_msgs/msg/State)."""
+    return message_class(ros_name)
+
 INTERRUPTED = ()  # SIGINT arrives as KeyboardInterrupt, as in plain Python
 USER_ERRORS = ()  # every user mistake is already a ParameterError
 

@@ -56,6 +56,13 @@ srv = types.SimpleNamespace(**{
     name.rsplit('/', 1)[1]: getattr(importlib.import_module(name.rsplit('/', 1)[0].replace(
         '/', '.')), name.rsplit('/', 1)[1]) for name in cdr.USED_SERVICES})
 
+
+def service_message(ros_name):
+    """The class of a message type that travels inside a service: rclpy's own, as services use."""
+    package, _, name = ros_name.split('/')
+    return getattr(importlib.import_module(f'{package}.msg'), name)
+
+
 Time = rclpy.time.Time
 Duration = rclpy.duration.Duration
 SENSOR_DATA = rclpy.qos.qos_profile_sensor_data

@@ -35,22 +35,26 @@ import types
 
 from cyclonedds.idl import IdlMeta, IdlStruct
 from cyclonedds.idl import types as idl
+from rosbags.typesys import get_types_from_msg
 from rosbags.typesys.base import Nodetype
 
 from bellows_ros.runtime.cdr import TYPESTORE, USED_SERVICES
 from bellows_ros.runtime.messages import dds_type_name, message_class
 
 # What ROS's IDL gives a message with no fields (rosidl): one uint8, so the struct is not empty.
-_EMPTY = [('structure_needs_at_least_one_member', 'uint8')]
+_EMPTY = [('structure_needs_at_least_one_member', (Nodetype.BASE, ('uint8', 0)))]
 
 
 def _register():
+    """Put each service's request and reply into the type store, parsed from its .srv text."""
     fielddefs = {}
-    for ros_name, (request, response) in USED_SERVICES.items():
-        for suffix, fields in (('_Request', request), ('_Response', response)):
-            fields = fields or _EMPTY
-            fielddefs[ros_name + suffix] = ([], [(name, (Nodetype.BASE, (base, 0)))
-                                                 for name, base in fields])
+    for ros_name, text in USED_SERVICES.items():
+        package = ros_name.split('/')[0]
+        for suffix, part in zip(('_Request', '_Response'), text.split('---')):
+            # rosbags reads .msg text; a short type name is resolved in the package named here.
+            parsed = get_types_from_msg(part, f'{package}/msg/_{suffix}')
+            (_, fields), = parsed.values()
+            fielddefs[ros_name + suffix] = ([], fields or _EMPTY)
     TYPESTORE.register(fielddefs)
 
 
