@@ -19,10 +19,12 @@ The bellows graph against real hardware (no simulators).
         [can_channel:=can0] [actuator:=true] [arm:=true] [params_file:=FILE]
 
 Starts driver_node, model_node (when the arm is on) and stiffness_controller_node (when the
-actuator is on). Ports default to the parameter file, whose '' means config/hardware.yaml (the
+actuator is on). The driver is a managed node: the launch configures it (it opens the devices)
+and activates it; a configure that fails (a device absent: the driver's log says which) ends the
+launch with an error. Ports default to the parameter file, whose '' means config/hardware.yaml (the
 board's /dev/serial/by-id link, socketcan can0). Arguments override the file's node sections
 (launch_ros writes them under the node's full name, after `params_file`). Every node is required:
-if one exits (absent device, bad parameter: its one-line error is in the output) the launch stops,
+if one exits (a bad parameter: its one-line error is in the output) the launch stops,
 and exits 1 when the node failed. The network is left as the user configured it
 (ROS_AUTOMATIC_DISCOVERY_RANGE, CYCLONEDDS_URI): a robot's graph is meant to be seen from other
 hosts.
@@ -34,7 +36,9 @@ from launch import LaunchDescription
 from launch.actions import DeclareLaunchArgument, OpaqueFunction, RegisterEventHandler, Shutdown
 from launch.event_handlers import OnProcessExit
 from launch.substitutions import LaunchConfiguration
-from launch_ros.actions import Node
+from launch_ros.actions import LifecycleNode, Node
+
+from bellows_ros.runtime.managed_launch import bring_to_active
 
 PACKAGE = 'bellows_ros'
 
@@ -65,20 +69,22 @@ def _nodes(context):
         if arg(argument):
             driver[parameter] = arg(argument)
 
-    def node(executable, overrides=None):
+    def node(executable, overrides=None, managed=False):
         # name= and namespace= make launch_ros write the dict under the node's own name (with
         # either missing it writes `/**`, which the file's node section beats).
-        return Node(package=PACKAGE, executable=executable, name=executable, namespace='',
-                    output='screen',
-                    parameters=[params_file, overrides or {}])
+        kind = LifecycleNode if managed else Node
+        return kind(package=PACKAGE, executable=executable, name=executable, namespace='',
+                    output='screen', parameters=[params_file, overrides or {}])
 
-    nodes = [node('driver_node', driver)]
+    # The driver is a managed node: configured (devices opened) and activated below.
+    driver = node('driver_node', driver, managed=True)
+    nodes = [driver]
     if use_arm:
         nodes.append(node('model_node'))
     if use_actuator:
         nodes.append(node('stiffness_controller_node'))
     return nodes + [RegisterEventHandler(OnProcessExit(target_action=n, on_exit=_on_exit))
-                    for n in nodes]
+                    for n in nodes] + bring_to_active(driver)
 
 
 def _on_exit(event, context):

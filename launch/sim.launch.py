@@ -20,7 +20,8 @@ The whole bellows graph on simulated hardware, with the scripted scenario.
         [params_file:=FILE] [discovery_range:=LOCALHOST]
 
 Starts sim_arm_node (CAN over udp_multicast on loopback), sim_actuator_node (serial on a pty),
-driver_node, model_node, stiffness_controller_node and arm_controller_node. With scenario:=true
+driver_node (a managed node, brought to active), model_node, stiffness_controller_node and
+arm_controller_node. With scenario:=true
 (the default) scenario_node runs the stiffness step and segment_1's angle trajectory (through
 the arm controller) for `duration` s,
 prints its summary, writes scenario.png and scenario.csv into `output_dir`, and the launch shuts
@@ -42,8 +43,10 @@ from launch.actions import (DeclareLaunchArgument, OpaqueFunction, RegisterEvent
                             SetEnvironmentVariable, Shutdown)
 from launch.event_handlers import OnProcessExit
 from launch.substitutions import LaunchConfiguration
-from launch_ros.actions import Node
+from launch_ros.actions import LifecycleNode, Node
 import yaml
+
+from bellows_ros.runtime.managed_launch import bring_to_active
 
 PACKAGE = 'bellows_ros'
 
@@ -89,17 +92,20 @@ def _nodes(context):
         if effects is not None:
             overrides['effects'] = effects
 
-    def node(executable, overrides=None, **kwargs):
+    def node(executable, overrides=None, managed=False, **kwargs):
         # name= and namespace= make launch_ros write the dict under the node's own name (with
         # either missing it writes `/**`, which the file's node section beats).
-        return Node(package=PACKAGE, executable=executable, name=executable, namespace='',
-                    output='screen',
-                    parameters=[params_file, overrides or {}], **kwargs)
+        kind = LifecycleNode if managed else Node
+        return kind(package=PACKAGE, executable=executable, name=executable, namespace='',
+                    output='screen', parameters=[params_file, overrides or {}], **kwargs)
+
+    # The driver is a managed node: brought to active below (bring_to_active).
+    driver = node('driver_node', {'arm.channel': channel, 'actuator.port': port}, managed=True)
 
     nodes = [
         node('sim_arm_node', arm),
         node('sim_actuator_node', actuator),
-        node('driver_node', {'arm.channel': channel, 'actuator.port': port}),
+        driver,
         node('model_node'),
         node('stiffness_controller_node'),
         node('arm_controller_node'),
@@ -112,7 +118,7 @@ def _nodes(context):
         raise ValueError(f"scenario:='{arg('scenario')}': expected true or false")
     handlers = [RegisterEventHandler(OnProcessExit(target_action=n, on_exit=_on_exit))
                 for n in nodes]
-    return nodes + handlers
+    return nodes + handlers + bring_to_active(driver)
 
 
 def _on_exit(event, context):

@@ -53,7 +53,8 @@ start() {
   echo "launch_hw: $1 (pid $!), log $logs/$1.log" >&2
 }
 
-start driver_node "${driver[@]}"
+# The driver is a managed node: autostart configures and activates it (a device absent: exit 2).
+start driver_node -p driver_node:autostart:=true "${driver[@]}"
 # The driver exits within its startup_timeout when a device is absent: report that, not a hang.
 sleep 3
 nodes_alive launch_hw

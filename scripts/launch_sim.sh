@@ -77,7 +77,9 @@ start sim_arm_node -p "sim_arm_node:can.channel:=$group"
 start sim_actuator_node -p "sim_actuator_node:port:=$port"
 for _ in $(seq 50); do [ -e "$port" ] && break; sleep 0.1; done
 nodes_alive launch_sim
-start driver_node -p "driver_node:arm.channel:=$group" -p "driver_node:actuator.port:=$port"
+# The driver is a managed node: autostart configures and activates it.
+start driver_node -p driver_node:autostart:=true -p "driver_node:arm.channel:=$group" \
+  -p "driver_node:actuator.port:=$port"
 start model_node
 start stiffness_controller_node
 start arm_controller_node

@@ -62,11 +62,16 @@ BIN = Path(sys.executable).parent
 SIM_CONFIG = Path(__file__).resolve().parent.parent / 'config' / 'nodes_sim.yaml'
 
 
+# The driver is a managed node: brought to active at start, as launch_sim.sh does.
+AUTOSTART = {'driver_node': ['-p', 'driver_node:autostart:=true']}
+
+
 def launch(name, args, env, log_dir):
     """Start node `name` with config/nodes_sim.yaml and `args`, its log in LOG_DIR/name.log."""
     log = open(log_dir / f'{name}.log', 'w')
     return subprocess.Popen([str(BIN / name), '--ros-args', '--params-file', str(SIM_CONFIG),
-                             *args], env=env, stdout=log, stderr=subprocess.STDOUT)
+                             *AUTOSTART.get(name, []), *args], env=env, stdout=log,
+                            stderr=subprocess.STDOUT)
 
 
 def logs(log_dir):

@@ -51,13 +51,15 @@ def check(result, *fragments):
 
 def test_missing_serial_device(run, tmp_path):
     port = tmp_path / 'no_such_board'
-    result = run('driver_node', ['-p', 'actuator.enabled:=true', '-p', f'actuator.port:={port}'])
+    result = run('driver_node', ['-p', 'autostart:=true', '-p', 'actuator.enabled:=true',
+                                 '-p', f'actuator.port:={port}'])
     check(result, 'driver_node: error:', f'actuator board port {port} does not exist')
 
 
 def test_silent_can_bus(run):
     group = f'239.74.165.{random.randint(2, 250)}'  # nobody simulates an arm on this group
-    result = run('driver_node', ['-p', 'arm.enabled:=true', '-p', 'arm.interface:=udp_multicast',
+    result = run('driver_node', ['-p', 'autostart:=true', '-p', 'arm.enabled:=true',
+                                 '-p', 'arm.interface:=udp_multicast',
                                  '-p', f'arm.channel:={group}', '-p', 'startup_timeout:=0.5'])
     check(result, f'no arm samples on udp_multicast:{group} within 0.5 s')
 

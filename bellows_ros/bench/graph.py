@@ -147,7 +147,8 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
                **dds_node.LOOPBACK_ENVIRONMENT)
     given = {'sim_arm_node': {'can.channel': group, 'n_segments': segments},
              'driver_node': {'arm.channel': group, 'arm.n_segments': segments,
-                             'actuator.enabled': 'false', 'wait_for_subscribers': 20.0},
+                             'actuator.enabled': 'false', 'wait_for_subscribers': 20.0,
+                             'autostart': 'true'},
              'model_node': {'segments': list(range(1, segments + 1)), 'latency_budget': 0.002}}
     binary = Path(sys.executable).parent
     logs = tempfile.TemporaryDirectory()

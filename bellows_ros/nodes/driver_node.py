@@ -220,7 +220,8 @@ class DriverNode(Node):
             self._wait_for_samples()
         except BellowsError as error:
             self.failure = str(error)
-            self.get_logger().error(f'configure failed: {error}')
+            if not self.given['autostart']:  # else it is the start's one-line error
+                self.get_logger().error(f'configure failed: {error}')
             self._close_devices()
             return FAILURE
         self._hold_vented()

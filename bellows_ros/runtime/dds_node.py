@@ -63,8 +63,9 @@ NAME = 'dds'
 
 
 def service_message(ros_name):
-    """The class of a message type that travels inside a service (lifecycle_msgs/msg/State)."""
+    """Return the class of a message type inside a service (lifecycle_msgs/msg/State)."""
     return message_class(ros_name)
+
 
 INTERRUPTED = ()  # SIGINT arrives as KeyboardInterrupt, as in plain Python
 USER_ERRORS = ()  # every user mistake is already a ParameterError

@@ -121,11 +121,11 @@ class StateMachine:
         self._callbacks, self._on_change, self._log_error = callbacks, on_change, log_error
 
     def available(self) -> List[Edge]:
-        """The transitions that can start from the current state."""
+        """Return the transitions that can start from the current state."""
         return [edge for edge in GRAPH if edge.start == self.state]
 
     def find(self, transition_id: int = 0, label: str = '') -> Optional[Edge]:
-        """The transition a request names (by label when it has one, as rclpy does), or None."""
+        """Return the transition a request names (by label if it has one, as rclpy), or None."""
         for edge in self.available():
             if (edge.label == label) if label else (edge.transition_id == transition_id):
                 return edge if edge.label not in (SUCCESS, FAILURE, ERROR) else None

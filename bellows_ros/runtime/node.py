@@ -35,8 +35,9 @@ subscriptions, timers, loggers and clocks are the runtime's own objects with rcl
 A runtime is a module with the same names in both implementations (`rclpy_runtime`, `dds_node`):
 `NAME`, `msg`, `srv`, `service_message(ros_name)`, `Time`, `Duration`, `SENSOR_DATA`, `LATCHED`,
 `init(args)`, `create_node(name)`, `spin_once(node, timeout_sec)`, `ok()`, `shutdown()`,
-`descriptor(spec)`, `parameter_overrides(node)` and the exception tuples `INTERRUPTED` and `USER_ERRORS`. `select_runtime` picks one, once, in `run`:
-`$BELLOWS_RUNTIME` = `rclpy` or `dds`, else rclpy when it imports. `rclpy_unavailable` asks
+`descriptor(spec)`, `parameter_overrides(node)` and the exception tuples `INTERRUPTED` and
+`USER_ERRORS`. `select_runtime` picks one, once, in `run`: `$BELLOWS_RUNTIME` = `rclpy` or
+`dds`, else rclpy when it imports. `rclpy_unavailable` asks
 a child Python whether rclpy could run the nodes here, for a process (the bench, the tests) that
 uses the DDS runtime itself.
 """

@@ -58,7 +58,7 @@ srv = types.SimpleNamespace(**{
 
 
 def service_message(ros_name):
-    """The class of a message type that travels inside a service: rclpy's own, as services use."""
+    """Return the class of a message type inside a service: rclpy's own, as its services use."""
     package, _, name = ros_name.split('/')
     return getattr(importlib.import_module(f'{package}.msg'), name)
 

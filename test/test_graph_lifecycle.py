@@ -1,0 +1,230 @@
+# Copyright 2026 bellows_ros maintainers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+driver_node is a managed node, driven from outside with ROS 2's own `ros2 lifecycle`.
+
+The state machine is compared with rclpy's LifecycleNode (rcl_lifecycle's) through the same
+command line. Then a simulated arm and the driver run on the runtime under test (across runtimes
+when it is the DDS one: the command line is rclpy), this process floods pressure commands
+(4 bar on both chambers of segment 1) and watches `/bellows/chambers`: nothing is published
+unconfigured; inactive publishes samples and refuses commands; active obeys them; deactivate
+vents; a `~/vent` survives deactivate/activate until `~/release`; shutdown vents and waits for
+ambient, and says after how long. The end of the process does the same from active.
+"""
+import random
+import re
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import pytest
+from runtimes import launch, logs, node_env, override, require_rclpy
+
+from bellows_ros import interfaces
+from bellows_ros.runtime import dds_node
+from bellows_ros.runtime.messages import msg
+
+pytestmark = pytest.mark.slow  # node processes and ros2 CLI calls, ~30 s per runtime
+
+AMBIENT = 101325.0
+COMMAND = 4.0e5
+VENTED = AMBIENT + 0.05 * (COMMAND - AMBIENT)  # a chamber below this is vented
+VENT_LINE = re.compile(r'shutdown: every chamber within \S+ Pa of ambient after ([0-9.]+) s')
+
+# An rclpy LifecycleNode with nothing of ours: the reference state machine.
+REFERENCE = textwrap.dedent("""
+    import rclpy
+    from rclpy.lifecycle import LifecycleNode
+    rclpy.init()
+    node = LifecycleNode('reference_lifecycle')
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
+        pass
+""")
+
+
+def ros2(args, env, timeout=60):
+    """Run the ros2 command line; its stdout."""
+    require_rclpy()
+    result = subprocess.run(['ros2', *args], capture_output=True, text=True, timeout=timeout,
+                            env=env)
+    assert result.returncode == 0, result.stdout + result.stderr
+    return result.stdout
+
+
+def _stop(processes):
+    for process in processes:
+        if process.poll() is None:
+            process.send_signal(signal.SIGINT)
+    for process in processes:
+        try:
+            process.wait(timeout=15)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            process.wait()
+
+
+def test_the_state_machine_is_rcl_lifecycles(runtime, tmp_path):
+    """`ros2 lifecycle list -a` and `list` read the same from the driver as from rclpy's node."""
+    env = node_env(runtime, ROS_DOMAIN_ID=str(random.randint(100, 180)))
+    reference = subprocess.Popen([sys.executable, '-c', REFERENCE], env=env)
+    driver = launch('driver_node', override('driver_node', 'autostart', 'false')
+                    + override('driver_node', 'actuator.enabled', 'false'), env, tmp_path)
+    try:
+        ours = ros2(['lifecycle', 'list', '/driver_node', '-a'], env)
+        theirs = ros2(['lifecycle', 'list', '/reference_lifecycle', '-a'], env)
+        # rcl lists the graph in its own order: compare the 25 transitions as a set.
+        assert ours.count('\n- ') + ours.startswith('- ') == 25, ours
+        assert sorted(ours.split('- ')) == sorted(theirs.split('- ')), (ours, theirs)
+        assert ros2(['lifecycle', 'list', '/driver_node'], env) == ros2(
+            ['lifecycle', 'list', '/reference_lifecycle'], env)
+        assert ros2(['lifecycle', 'get', '/driver_node'], env).strip() == 'unconfigured [1]'
+        nodes = ros2(['lifecycle', 'nodes'], env).split()
+        assert '/driver_node' in nodes and '/reference_lifecycle' in nodes
+    finally:
+        _stop([reference, driver])
+
+
+@pytest.fixture
+def rig(runtime, tmp_path, monkeypatch):
+    """Start a simulated arm (one segment); yield a starter of the driver and the probe."""
+    domain = str(random.randint(100, 180))
+    group = f'239.74.169.{random.randint(2, 250)}'
+    monkeypatch.setenv('ROS_DOMAIN_ID', domain)
+    env = node_env(runtime, ROS_DOMAIN_ID=domain)
+    normal = [('realtime_priority', 0)]
+    processes = [launch('sim_arm_node', sum((override('sim_arm_node', k, v) for k, v in
+                                             [('can.channel', group), ('n_segments', 1)]
+                                             + normal), []), env, tmp_path)]
+
+    def start_driver(autostart):
+        processes.append(launch('driver_node', sum((override('driver_node', k, v) for k, v in
+                                                    [('arm.channel', group),
+                                                     ('arm.n_segments', 1),
+                                                     ('actuator.enabled', 'false'),
+                                                     ('autostart', autostart)] + normal), []),
+                                env, tmp_path))
+        return processes[-1]
+
+    dds_node.init([])
+    try:
+        yield start_driver, Probe(), env, tmp_path
+    finally:
+        _stop(processes)
+        dds_node.shutdown()
+
+
+class Probe:
+    """Floods pressure commands, records the chamber pressures and the driver's diagnostics."""
+
+    def __init__(self):
+        self.node = dds_node.Node('lifecycle_probe')
+        self.pressures, self.status = [], {}
+        self.node.create_subscription(
+            msg.JointState, interfaces.CHAMBERS.resolved(),
+            lambda m: self.pressures.append((time.monotonic(), max(m.effort))), 1000)
+        self.node.create_subscription(
+            msg.DiagnosticArray, '/diagnostics',
+            lambda a: self.status.update({s.name: {kv.key: kv.value for kv in s.values}
+                                          for s in a.status}), 50)
+        self.commands = self.node.create_publisher(
+            msg.JointState, interfaces.PRESSURE_COMMAND.resolved(), 10)
+        self.command = msg.JointState(name=[interfaces.chain_chamber(1, 1),
+                                            interfaces.chain_chamber(1, 2)],
+                                      effort=[COMMAND, COMMAND])
+
+    def flood(self, seconds=0.0, until=None):
+        """Publish commands for `seconds`, or while the process `until` runs; its stdout."""
+        end = time.monotonic() + seconds
+        while time.monotonic() < end or (until is not None and until.poll() is None):
+            self.commands.publish(self.command)
+            dds_node.spin_once(self.node, timeout_sec=0.001)
+        return until.communicate()[0] if until is not None else None
+
+    def lifecycle(self, env, *args):
+        """`ros2 lifecycle ARGS /driver_node` while the commands keep coming; its output."""
+        require_rclpy()
+        process = subprocess.Popen(['ros2', 'lifecycle', *args[:1], '/driver_node', *args[1:]],
+                                   env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                   text=True)
+        return self.flood(until=process)
+
+    def since(self, start):
+        return [p for t, p in self.pressures if t > start]
+
+    def pressurise(self, log_dir):
+        deadline = time.monotonic() + 40
+        while (not self.pressures or self.pressures[-1][1] < 0.9 * COMMAND) \
+                and time.monotonic() < deadline:
+            self.flood(0.2)
+        assert self.pressures[-1][1] > 0.9 * COMMAND, logs(log_dir)
+
+
+def test_lifecycle_from_the_command_line(rig):
+    start_driver, probe, env, log_dir = rig
+    start_driver('false')
+    deadline = time.monotonic() + 30
+    while 'unconfigured' not in probe.lifecycle(env, 'get') and time.monotonic() < deadline:
+        time.sleep(0.2)
+    probe.flood(1.0)
+    assert not probe.pressures, 'samples published while unconfigured'
+
+    assert 'successful' in probe.lifecycle(env, 'set', 'configure'), logs(log_dir)
+    configured = time.monotonic()
+    probe.flood(1.5)
+    inactive = probe.since(configured)
+    assert inactive and max(inactive) < VENTED, 'commands obeyed while inactive'
+    assert probe.status['driver_node: arm']['lifecycle'] == 'inactive'
+
+    assert 'successful' in probe.lifecycle(env, 'set', 'activate')
+    probe.pressurise(log_dir)
+    assert 'successful' in probe.lifecycle(env, 'set', 'deactivate')
+    deactivated = time.monotonic()
+    probe.flood(3.0)
+    assert max(p for t, p in probe.pressures if t > deactivated + 1.5) < VENTED
+
+    # A latched vent outlives deactivate/activate: only ~/release ends it.
+    ros2(['service', 'call', '/driver_node/vent', 'std_srvs/srv/Trigger'], env)
+    assert 'successful' in probe.lifecycle(env, 'set', 'activate')
+    activated = time.monotonic()
+    probe.flood(2.0)
+    assert max(probe.since(activated)) < VENTED, 'activate released a latched vent'
+    ros2(['service', 'call', '/driver_node/release', 'std_srvs/srv/Trigger'], env)
+    probe.pressurise(log_dir)
+
+    assert 'successful' in probe.lifecycle(env, 'set', 'shutdown')
+    assert probe.lifecycle(env, 'get').strip() == 'finalized [4]'
+    log = (log_dir / 'driver_node.log').read_text()
+    vent = VENT_LINE.search(log)
+    assert vent, log[-2000:]
+    print(f'vent to ambient after shutdown: {float(vent.group(1)):.3f} s')
+
+
+def test_the_end_of_the_process_vents_and_waits_for_ambient(rig):
+    start_driver, probe, env, log_dir = rig
+    driver = start_driver('true')
+    probe.pressurise(log_dir)
+    driver.send_signal(signal.SIGINT)
+    while driver.poll() is None:
+        probe.flood(0.05)
+    assert driver.returncode == 0, logs(log_dir)
+    log = (log_dir / 'driver_node.log').read_text()
+    vent = VENT_LINE.search(log)
+    assert vent, log[-2000:]
+    assert float(vent.group(1)) > 0.0  # it was pressurised: venting takes time
+    print(f'vent to ambient at SIGINT: {float(vent.group(1)):.3f} s')
