@@ -13,6 +13,7 @@
 # limitations under the License.
 
 """Angle tracker and built-in trajectories: the parts the bench and the node share."""
+import dataclasses
 import math
 
 import pytest
@@ -97,3 +98,20 @@ def test_bad_feedforward_and_gains_are_refused():
         AngleTracker(P, GAINS, 'paper_b')
     with pytest.raises(ParameterError, match='base_pressure'):
         AngleTracker(P, TrackingGains(40.0, 640.0, 2.0, 20.0, 20.0, 8e5), 'paper_a')
+
+
+def test_retune_takes_new_gains_and_keeps_the_state():
+    """A live gain change: the next command uses the new gains; integral and memory are kept."""
+    tracker = AngleTracker(P, GAINS, 'none')
+    tracker.observe(0.1, 0.0, P.p0, P.p0, 1e-3)
+    tracker.command(0.2, 0.0, 0.0, 0.1, 5e-3)
+    integral, velocity = tracker.integral, tracker.velocity
+    stiffer = dataclasses.replace(GAINS, kp=2 * GAINS.kp, base_pressure=P.p0 + 1e5)
+    tracker.retune(stiffer, 'paper_a')
+    assert (tracker.integral, tracker.velocity) == (integral, velocity)
+    assert tracker.gains == stiffer and tracker.feedforward == 'paper_a'
+    fresh = AngleTracker(P, stiffer, 'paper_a')
+    assert tracker.g0 == pytest.approx(fresh.g0)  # the slope at the new base pressure
+    with pytest.raises(ParameterError, match='base_pressure'):
+        tracker.retune(dataclasses.replace(GAINS, base_pressure=8e5), 'none')
+    assert tracker.gains == stiffer  # a refused change leaves the tracker as it was

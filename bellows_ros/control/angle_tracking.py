@@ -127,6 +127,19 @@ class AngleTracker:
         self.model.reset()
         self.restart()
 
+    def retune(self, gains, feedforward):
+        """
+        Take new gains and feedforward from the next command on (a live parameter change).
+
+        The feedback state (integral, rate filter) and the model's contact memory are kept, so
+        the command does not jump beyond what the new gains themselves change.
+        """
+        check_feedforward(feedforward)
+        check_gains(gains, self.params)
+        if gains.base_pressure != self.gains.base_pressure:
+            self.g0 = pressure_gain(self.model, gains.base_pressure)  # torques(): no state
+        self.gains, self.feedforward = gains, feedforward
+
     def restart(self):
         """
         Forget the feedback state (integral, velocity), keep the model's contact memory.

@@ -41,7 +41,10 @@ feedforward_lead (s: the valves' lag the feedforward anticipates, 0 = none), co_
 above ambient on both chains), control_every (samples per command), params_file (str: YAML over
 config/segment.yaml, e.g. identified parameters and the arm's segment.dynamics), max_pending
 (unmatched half-samples kept), max_sample_age (s: no command from a sample older than this),
-realtime_priority, cpu_latency_limit (runtime/realtime.py).
+realtime_priority, cpu_latency_limit (runtime/realtime.py). The gains (pid.*), feedforward,
+feedforward_lead, co_contraction and max_sample_age are live: `ros2 param set` takes effect at
+the next command, with the integral and the contact memory kept (`AngleTracker.retune`); a
+co-contraction that would lift the base pressure above p_max is refused with the reason.
 """
 from collections import deque
 import math
@@ -53,7 +56,9 @@ from bellows_ros import interfaces
 from bellows_ros.config.hardware import arm_bus_config
 from bellows_ros.config.segment import load_segment_params
 from bellows_ros.control import angle_trajectory
-from bellows_ros.control.angle_tracking import AngleTracker, FEEDFORWARDS, TrackingGains
+from bellows_ros.control.angle_tracking import (AngleTracker, check_gains, FEEDFORWARDS,
+                                                TrackingGains)
+from bellows_ros.errors import ParameterError
 from bellows_ros.hardware.can_protocol import dbc_segments
 from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.nodes import diagnostics
@@ -68,21 +73,22 @@ PARAMETERS = (
     Spec('segments', [1], 'the arm segments to control (numbers on the CAN bus)', low=1,
          high=dbc_segments(), items=(1, dbc_segments()), unique=True),
     Spec('feedforward', 'paper_a', "model inverted as feedforward ('none' = feedback only)",
-         choices=FEEDFORWARDS),
+         choices=FEEDFORWARDS, read_only=False),
     Spec('trajectory', '', "built-in set-point trajectory ('' = hold, or /arm/psi_setpoint)",
          choices=('', *angle_trajectory.TRAJECTORIES)),
     Spec('trajectory_delay', 1.0, 'start of the built-in trajectory after the first sample, s',
          low=0.0, high=3600.0),
-    Spec('pid.kp', 20.0, 'proportional gain, N·m/rad', low=0.0, high=1e4),
-    Spec('pid.ki', 200.0, 'integral gain, N·m/(rad·s)', low=0.0, high=1e5),
-    Spec('pid.kd', 1.0, 'derivative gain, N·m·s/rad', low=0.0, high=1e3),
+    Spec('pid.kp', 20.0, 'proportional gain, N·m/rad', low=0.0, high=1e4, read_only=False),
+    Spec('pid.ki', 200.0, 'integral gain, N·m/(rad·s)', low=0.0, high=1e5, read_only=False),
+    Spec('pid.kd', 1.0, 'derivative gain, N·m·s/rad', low=0.0, high=1e3, read_only=False),
     Spec('pid.velocity_cutoff', 20.0, 'cut-off of the angle-rate filter, Hz', low=0.1,
-         high=500.0),
-    Spec('pid.integral_limit', 20.0, 'bound of the integral term, N·m', low=0.0, high=1e3),
+         high=500.0, read_only=False),
+    Spec('pid.integral_limit', 20.0, 'bound of the integral term, N·m', low=0.0, high=1e3,
+         read_only=False),
     Spec('feedforward_lead', 0.05, 'valve lag the feedforward anticipates, s (0 = none)',
-         low=0.0, high=1.0),
+         low=0.0, high=1.0, read_only=False),
     Spec('co_contraction', 0.0, 'pressure above ambient on both chains, Pa', low=0.0,
-         high=6.5e5),
+         high=6.5e5, read_only=False),
     Spec('control_every', 5, 'samples per pressure command (a command at least every quarter '
          'of the driver watchdog)', low=1, high=int(arm_bus_config().command_timeout / 4
                                                     / SAMPLE_PERIOD)),
@@ -90,7 +96,7 @@ PARAMETERS = (
     Spec('max_pending', 100, 'unmatched half-samples kept before the oldest is dropped',
          low=1, high=interfaces.SAMPLE_DEPTH),
     Spec('max_sample_age', 0.02, 'no command from a sample older than this, s', low=1e-3,
-         high=1.0),
+         high=1.0, read_only=False),
 )
 
 
@@ -129,18 +135,15 @@ class ArmControllerNode(Node):
         given = self.declare_specs(PARAMETERS)
         segments, feedforward = given['segments'], given['feedforward']
         trajectory, self.delay = given['trajectory'], given['trajectory_delay']
-        kp, ki, kd = given['pid.kp'], given['pid.ki'], given['pid.kd']
-        cutoff, integral_limit = given['pid.velocity_cutoff'], given['pid.integral_limit']
-        lead, co_contraction = given['feedforward_lead'], given['co_contraction']
+        lead = given['feedforward_lead']
         self.control_every, params_file = given['control_every'], given['params_file'] or None
         max_pending, max_age = given['max_pending'], given['max_sample_age']
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
         path = angle_trajectory.by_name(trajectory) if trajectory else None
         self.watchdog_ns = round(arm_bus_config().command_timeout * 1e9)
-        params = load_segment_params(params_file)
-        gains = TrackingGains(kp, ki, kd, cutoff, integral_limit, params.p0 + co_contraction,
-                              lead)
+        self.params = params = load_segment_params(params_file)
+        gains = self._gains(given)
         self.lead = lead
         self.loops = [SegmentLoop(i, AngleTracker(params, gains, feedforward), path)
                       for i in segments]
@@ -166,6 +169,29 @@ class ArmControllerNode(Node):
         self.get_logger().info(
             f"tracking {', '.join(loop.name for loop in self.loops)}, feedforward {feedforward}"
             + (f', trajectory {trajectory}' if trajectory else ''))
+
+    def _gains(self, values):
+        return TrackingGains(values['pid.kp'], values['pid.ki'], values['pid.kd'],
+                             values['pid.velocity_cutoff'], values['pid.integral_limit'],
+                             self.params.p0 + values['co_contraction'],
+                             values['feedforward_lead'])
+
+    # --- live parameters (ros2 param set): from the next command ---------------------------------
+    def parameter_problem(self, changed):
+        """What the Specs cannot know: the co-contraction must stay within p_max."""
+        try:
+            check_gains(self._gains({**self.parameters, **changed}), self.params,
+                        'arm_controller_node')
+        except ParameterError as error:
+            return str(error)
+        return ''
+
+    def on_parameters(self, changed):
+        gains = self._gains(self.parameters)
+        self.lead, self.feedforward = gains.lead, self.parameters['feedforward']
+        self.max_age_ns = round(self.parameters['max_sample_age'] * 1e9)
+        for loop in self.loops:
+            loop.tracker.retune(gains, self.feedforward)
 
     # --- inputs ---------------------------------------------------------------------------------
     def on_setpoint(self, msg):

@@ -56,7 +56,7 @@ PARAMETERS = (
     Spec('max_pending', 100, 'unmatched half-samples kept before the oldest is dropped',
          low=1, high=interfaces.SAMPLE_DEPTH),
     Spec('latency_budget', 0.002, 'a torque published later than this after its sample is '
-         'counted late, s', low=1e-4, high=1.0),
+         'counted late, s', low=1e-4, high=1.0, read_only=False),
 )
 
 
@@ -95,6 +95,11 @@ class ModelNode(Node):
                                + (f' with {params_file}' if params_file else ''))
 
     # --- pairing the two halves of a sample ------------------------------------------------------
+    def on_parameters(self, changed):
+        """A live latency_budget (ros2 param set) counts from the next torque on."""
+        if 'latency_budget' in changed:
+            self.latency_budget_ns = round(changed['latency_budget'] * 1e9)
+
     def on_joint_states(self, msg):
         if self.names[0] in msg.name:
             self._half(msg, JOINTS)

@@ -38,7 +38,10 @@ of x_c* from the gas estimate), publish_every,
 initial_stiffness (N/m; 0 = hold still until the first set-point), realtime_priority (SCHED_FIFO
 priority 1-99 for the node's threads; 0 = normal scheduling), cpu_latency_limit (s: CPU wake-up
 latency held while the node runs, 0 = idle CPUs poll, negative = off; runtime/realtime.py).
+The PD gains, gas_time_constant, control_every, target_every and publish_every are live: `ros2
+param set` takes effect at the next control step (`on_parameters`); the others are read-only.
 """
+import dataclasses
 import time
 
 from bellows_ros import interfaces
@@ -52,21 +55,27 @@ from bellows_ros.runtime import Node, realtime, run, stamp_ns
 from bellows_ros.runtime.parameters import Spec
 
 
+# Parameter -> field of PDGains.
+_PD_GAINS = {'pd.kp': 'kp', 'pd.kd': 'kd', 'pd.velocity_cutoff': 'velocity_cutoff',
+             'pd.duty_max': 'duty_max', 'pd.deadband': 'deadband'}
+
 PARAMETERS = (
     Spec('actuator_params', '', "YAML laid over config/actuator.yaml ('' = defaults)"),
-    Spec('pd.kp', 400.0, 'proportional gain on the compression error, 1/m', low=0.0, high=1e6),
-    Spec('pd.kd', 0.0, 'derivative gain, s/m', low=0.0, high=1e4),
+    Spec('pd.kp', 400.0, 'proportional gain on the compression error, 1/m', low=0.0, high=1e6,
+         read_only=False),
+    Spec('pd.kd', 0.0, 'derivative gain, s/m', low=0.0, high=1e4, read_only=False),
     Spec('pd.velocity_cutoff', 50.0, 'cut-off of the compression-rate filter, Hz', low=0.1,
-         high=500.0),
-    Spec('pd.duty_max', 0.8, 'largest motor duty', low=0.01, high=1.0),
+         high=500.0, read_only=False),
+    Spec('pd.duty_max', 0.8, 'largest motor duty', low=0.01, high=1.0, read_only=False),
     Spec('pd.deadband', 2e-5, 'compression error within which the motor rests, m', low=0.0,
-         high=1e-3),
+         high=1e-3, read_only=False),
     Spec('gas_time_constant', 2.0, 'time constant of the gas-amount estimate, s', low=0.01,
-         high=3600.0),
-    Spec('control_every', 5, 'samples per control step', low=1, high=100),
+         high=3600.0, read_only=False),
+    Spec('control_every', 5, 'samples per control step', low=1, high=100, read_only=False),
     Spec('target_every', 4, 'control steps between re-computations of the target compression',
-         low=1, high=1000),
-    Spec('publish_every', 2, 'control steps per /actuator/stiffness message', low=1, high=1000),
+         low=1, high=1000, read_only=False),
+    Spec('publish_every', 2, 'control steps per /actuator/stiffness message', low=1, high=1000,
+         read_only=False),
     Spec('initial_stiffness', 0.0, 'stiffness held from the start, N/m (0 = hold still until '
          'the first set-point)', low=0.0, high=1e6),
 )
@@ -78,9 +87,7 @@ class StiffnessControllerNode(Node):
         super().__init__('stiffness_controller_node', runtime)
         given = self.declare_specs(PARAMETERS)
         actuator_params = given['actuator_params'] or None
-        gains = PDGains(kp=given['pd.kp'], kd=given['pd.kd'],
-                        velocity_cutoff=given['pd.velocity_cutoff'],
-                        duty_max=given['pd.duty_max'], deadband=given['pd.deadband'])
+        gains = PDGains(**{field: given[name] for name, field in _PD_GAINS.items()})
         gas_time_constant = given['gas_time_constant']
         self.control_every, self.target_every = given['control_every'], given['target_every']
         self.publish_every, initial = given['publish_every'], given['initial_stiffness']
@@ -111,6 +118,17 @@ class StiffnessControllerNode(Node):
         self.subscription(interfaces.CHAMBERS, self.on_chambers)
         self.subscription(interfaces.JOINT_STATES, self.on_joint_states)
         self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
+
+    # --- live parameters (ros2 param set): from the next control step -------------------------
+    def on_parameters(self, changed):
+        gains = {field: changed[name] for name, field in _PD_GAINS.items() if name in changed}
+        if gains:  # the rate filter's state is kept: no jump beyond the new gains' own
+            self.pd.gains = dataclasses.replace(self.pd.gains, **gains)
+        if 'gas_time_constant' in changed:
+            self.setpoint.gas_time_constant = changed['gas_time_constant']
+        for name in ('control_every', 'target_every', 'publish_every'):
+            if name in changed:
+                setattr(self, name, changed[name])
 
     def on_setpoint(self, msg):
         if msg.data == self.setpoint.k_target:

@@ -62,6 +62,18 @@ USED_SERVICES = {
     'lifecycle_msgs/srv/GetAvailableStates': '---\nlifecycle_msgs/State[] available_states',
     'lifecycle_msgs/srv/GetAvailableTransitions':
         '---\nlifecycle_msgs/TransitionDescription[] available_transitions',
+    # Every node's parameter services (the DDS runtime serves them: runtime/parameter_services.py).
+    'rcl_interfaces/srv/ListParameters':
+        'string[] prefixes\nuint64 depth\n---\nrcl_interfaces/ListParametersResult result',
+    'rcl_interfaces/srv/GetParameters':
+        'string[] names\n---\nrcl_interfaces/ParameterValue[] values',
+    'rcl_interfaces/srv/GetParameterTypes': 'string[] names\n---\nuint8[] types',
+    'rcl_interfaces/srv/DescribeParameters':
+        'string[] names\n---\nrcl_interfaces/ParameterDescriptor[] descriptors',
+    'rcl_interfaces/srv/SetParameters':
+        'rcl_interfaces/Parameter[] parameters\n---\nrcl_interfaces/SetParametersResult[] results',
+    'rcl_interfaces/srv/SetParametersAtomically':
+        'rcl_interfaces/Parameter[] parameters\n---\nrcl_interfaces/SetParametersResult result',
 }
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)

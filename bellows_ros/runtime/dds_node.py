@@ -53,10 +53,11 @@ from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
 from bellows_ros.errors import ParameterError
-from bellows_ros.runtime import ros_args
+from bellows_ros.runtime import parameter_services, ros_args
 from bellows_ros.runtime.messages import (message_class, msg,  # noqa: F401 (msg: the interface)
                                           type_hash)
 from bellows_ros.runtime.node import check_override
+from bellows_ros.runtime.parameters import descriptor_message
 from bellows_ros.runtime.services import fields_of, srv  # noqa: F401 (srv: the interface)
 
 NAME = 'dds'
@@ -417,7 +418,8 @@ class Node:
         self._logger = Logger(self._name, args.log_level)
         fqn = self._namespace.rstrip('/') + '/' + self._name
         self._overrides = ros_args.parameter_overrides(args, fqn)
-        self._parameters = {}
+        self._parameters, self._descriptors = {}, {}
+        self._on_set, self._post_set = [], []  # parameter callbacks, as rclpy's
         self._subscriptions, self._timers, self._writers = [], [], []
         self._services = []
         self._waitset = WaitSet(_context.participant)
@@ -425,6 +427,8 @@ class Node:
         self._waitset.attach(self._wakeup)
         self._clock = Clock()
         _context.nodes.append(self)
+        # What rclpy's Node offers: `ros2 param list/get/set/describe` reach this node too.
+        self._parameter_services = parameter_services.ParameterServices(self, srv)
         _publish_graph()
         if self.declare_parameter('use_sim_time', False).value:
             self._clock.sim_time = 0
@@ -456,7 +460,57 @@ class Node:
                 raise ParameterError(f'{source}: {exc}') from None
             value = override
         self._parameters[name] = Parameter(name, value)
+        self._descriptors[name] = descriptor
         return self._parameters[name]
+
+    def parameter_names(self):
+        return list(self._parameters)
+
+    def describe_parameter(self, name):
+        """rcl_interfaces/ParameterDescriptor of a declared parameter."""
+        spec = self._descriptors.get(name)
+        described = (descriptor_message(spec, message_class) if spec is not None else
+                     message_class('rcl_interfaces/msg/ParameterDescriptor')(name=name))
+        described.type = parameter_services.type_id(self._parameters[name].value)
+        return described
+
+    def add_on_set_parameters_callback(self, callback):
+        """`callback([Parameter]) -> SetParametersResult` decides whether a change is taken."""
+        self._on_set.append(callback)
+
+    def add_post_set_parameters_callback(self, callback):
+        """`callback([Parameter])` is told every change taken."""
+        self._post_set.append(callback)
+
+    def set_parameter(self, name, value):
+        """Change one parameter as rclpy does (declared, same type, callbacks); the result."""
+        return self.set_parameters_atomically({name: value})
+
+    def set_parameters_atomically(self, values):
+        """Change every parameter of {name: value}, or none; rcl_interfaces/SetParametersResult."""
+        result = message_class('rcl_interfaces/msg/SetParametersResult')(successful=True)
+        for name, value in values.items():
+            if name not in self._parameters:
+                result.successful, result.reason = False, f"parameter '{name}' is not declared"
+            elif value is None:
+                result.successful, result.reason = False, f"parameter '{name}': no value given"
+            else:
+                try:
+                    check_override(self._name, name, self._parameters[name].value, value)
+                except ParameterError as exc:
+                    result.successful, result.reason = False, str(exc)
+            if not result.successful:
+                return result
+        changes = [Parameter(name, value) for name, value in values.items()]
+        for callback in self._on_set:
+            result = callback(changes)
+            if not result.successful:
+                return result
+        for change in changes:
+            self._parameters[change.name] = change
+        for callback in self._post_set:
+            callback(changes)
+        return result
 
     def declare_parameters(self, namespace, parameters):
         prefix = f'{namespace}.' if namespace else ''

@@ -41,6 +41,7 @@ A runtime is a module with the same names in both implementations (`rclpy_runtim
 a child Python whether rclpy could run the nodes here, for a process (the bench, the tests) that
 uses the DDS runtime itself.
 """
+import array
 import gc
 import importlib
 import os
@@ -51,6 +52,7 @@ from types import ModuleType
 from typing import Any, Callable, Optional, Sequence
 
 from bellows_ros.errors import BellowsError, ParameterError
+from bellows_ros.runtime.parameters import validate
 
 RUNTIMES = {'rclpy': 'bellows_ros.runtime.rclpy_runtime', 'dds': 'bellows_ros.runtime.dds_node'}
 
@@ -128,6 +130,11 @@ def check_override(node_name: str, name: str, default: Any, override: Any) -> No
                          f'got {_article(given)} {override!r}{hint}')
 
 
+def _plain(value: Any) -> Any:
+    """A parameter value as the node declared it: rclpy hands arrays over as array.array."""
+    return list(value) if isinstance(value, array.array) else value
+
+
 def _article(kind: str) -> str:
     return ('an ' if kind[0] in 'aeiou' else 'a ') + kind.replace('_', ' ')
 
@@ -141,6 +148,9 @@ class Node:
         self.srv = runtime.srv
         self._node = runtime.create_node(node_name)
         self._overrides = runtime.parameter_overrides(self._node)
+        self._specs = {}
+        # The value of every parameter declared with a Spec, kept current while the node runs.
+        self.parameters = {}
 
     # parameters
     def declare_parameter(self, name: str, value: Any) -> Any:
@@ -157,7 +167,6 @@ class Node:
         declared, the same way on both runtimes; rclpy also gets the Spec as the parameter's
         descriptor. Returns {name: value}.
         """
-        from bellows_ros.runtime.parameters import validate
         values = {}
         for spec in specs:
             value = spec.default
@@ -167,7 +176,41 @@ class Node:
             validate(self.get_name(), spec, value)
             values[spec.name] = self._node.declare_parameter(
                 spec.name, spec.default, self.runtime.descriptor(spec)).value
+        self._specs.update({spec.name: spec for spec in specs})
+        self.parameters.update(values)
         return values
+
+    # A change while running (`ros2 param set`, rqt_reconfigure), the same way on both runtimes:
+    # the runtime has checked that the parameter is declared and keeps its type; here its Spec
+    # decides (read-only, bounds, choices, rule), and the node is told once the change is taken.
+    def _check_change(self, changes: Sequence[Any]) -> Any:
+        result = self.runtime.service_message('rcl_interfaces/msg/SetParametersResult')(
+            successful=True)
+        for change in changes:
+            spec, value = self._specs.get(change.name), _plain(change.value)
+            if spec is None or spec.read_only:
+                result.successful = False
+                result.reason = (f"parameter '{change.name}' is read-only: the node reads it at "
+                                 'start (restart the node to change it)')
+                return result
+            try:
+                check_override(self.get_name(), change.name, spec.default, value)
+                validate(self.get_name(), spec, value)
+            except ParameterError as error:
+                result.successful, result.reason = False, str(error)
+                return result
+        if hasattr(self, 'parameter_problem'):
+            # A rule across parameters or with the node's own data (the node says what is wrong).
+            result.reason = self.parameter_problem({c.name: _plain(c.value) for c in changes})
+            result.successful = not result.reason
+        return result
+
+    def _take_change(self, changes: Sequence[Any]) -> None:
+        changed = {change.name: _plain(change.value) for change in changes}
+        self.parameters.update(changed)
+        if hasattr(self, 'on_parameters'):
+            # The node's own reaction (rebuild a filter, new gains): from the next control step.
+            self.on_parameters(changed)
 
     def get_parameter(self, name: str) -> Any:
         return self._node.get_parameter(name)
@@ -182,6 +225,15 @@ class Node:
             raise ParameterError(f"unknown parameter '{unknown[0]}' for node '{self.get_name()}' "
                                  '(given in a params file or with -p; the node has no such '
                                  'parameter)')
+
+    def watch_parameters(self) -> None:
+        """
+        From now on, decide every change of a parameter (`run` calls it once the node is built).
+
+        Not before: rclpy runs these callbacks for each declaration too.
+        """
+        self._node.add_on_set_parameters_callback(self._check_change)
+        self._node.add_post_set_parameters_callback(self._take_change)
 
     # communication
     def create_publisher(self, msg_type: type, topic: str, qos_profile: Any) -> Any:
@@ -272,6 +324,7 @@ def run(node_class: type, args: Optional[Sequence[str]] = None,
         runtime.init(args)
         node = node_class(runtime)
         node.check_parameters()
+        node.watch_parameters()
         realtime.request(node)
         latency_request = realtime.limit_cpu_latency(node)
         # Everything built so far (modules, type store, model tables) lives as long as the node:

@@ -88,6 +88,33 @@ class Spec:
         return f'>= {low}' if self.low is not None else f'<= {high}'
 
 
+def descriptor_message(spec, message_class):
+    """
+    Return rcl_interfaces/ParameterDescriptor of a Spec: description, range, read_only.
+
+    `message_class(ros_name)` gives the runtime's classes (rclpy's own, or the DDS runtime's).
+    """
+    result = message_class('rcl_interfaces/msg/ParameterDescriptor')(
+        name=spec.name, description=spec.description, read_only=spec.read_only)
+    # rcl's ranges hold no "unset" value: a parameter whose default is nan gets none.
+    unset = isinstance(spec.default, float) and math.isnan(spec.default)
+    if (spec.low is None and spec.high is None) or unset:
+        return result
+    element = spec.default[0] if isinstance(spec.default, (list, tuple)) and spec.default \
+        else spec.default
+    if isinstance(element, int) and not isinstance(element, bool):
+        low = -2 ** 63 if spec.low is None else int(math.ceil(spec.low))
+        high = 2 ** 63 - 1 if spec.high is None else int(math.floor(spec.high))
+        result.integer_range = [message_class('rcl_interfaces/msg/IntegerRange')(
+            from_value=low, to_value=high, step=0)]
+    elif isinstance(element, float):
+        low = -math.inf if spec.low is None else float(spec.low)
+        high = math.inf if spec.high is None else float(spec.high)
+        result.floating_point_range = [message_class('rcl_interfaces/msg/FloatingPointRange')(
+            from_value=low, to_value=high, step=0.0)]
+    return result
+
+
 def _number(value):
     return str(value) if isinstance(value, int) else f'{value:g}'
 

@@ -26,7 +26,6 @@ structs, then rmw_cyclonedds_cpp's introspection serializer, cost the model node
 sample than its model (docs/nodes.md, "rclpy beside the DDS runtime").
 """
 import importlib
-import math
 import sys
 import time
 import types
@@ -46,6 +45,7 @@ from rclpy.waitable import NumberOfEntities
 
 from bellows_ros.errors import ParameterError
 from bellows_ros.runtime import cdr, ros_args
+from bellows_ros.runtime.parameters import descriptor_message
 
 NAME = 'rclpy'
 
@@ -176,24 +176,8 @@ def _steps(plain_type):
 
 
 def descriptor(spec):
-    """rcl_interfaces/ParameterDescriptor of a Spec: description, range, read_only."""
-    from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
-    result = ParameterDescriptor(description=spec.description, read_only=spec.read_only)
-    # rcl's ranges hold no "unset" value: a parameter whose default is nan gets none.
-    unset = isinstance(spec.default, float) and math.isnan(spec.default)
-    if (spec.low is not None or spec.high is not None) and not unset:
-        element = spec.default[0] if isinstance(spec.default, (list, tuple)) and spec.default \
-            else spec.default
-        if isinstance(element, int) and not isinstance(element, bool):
-            low = -2 ** 63 if spec.low is None else int(math.ceil(spec.low))
-            high = 2 ** 63 - 1 if spec.high is None else int(math.floor(spec.high))
-            result.integer_range = [IntegerRange(from_value=low, to_value=high, step=0)]
-        elif isinstance(element, float):
-            low = -math.inf if spec.low is None else float(spec.low)
-            high = math.inf if spec.high is None else float(spec.high)
-            result.floating_point_range = [FloatingPointRange(from_value=low, to_value=high,
-                                                              step=0.0)]
-    return result
+    """Return rcl_interfaces/ParameterDescriptor of a Spec (rclpy's class): parameters.py."""
+    return descriptor_message(spec, service_message)
 
 
 def parameter_overrides(node):

@@ -1,0 +1,119 @@
+# Copyright 2026 bellows_ros maintainers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Live parameters with ROS 2's own `ros2 param`, on both runtimes and across them.
+
+The controllers and the model node run on the runtime under test; `ros2 param` is rclpy, so on
+the DDS runtime every call crosses runtimes through the parameter services the DDS runtime
+serves (runtime/parameter_services.py). Table-driven: a live parameter is set and reads back;
+a value outside its Spec is refused with the reason; a read-only one is refused as read-only;
+a change reaches the running node (its /diagnostics show the new feedforward).
+"""
+import random
+import subprocess
+import time
+
+import pytest
+from runtimes import launch, logs, node_env, require_rclpy, stop_all
+
+from bellows_ros.runtime import dds_node
+from bellows_ros.runtime.messages import msg
+
+pytestmark = pytest.mark.slow  # three nodes and ~20 ros2 CLI calls per runtime
+
+NODES = ('arm_controller_node', 'stiffness_controller_node', 'model_node')
+
+# (node, parameter, a value it takes, what `ros2 param get` then prints)
+LIVE = [
+    ('arm_controller_node', 'pid.kp', '35.0', 'Double value is: 35.0'),
+    ('arm_controller_node', 'feedforward', 'previous', 'String value is: previous'),
+    ('arm_controller_node', 'co_contraction', '50000.0', 'Double value is: 50000.0'),
+    ('stiffness_controller_node', 'pd.kp', '500.0', 'Double value is: 500.0'),
+    ('stiffness_controller_node', 'control_every', '2', 'Integer value is: 2'),
+    ('model_node', 'latency_budget', '0.003', 'Double value is: 0.003'),
+]
+# (node, parameter, a value it refuses, what the refusal says: the Spec's words, or rclpy's own
+# where rclpy checks the descriptor before the node's callback)
+REFUSED = [
+    ('arm_controller_node', 'pid.kp', '-1.0', ('0..10000', 'Max: 10000.0')),
+    ('arm_controller_node', 'feedforward', 'magic', ("one of 'paper_a'",)),
+    ('arm_controller_node', 'co_contraction', '650000.0', ('p_max',)),  # above p_max - p0
+    ('arm_controller_node', 'pid.kp', '35', ('double', 'Wrong parameter type')),  # no change
+    ('stiffness_controller_node', 'pd.duty_max', '2.0', ('0.01..1', 'Max: 1.0')),
+    ('model_node', 'latency_budget', '0.0', ('0.0001..1', 'Min: 0.0001')),
+    ('arm_controller_node', 'segments', '[2]', ('read-only',)),
+    ('model_node', 'segments', '[1]', ('read-only',)),
+    ('stiffness_controller_node', 'actuator_params', 'x.yaml', ('read-only',)),
+]
+
+
+def ros2_param(env, *args):
+    require_rclpy()
+    result = subprocess.run(['ros2', 'param', *args], capture_output=True, text=True,
+                            timeout=60, env=env)
+    return result.stdout + result.stderr
+
+
+@pytest.fixture
+def graph(runtime, tmp_path, monkeypatch):
+    domain = str(random.randint(100, 180))
+    monkeypatch.setenv('ROS_DOMAIN_ID', domain)
+    env = node_env(runtime, ROS_DOMAIN_ID=domain)
+    processes = [launch(name, [], env, tmp_path) for name in NODES]
+    try:
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline:
+            listed = ros2_param(env, 'list')
+            if all(f'/{name}:' in listed for name in NODES):
+                break
+            time.sleep(0.5)
+        assert all(f'/{name}:' in listed for name in NODES), listed + logs(tmp_path)
+        yield env, tmp_path
+    finally:
+        stop_all(processes)
+
+
+def test_live_parameters_set_refuse_and_take_effect(graph):
+    env, log_dir = graph
+    for node, name, value, shown in LIVE:
+        answer = ros2_param(env, 'set', f'/{node}', name, value)
+        assert 'Set parameter successful' in answer, (node, name, answer, logs(log_dir))
+        assert ros2_param(env, 'get', f'/{node}', name).strip() == shown
+    for node, name, value, reasons in REFUSED:
+        before = ros2_param(env, 'get', f'/{node}', name)
+        answer = ros2_param(env, 'set', f'/{node}', name, value)
+        assert 'Setting parameter failed' in answer, (node, name, answer)
+        assert any(reason in answer for reason in reasons), (node, name, answer)
+        assert ros2_param(env, 'get', f'/{node}', name) == before  # nothing changed
+    described = ros2_param(env, 'describe', '/arm_controller_node', 'pid.kp', 'segments')
+    assert 'Min value: 0.0' in described and 'Max value: 10000.0' in described, described
+    assert described.count('Read only: true') == 1, described  # segments only
+
+    # The change reached the running controller: its /diagnostics name the new feedforward.
+    seen = {}
+    dds_node.init([])
+    try:
+        probe = dds_node.Node('live_parameter_probe')
+        probe.create_subscription(
+            msg.DiagnosticArray, '/diagnostics',
+            lambda a: seen.update({kv.key: kv.value for s in a.status
+                                   if s.name.startswith('arm_controller_node')
+                                   for kv in s.values}), 50)
+        deadline = time.monotonic() + 15
+        while 'feedforward' not in seen and time.monotonic() < deadline:
+            dds_node.spin_once(probe, timeout_sec=0.1)
+    finally:
+        dds_node.shutdown()
+    assert seen.get('feedforward') == 'previous', seen
