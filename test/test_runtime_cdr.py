@@ -51,6 +51,10 @@ CASES = [
              'values': [{'key': 'rate_hz', 'value': '998.2'}, {'key': 'k', 'value': ''}]},
             {'level': 0, 'name': 'driver: actuator', 'values': []}]}),
     ('rosgraph_msgs/msg/Clock', {'clock': {'sec': 3, 'nanosec': 5}}),
+    ('lifecycle_msgs/msg/TransitionEvent', {
+        'timestamp': 2 ** 63 + 5, 'transition': {'id': 3, 'label': 'activate'},
+        'start_state': {'id': 2, 'label': 'inactive'},
+        'goal_state': {'id': 13, 'label': 'activating'}}),
 ]
 
 
