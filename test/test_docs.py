@@ -141,3 +141,97 @@ def test_the_documented_queue_depths_are_the_contract():
     text = INTERFACES.read_text()
     assert f'depth {interfaces.SAMPLE_DEPTH} (`SAMPLE_DEPTH`' in text
     assert f'depth {interfaces.COMMAND_DEPTH} (`COMMAND_DEPTH`' in text
+
+
+# --- the parameter tables of docs/interfaces.md ------------------------------------------------
+# Every node module that declares parameters, and the section of docs/interfaces.md holding them.
+NODE_MODULES = ('driver_node', 'model_node', 'arm_controller_node', 'stiffness_controller_node',
+                'sim_actuator_node', 'sim_arm_node', 'scenario_node')
+COMMON = 'Every node has these'
+
+
+def parameter_tables():
+    """{section: {parameter: {column: cell}}} of the tables under '## Node parameters'."""
+    text = INTERFACES.read_text()
+    text = text[text.index('## Node parameters'):text.index('## Data files')]
+    tables, section, header = {}, None, None
+    for line in text.splitlines():
+        if line.startswith('### '):
+            section = line[4:].split()[0]
+        elif line.startswith(COMMON):
+            section = COMMON
+        elif line.startswith('| parameter |'):
+            header = [cell.strip() for cell in line.strip('|').split('|')]
+        elif line.startswith('| `') and section:
+            cells = [cell.strip() for cell in line.strip('|').split('|')]
+            tables.setdefault(section, {})[cells[0].strip('`')] = dict(zip(header, cells))
+    return tables
+
+
+def _flat(values, prefix=''):
+    out = {}
+    for key, value in values.items():
+        if isinstance(value, dict):
+            out.update(_flat(value, f'{prefix}{key}.'))
+        else:
+            out[prefix + key] = value
+    return out
+
+
+def configured(kind):
+    """{node: {parameter: value}} of config/nodes_KIND.yaml, `/**` under its own name."""
+    import yaml
+    sections = yaml.safe_load((ROOT / 'config' / f'nodes_{kind}.yaml').read_text())
+    return {node: _flat(section.get('ros__parameters', {})) for node, section in sections.items()}
+
+
+def file_cell(files, node, name):
+    """What a table's sim/hw column must say: the node's value, else `/**`'s, else '—'."""
+    from bellows_ros.runtime.parameters import value_text
+    for section in (node, '/**'):
+        if name in files.get(section, {}):
+            return value_text(files[section][name])
+    return '—'
+
+
+def expected_row(spec, files):
+    from bellows_ros.runtime.parameters import value_text
+    return {'default': value_text(spec.default), 'allowed': spec.allowed(),
+            'live': 'no' if spec.read_only else 'yes',
+            'sim': files['sim'](spec.name), 'hw': files['hw'](spec.name)}
+
+
+def test_the_parameter_tables_are_the_code_and_the_files():
+    """Each node's table: exactly its Specs, with type, default, allowed, live, sim and hw."""
+    from bellows_ros.runtime import realtime
+    tables = parameter_tables()
+    config = {kind: configured(kind) for kind in ('sim', 'hw')}
+    for node in NODE_MODULES:
+        specs = importlib.import_module(f'bellows_ros.nodes.{node}').PARAMETERS
+        rows = tables.get(node, {})
+        assert set(rows) == {spec.name for spec in specs}, node
+        files = {kind: (lambda name, kind=kind: file_cell(config[kind], node, name))
+                 for kind in config}
+        for spec in specs:
+            row = rows[spec.name]
+            assert row['type, unit'].split(',')[0] == spec.type_name(), (node, spec.name)
+            expected = expected_row(spec, files)
+            assert {k: row[k] for k in expected} == expected, (node, spec.name)
+    common = tables[COMMON]
+    assert set(common) == {spec.name for spec in realtime.PARAMETERS} | {'use_sim_time'}
+    for spec in realtime.PARAMETERS:
+        for kind in ('sim', 'hw'):
+            given = ', '.join(f'{file_cell(config[kind], node, spec.name)} {node}'
+                              for node in NODE_MODULES
+                              if node in config[kind]
+                              and file_cell(config[kind], node, spec.name) != '—')
+            assert common[spec.name][kind] == (given or '—'), (spec.name, kind)
+
+
+def test_the_parameter_table_check_catches_a_drift():
+    """The check above fails when a row is missing or a default drifted (it is not vacuous)."""
+    tables = parameter_tables()
+    assert 'latency_budget' in tables['model_node']
+    assert tables['model_node']['latency_budget']['default'] == '0.002'
+    assert tables['arm_controller_node']['pid.kp']['live'] == 'yes'
+    assert tables['driver_node']['arm.channel']['live'] == 'no'

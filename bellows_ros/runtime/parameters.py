@@ -80,6 +80,28 @@ class Spec:
                         f'got {element!r}')
         return self.check(value) if self.check else ''
 
+    def type_name(self):
+        """Return the parameter's type as docs/interfaces.md names it: 'float', 'int array', ..."""
+        value = self.default[0] if isinstance(self.default, (list, tuple)) else self.default
+        name = {bool: 'bool', int: 'int', float: 'float', str: 'str'}[type(value)]
+        return f'{name} array' if isinstance(self.default, (list, tuple)) else name
+
+    def allowed(self):
+        """Return what values are allowed, as docs/interfaces.md says it ('—' = any)."""
+        parts = []
+        if self.low is not None or self.high is not None:
+            parts.append(self.bounds())
+        if self.choices:
+            parts.append('one of ' + ', '.join(f'`{c}`' if c else "''" for c in self.choices))
+        if self.items:
+            fewest, most = self.items
+            parts.append(f'{fewest}-{most} elements')
+        if self.unique:
+            parts.append('unique')
+        if self.check:
+            parts.append('checked')
+        return '; '.join(parts) or '—'
+
     def bounds(self):
         """Return the bounds as text: '1..99', '>= 0', '<= 5'."""
         low, high = (_number(bound) for bound in (self.low, self.high))
@@ -113,6 +135,19 @@ def descriptor_message(spec, message_class):
         result.floating_point_range = [message_class('rcl_interfaces/msg/FloatingPointRange')(
             from_value=low, to_value=high, step=0.0)]
     return result
+
+
+def value_text(value):
+    """Return a parameter value as docs/interfaces.md writes it (YAML-like: true, '', [1, 2])."""
+    if isinstance(value, bool):
+        return 'true' if value else 'false'
+    if isinstance(value, str):
+        return value or "''"
+    if isinstance(value, float) and math.isnan(value):
+        return 'nan'
+    if isinstance(value, (list, tuple)):
+        return '[' + ', '.join(value_text(v) for v in value) + ']'
+    return repr(value)
 
 
 def _number(value):
