@@ -17,7 +17,7 @@ The whole bellows graph on simulated hardware, with the scripted scenario.
 
     ros2 launch bellows_ros sim.launch.py [duration:=40.0] [scenario:=true] [output_dir:=DIR]
         [actuator_port:=PATH] [can_channel:=GROUP] [arm_effects:='[..]'] [actuator_effects:='[..]']
-        [params_file:=FILE] [discovery_range:=LOCALHOST]
+        [params_file:=FILE] [discovery_range:=LOCALHOST] [namespace:=NS]
 
 Starts sim_arm_node (CAN over udp_multicast on loopback), sim_actuator_node (serial on a pty),
 driver_node (a managed node, brought to active), model_node, stiffness_controller_node and
@@ -32,7 +32,8 @@ Arguments override the parameter file's node sections: launch_ros writes a dict 
 a file under the node's full name (when both name and namespace are given), passed after
 `params_file`, so it wins as `-p node:name:=value` would. The default pty path and multicast
 group are private to each launch (from its process id), so two launches on one machine do not
-collide.
+collide: with `namespace:=arm_a` and `namespace:=arm_b` two whole graphs run side by side, each
+under its namespace (config/nodes_sim.yaml's sections are `/**/<node>`, so they apply in any).
 """
 import os
 import tempfile
@@ -92,11 +93,13 @@ def _nodes(context):
         if effects is not None:
             overrides['effects'] = effects
 
+    namespace = arg('namespace').strip('/')
+
     def node(executable, overrides=None, managed=False, **kwargs):
         # name= and namespace= make launch_ros write the dict under the node's own name (with
         # either missing it writes `/**`, which the file's node section beats).
         kind = LifecycleNode if managed else Node
-        return kind(package=PACKAGE, executable=executable, name=executable, namespace='',
+        return kind(package=PACKAGE, executable=executable, name=executable, namespace=namespace,
                     output='screen', parameters=[params_file, overrides or {}], **kwargs)
 
     # The driver is a managed node: brought to active below (bring_to_active).
@@ -160,6 +163,9 @@ def generate_launch_description():
         DeclareLaunchArgument('params_file',
                               default_value=os.path.join(share, 'config', 'nodes_sim.yaml'),
                               description='ROS 2 parameter file for every node'),
+        DeclareLaunchArgument('namespace', default_value='',
+                              description='namespace of every node and topic (a second graph '
+                                          'beside the first: namespace:=arm_b)'),
         DeclareLaunchArgument('discovery_range', default_value=discovery,
                               description='ROS_AUTOMATIC_DISCOVERY_RANGE for the nodes '
                                           '(default LOCALHOST unless set in the environment)'),

@@ -2,13 +2,15 @@
 # The whole bellows graph on simulated hardware, plus a short scripted scenario.
 #
 #   scripts/launch_sim.sh [--no-scenario] [--duration S] [--output DIR] [--params FILE]
-#                         [-- extra --ros-args for every node]
+#                         [--namespace NS] [-- extra --ros-args for every node]
 #
 # Starts sim_arm_node (CAN over udp_multicast) and sim_actuator_node (serial on a pty), then
 # driver_node, model_node, stiffness_controller_node and arm_controller_node, all in the background
 # with their logs in DIR/logs. Then runs scenario_node (stiffness step 1400 -> 1900 N/m, segment_1
 # tracking an angle sweep): it prints a summary and writes DIR/scenario.png and .csv, and the
-# graph is stopped. With --no-scenario the graph runs until Ctrl-C. Every process is stopped on
+# graph is stopped. With --no-scenario the graph runs until Ctrl-C. With --namespace NS every node
+# runs in /NS (its topics under /NS/...), so graphs in different namespaces run side by side,
+# each with its own pty and CAN group. Every process is stopped on
 # exit, Ctrl-C or error (trap). Works from a checkout, a pip install and a colcon install (the
 # executables are found as `ros2 run` finds them). DDS discovery stays on this host.
 set -euo pipefail
@@ -23,6 +25,7 @@ params="$top/config/nodes_sim.yaml"
 output="$here/out/scenario"
 duration=40.0
 scenario=1
+namespace=''
 extra=()
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -31,7 +34,8 @@ while [ $# -gt 0 ]; do
     --output) output="$2"; shift ;;
     --params) params="$2"; shift ;;
     --) shift; extra=("$@"); break ;;
-    -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
+    --namespace) namespace="$2"; shift ;;
+    -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
     *) echo "launch_sim.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
   shift
@@ -43,6 +47,10 @@ case "$duration" in
   *) duration="$duration.0" ;;  # rcl types parameters strictly: duration is a double
 esac
 [ -f "$params" ] || { echo "launch_sim.sh: --params '$params': no such file" >&2; exit 2; }
+namespace=${namespace#/}
+if [ -n "$namespace" ] && ! [[ "$namespace" =~ ^[A-Za-z][A-Za-z0-9_]*(/[A-Za-z][A-Za-z0-9_]*)*$ ]]; then
+  echo "launch_sim.sh: --namespace '$namespace': expected a ROS name such as arm_a" >&2; exit 2
+fi
 # A simulation stays off the network: DDS discovery on this host only, Cyclone on loopback
 # (unless the user configured Cyclone); the simulated CAN bus is on loopback already.
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
@@ -57,7 +65,22 @@ output=$(cd "$output" && pwd)
 portdir=$(mktemp -d "${TMPDIR:-/tmp}/bellows_sim_actuator.XXXXXX")
 port="$portdir/board"
 group="239.74.163.$(( ($$ % 200) + 20 ))"
-common=(--ros-args --params-file "$params")
+# This run's own values, in a parameter file of its own after the user's: a section
+# `/**/<node>` reaches the node in any namespace and, coming later, wins over the file's
+# (a `-p node:name:=v` would reach only a node in the root namespace).
+overrides="$output/launch_parameters.yaml"
+cat >"$overrides.tmp" <<YAML
+/**/sim_arm_node:
+  ros__parameters: {can: {channel: '$group'}}
+/**/sim_actuator_node:
+  ros__parameters: {port: '$port'}
+/**/driver_node:
+  ros__parameters: {autostart: true, arm: {channel: '$group'}, actuator: {port: '$port'}}
+/**/scenario_node:
+  ros__parameters: {duration: $duration, output_dir: '$output'}
+YAML
+mv -f "$overrides.tmp" "$overrides"
+common=(--ros-args -r "__ns:=/$namespace" --params-file "$params" --params-file "$overrides")
 
 node_logs="$output/logs"
 cleanup() {
@@ -72,14 +95,12 @@ start() {  # start NAME ARGS...: a node in the background, log in $output/logs/N
   echo "launch_sim: $1 (pid $!)" >&2
 }
 
-# node:name:=value, after the file: under rcl a node's own section beats a bare -p (= /**).
-start sim_arm_node -p "sim_arm_node:can.channel:=$group"
-start sim_actuator_node -p "sim_actuator_node:port:=$port"
+start sim_arm_node
+start sim_actuator_node
 for _ in $(seq 50); do [ -e "$port" ] && break; sleep 0.1; done
 nodes_alive launch_sim
-# The driver is a managed node: autostart configures and activates it.
-start driver_node -p driver_node:autostart:=true -p "driver_node:arm.channel:=$group" \
-  -p "driver_node:actuator.port:=$port"
+# The driver is a managed node: autostart (launch_parameters.yaml) configures and activates it.
+start driver_node
 start model_node
 start stiffness_controller_node
 start arm_controller_node
@@ -87,8 +108,7 @@ sleep 3
 nodes_alive launch_sim
 
 if [ "$scenario" = 1 ]; then
-  "$bin/scenario_node" "${common[@]}" -p "scenario_node:duration:=$duration" \
-    -p "scenario_node:output_dir:=$output" "${extra[@]}"
+  "$bin/scenario_node" "${common[@]}" "${extra[@]}"
   nodes_alive launch_sim
 else
   echo "launch_sim: graph running; Ctrl-C to stop" >&2

@@ -168,64 +168,55 @@ def parameter_tables():
     return tables
 
 
-def _flat(values, prefix=''):
-    out = {}
-    for key, value in values.items():
-        if isinstance(value, dict):
-            out.update(_flat(value, f'{prefix}{key}.'))
-        else:
-            out[prefix + key] = value
-    return out
+def config_file(kind):
+    return ROOT / 'config' / f'nodes_{kind}.yaml'
 
 
-def configured(kind):
-    """{node: {parameter: value}} of config/nodes_KIND.yaml, `/**` under its own name."""
-    import yaml
-    sections = yaml.safe_load((ROOT / 'config' / f'nodes_{kind}.yaml').read_text())
-    return {node: _flat(section.get('ros__parameters', {})) for node, section in sections.items()}
-
-
-def file_cell(files, node, name):
-    """What a table's sim/hw column must say: the node's value, else `/**`'s, else '—'."""
+def node_cell(kind, node, name):
+    """What a node table's sim/hw column must say: the value the file gives the node, or '—'."""
+    from bellows_ros.params import read_file
     from bellows_ros.runtime.parameters import value_text
-    for section in (node, '/**'):
-        if name in files.get(section, {}):
-            return value_text(files[section][name])
-    return '—'
+    given = read_file(config_file(kind), node)
+    return value_text(given[name]) if name in given else '—'
 
 
-def expected_row(spec, files):
+def common_cell(kind, name):
+    """The common table's sim/hw column: '/**'s value for every node, then each node section's."""
+    from bellows_ros.params import read_sections
+    from bellows_ros.runtime.parameters import value_text
+    sections = read_sections(config_file(kind))
+    parts = [f"{value_text(sections['/**'][name])} (every node)"] if name in sections['/**'] \
+        else []
+    parts += [f'{value_text(values[name])} {section.rsplit("/", 1)[-1]}'
+              for section, values in sections.items() if section != '/**' and name in values]
+    return ', '.join(parts) or '—'
+
+
+def expected_row(spec, node):
     from bellows_ros.runtime.parameters import value_text
     return {'default': value_text(spec.default), 'allowed': spec.allowed(),
             'live': 'no' if spec.read_only else 'yes',
-            'sim': files['sim'](spec.name), 'hw': files['hw'](spec.name)}
+            'sim': node_cell('sim', node, spec.name), 'hw': node_cell('hw', node, spec.name)}
 
 
 def test_the_parameter_tables_are_the_code_and_the_files():
     """Each node's table: exactly its Specs, with type, default, allowed, live, sim and hw."""
     from bellows_ros.runtime import realtime
     tables = parameter_tables()
-    config = {kind: configured(kind) for kind in ('sim', 'hw')}
     for node in NODE_MODULES:
         specs = importlib.import_module(f'bellows_ros.nodes.{node}').PARAMETERS
         rows = tables.get(node, {})
         assert set(rows) == {spec.name for spec in specs}, node
-        files = {kind: (lambda name, kind=kind: file_cell(config[kind], node, name))
-                 for kind in config}
         for spec in specs:
             row = rows[spec.name]
             assert row['type, unit'].split(',')[0] == spec.type_name(), (node, spec.name)
-            expected = expected_row(spec, files)
+            expected = expected_row(spec, node)
             assert {k: row[k] for k in expected} == expected, (node, spec.name)
     common = tables[COMMON]
     assert set(common) == {spec.name for spec in realtime.PARAMETERS} | {'use_sim_time'}
     for spec in realtime.PARAMETERS:
         for kind in ('sim', 'hw'):
-            given = ', '.join(f'{file_cell(config[kind], node, spec.name)} {node}'
-                              for node in NODE_MODULES
-                              if node in config[kind]
-                              and file_cell(config[kind], node, spec.name) != '—')
-            assert common[spec.name][kind] == (given or '—'), (spec.name, kind)
+            assert common[spec.name][kind] == common_cell(kind, spec.name), (spec.name, kind)
 
 
 def test_the_parameter_table_check_catches_a_drift():

@@ -29,6 +29,7 @@ import signal
 import subprocess
 import sys
 import threading
+import time
 
 import pytest
 from runtimes import LOOPBACK_ENVIRONMENT, require_rclpy
@@ -96,8 +97,9 @@ def prefix(ros, tmp_path_factory):
     return top
 
 
-def _prefix_env(prefix):
-    return _ros_env(AMENT_PREFIX_PATH=f"{prefix}:{os.environ.get('AMENT_PREFIX_PATH', '')}")
+def _prefix_env(prefix, **extra):
+    return _ros_env(AMENT_PREFIX_PATH=f"{prefix}:{os.environ.get('AMENT_PREFIX_PATH', '')}",
+                    **extra)
 
 
 def _series_counts(csv_path):
@@ -170,8 +172,8 @@ def test_sim_launch_arguments_override_the_parameter_file(prefix, tmp_path):
     sections = yaml.safe_load((ROOT / 'config' / 'nodes_sim.yaml').read_text())
     port = tmp_path / 'actuator_pty'
     channel = f'239.74.163.{(os.getpid() % 30) + 220}'
-    yaml_port = sections['sim_actuator_node']['ros__parameters']['port']
-    yaml_channel = sections['sim_arm_node']['ros__parameters']['can']['channel']
+    yaml_port = sections['/**/sim_actuator_node']['ros__parameters']['port']
+    yaml_channel = sections['/**/sim_arm_node']['ros__parameters']['can']['channel']
     assert (str(port), channel) != (yaml_port, yaml_channel)  # else the test proves nothing
     process = subprocess.Popen(
         ['ros2', 'launch', 'bellows_ros', 'sim.launch.py', 'scenario:=false',
@@ -253,3 +255,57 @@ def test_shell_launcher_from_a_pip_install(ros, tmp_path):
     board = (out / 'logs' / 'sim_actuator_node.log').read_text()
     assert re.search(r'simulated actuator board on \S+/bellows_sim_actuator\.\w+/board,', board), \
         board
+
+
+def test_two_namespaced_graphs_run_side_by_side(prefix, tmp_path, monkeypatch):
+    """
+    `sim.launch.py namespace:=arm_a` (rclpy) beside `launch_sim.sh --namespace arm_b` (DDS).
+
+    Graph b simulates two segments, graph a one: every sample on /arm_a/... names segment_1
+    only, every one on /arm_b/... both, and nothing reaches the root namespace's topics.
+    """
+    from bellows_ros import interfaces
+    from bellows_ros.runtime import dds_node
+    from bellows_ros.runtime.messages import msg
+    env = _prefix_env(prefix, ROS_DOMAIN_ID=str(os.getpid() % 50 + 120))
+    two = yaml.safe_load((ROOT / 'config' / 'nodes_sim.yaml').read_text())
+    two['/**/sim_arm_node']['ros__parameters']['n_segments'] = 2
+    two['/**/driver_node']['ros__parameters']['arm']['n_segments'] = 2
+    params_b = tmp_path / 'nodes_b.yaml'
+    params_b.write_text(yaml.safe_dump(two))
+    graph_a = subprocess.Popen(['ros2', 'launch', 'bellows_ros', 'sim.launch.py',
+                                'scenario:=false', 'namespace:=arm_a'], env=env,
+                               stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
+    graph_b = subprocess.Popen(['bash', str(ROOT / 'scripts' / 'launch_sim.sh'), '--no-scenario',
+                                '--namespace', 'arm_b', '--params', str(params_b), '--output',
+                                str(tmp_path / 'b')], env=dict(env, BELLOWS_RUNTIME='dds'),
+                               stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
+    names = {'/arm_a': [], '/arm_b': [], '/': []}
+    monkeypatch.setenv('ROS_DOMAIN_ID', env['ROS_DOMAIN_ID'])
+    dds_node.init([])
+    try:
+        probe = dds_node.Node('namespace_probe')
+        for namespace, seen in names.items():
+            for topic in (interfaces.JOINT_STATES, interfaces.CHAMBERS):
+                probe.create_subscription(msg.JointState, topic.resolved(namespace),
+                                          lambda m, seen=seen: seen.append(tuple(m.name)), 1000)
+        deadline = time.monotonic() + GUARD
+        while not (names['/arm_a'] and names['/arm_b']) and time.monotonic() < deadline:
+            dds_node.spin_once(probe, timeout_sec=0.1)
+        end = time.monotonic() + 3.0
+        while time.monotonic() < end:
+            dds_node.spin_once(probe, timeout_sec=0.05)
+    finally:
+        dds_node.shutdown()
+        _stop(graph_a)
+        _stop(graph_b)
+    actuator = {interfaces.ACTUATOR_JOINTS, (interfaces.ACTUATOR_CHAMBER,)}
+    arm_a = {(interfaces.segment_joint(1),),
+             (interfaces.chain_chamber(1, 1), interfaces.chain_chamber(1, 2))}
+    arm_b = {tuple(interfaces.segment_joint(i) for i in (1, 2)),
+             tuple(interfaces.chain_chamber(i, j) for i in (1, 2) for j in (1, 2))}
+    logs = '\n'.join(p.read_text()[-800:] for p in (tmp_path / 'b' / 'logs').glob('*.log'))
+    assert len(names['/arm_a']) > 100 and len(names['/arm_b']) > 100, logs
+    assert set(names['/arm_a']) <= arm_a | actuator and set(names['/arm_a']) & arm_a
+    assert set(names['/arm_b']) <= arm_b | actuator and set(names['/arm_b']) & arm_b
+    assert names['/'] == []
