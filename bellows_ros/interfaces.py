@@ -38,6 +38,11 @@ from dataclasses import dataclass
 SAMPLE_DEPTH = 1000
 # Depth for commands, set-points and status: only the newest few matter.
 COMMAND_DEPTH = 10
+# s: the longest gap between pressure commands after which a driver may vent the arm (its
+# `hardware.arm_bus.command_timeout` is at least this, checked when the driver's hardware file is
+# read). A controller sends a command at least every quarter of it, whatever file the driver
+# was given: this is the promise between them, not a copy of the driver's configuration.
+COMMAND_WATCHDOG = 0.1
 
 
 @dataclass(frozen=True)

@@ -147,3 +147,17 @@ def test_an_ambient_pressure_in_bar_kpa_or_hpa_is_refused(value, tmp_path, capsy
                  '--params', str(params)]) == 2
     line = error_line(capsys)
     assert "parameter 'segment.p0'" in line and 'ambient' in line, line
+
+
+def test_a_driver_refuses_a_command_timeout_below_the_contracts_watchdog(tmp_path):
+    """A controller keeps to interfaces.COMMAND_WATCHDOG: a shorter timeout is refused."""
+    from bellows_ros import interfaces
+    from bellows_ros.config.hardware import arm_bus_config
+    section = '/**:\n  ros__parameters:\n    hardware:\n      arm_bus:\n        command_timeout: '
+    short = tmp_path / 'hardware.yaml'
+    short.write_text(f'{section}{interfaces.COMMAND_WATCHDOG / 2}\n')
+    with pytest.raises(ParameterError, match='command watchdog of the interface contract'):
+        arm_bus_config(short)
+    longer = tmp_path / 'longer.yaml'
+    longer.write_text(f'{section}0.5\n')
+    assert arm_bus_config(longer).command_timeout == 0.5

@@ -141,6 +141,7 @@ def test_the_documented_queue_depths_are_the_contract():
     text = INTERFACES.read_text()
     assert f'depth {interfaces.SAMPLE_DEPTH} (`SAMPLE_DEPTH`' in text
     assert f'depth {interfaces.COMMAND_DEPTH} (`COMMAND_DEPTH`' in text
+    assert f'`COMMAND_WATCHDOG` = {interfaces.COMMAND_WATCHDOG:g} s' in text
 
 
 # --- the parameter tables of docs/interfaces.md ------------------------------------------------

@@ -27,6 +27,7 @@ import dataclasses
 
 from bellows_ros import params as param_files
 from bellows_ros.errors import ParameterError
+from bellows_ros.interfaces import COMMAND_WATCHDOG
 from bellows_ros.models.actuator_drive import Drive
 
 HARDWARE_SOURCE = 'config/hardware.yaml'
@@ -152,7 +153,15 @@ def arm_bus_config(params_path=None, segment_params_path=None):
     if not p_max > p0 > 0:
         raise ParameterError(f"{segment_source}: parameter 'segment.p_max' must exceed p0 > 0")
     flat.update(pressure_min=float(p0), pressure_max=float(p_max))
-    return param_files.build(ArmBusConfig, flat, params_path or HARDWARE_SOURCE)
+    config = param_files.build(ArmBusConfig, flat, params_path or HARDWARE_SOURCE)
+    if not config.command_timeout >= COMMAND_WATCHDOG:
+        # A controller keeps to the contract's watchdog, not to this file: a shorter timeout
+        # would vent the arm between two of its commands.
+        raise ParameterError(f'{params_path or HARDWARE_SOURCE}: parameter '
+                             f"'hardware.arm_bus.command_timeout' = {config.command_timeout:g} s "
+                             f'is shorter than the command watchdog of the interface contract '
+                             f'({COMMAND_WATCHDOG:g} s, bellows_ros/interfaces.py)')
+    return config
 
 
 def vent_pressure(segment_params_path=None):

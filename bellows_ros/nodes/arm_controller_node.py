@@ -23,8 +23,9 @@ allocation of `control.pressure_allocation`) and `control.angle_trajectory` (bui
       memory, Algorithm 1); every `control_every`-th sample a command goes out:
   /bellows/pressure_command (JointState, effort = chain pressures, Pa abs, names
       `segment_i/chain_j`), inside the driver's limits [p0, p_max] of config/segment.yaml, at
-      1 kHz / control_every — well inside the driver's command watchdog (`hardware.arm_bus.
-      command_timeout`): with no samples there is no command, and the driver vents the arm.
+      1 kHz / control_every — well inside the command watchdog of the interface contract
+      (`interfaces.COMMAND_WATCHDOG`, which every driver's `hardware.arm_bus.command_timeout`
+      meets): with no samples there is no command, and the driver vents the arm.
   /arm/psi_setpoint (JointState by segment name: position = Ψ_d rad, velocity = Ψ̇_d rad/s if
       given): from its first message on, a segment follows the topic instead of its trajectory.
   /diagnostics: per segment the tracking error (RMS and largest since the last report), the
@@ -53,7 +54,6 @@ import time
 import numpy as np
 
 from bellows_ros import interfaces
-from bellows_ros.config.hardware import arm_bus_config
 from bellows_ros.config.segment import load_segment_params
 from bellows_ros.control import angle_trajectory
 from bellows_ros.control.angle_tracking import (AngleTracker, check_gains, FEEDFORWARDS,
@@ -90,8 +90,8 @@ PARAMETERS = (
     Spec('co_contraction', 0.0, 'pressure above ambient on both chains, Pa', low=0.0,
          high=6.5e5, read_only=False),
     Spec('control_every', 5, 'samples per pressure command (a command at least every quarter '
-         'of the driver watchdog)', low=1, high=int(arm_bus_config().command_timeout / 4
-                                                    / SAMPLE_PERIOD)),
+         'of the command watchdog)', low=1,
+         high=int(interfaces.COMMAND_WATCHDOG / 4 / SAMPLE_PERIOD)),
     Spec('params_file', '', "YAML laid over config/segment.yaml ('' = defaults)"),
     Spec('max_pending', 100, 'unmatched half-samples kept before the oldest is dropped',
          low=1, high=interfaces.SAMPLE_DEPTH),
@@ -141,7 +141,7 @@ class ArmControllerNode(Node):
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
         path = angle_trajectory.by_name(trajectory) if trajectory else None
-        self.watchdog_ns = round(arm_bus_config().command_timeout * 1e9)
+        self.watchdog_ns = round(interfaces.COMMAND_WATCHDOG * 1e9)
         self.params = params = load_segment_params(params_file)
         gains = self._gains(given)
         self.lead = lead
