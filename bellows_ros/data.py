@@ -24,14 +24,22 @@ A directory is read as a rosbag2 recording (see `bellows_ros.bag`). Both readers
 """
 import csv
 import io
+import itertools
 import math
 from pathlib import Path
+import sys
 
 import numpy as np
+from tqdm import tqdm
 
 from bellows_ros.errors import DataError
 from bellows_ros.outputs import atomic_file
 from bellows_ros.table import check_increasing, COLUMNS, Table
+
+BOM = b'\xef\xbb\xbf'  # the UTF-8 byte-order mark spreadsheets write
+# Rows per chunk of a streamed record (`read_chunks`): about 30 MB while a chunk is run and
+# written (its numbers, then their text), whatever the record's length.
+CHUNK_ROWS = 20_000
 
 # Pressure columns of each system: absolute, in Pa.
 PRESSURES = {'segment': ('p1', 'p2'), 'actuator': ('p',)}
@@ -59,15 +67,19 @@ def read_csv(path, required, optional=()):
         raw = path.read_bytes()
     except OSError as exc:
         raise DataError(path, f'cannot read file ({exc.strerror})') from None
-    raw = raw.removeprefix(b'\xef\xbb\xbf')  # the UTF-8 byte-order mark spreadsheets write
-    fast = _read_numeric(path, raw, required, optional)
+    return _parse(path, raw.removeprefix(BOM), required, optional)
+
+
+def _parse(path, raw, required, optional, skipped=0):
+    """A Table of CSV bytes (header line, then rows); `skipped` data lines came before them."""
+    fast = _read_numeric(path, raw, required, optional, skipped)
     if fast is not None:
         return fast
     reader = csv.reader(io.StringIO(raw.decode(errors='replace'), newline=''))
     try:
-        header, rows, lines = _split_rows(path, reader, required)
+        header, rows, lines = _split_rows(path, reader, required, skipped)
     except csv.Error as exc:  # e.g. a field longer than the csv module's limit
-        raise DataError(path, str(exc), line=reader.line_num) from None
+        raise DataError(path, str(exc), line=reader.line_num + skipped) from None
     values, extras = {}, {}
     for index, name in enumerate(header):
         cells = [row[index] for row in rows]
@@ -78,7 +90,7 @@ def read_csv(path, required, optional=()):
     return Table(str(path), header, values, extras, lines)
 
 
-def _split_rows(path, reader, required):
+def _split_rows(path, reader, required, skipped=0):
     """Header (checked against `required`) and the non-blank rows of a CSV with their lines."""
     header = next(reader, None)
     if not header:
@@ -98,15 +110,15 @@ def _split_rows(path, reader, required):
             continue
         if len(row) != len(header):
             raise DataError(path, f'expected {len(header)} fields, found {len(row)}',
-                            line=reader.line_num)
+                            line=reader.line_num + skipped)
         rows.append(row)
-        lines.append(reader.line_num)
+        lines.append(reader.line_num + skipped)
     if not rows:
         raise DataError(path, 'no data rows after the header')
     return header, rows, lines
 
 
-def _read_numeric(path, raw, required, optional):
+def _read_numeric(path, raw, required, optional, skipped=0):
     """
     Fast path for the common file: every column wanted, all finite numbers, no blank lines.
 
@@ -129,7 +141,7 @@ def _read_numeric(path, raw, required, optional):
     if array.shape != (rows, len(header)) or not np.isfinite(array).all():
         return None
     values = {name: np.ascontiguousarray(array[:, i]) for i, name in enumerate(header)}
-    return Table(str(path), header, values, {}, list(range(2, rows + 2)))
+    return Table(str(path), header, values, {}, range(skipped + 2, skipped + rows + 2))
 
 
 def _parse_column(path, name, cells, lines):
@@ -182,6 +194,61 @@ def check_moves(table, name, why):
                         f'{noise:.2g}): {why}', column=name)
 
 
+def read_chunks(path, system, required=None, rows=None):
+    """
+    Yield a `system` file as Tables of at most `rows` rows (CHUNK_ROWS), for a record of any size.
+
+    Each chunk is checked as `read_table` checks a whole file (columns, numbers, units), and time
+    increases across chunks too; line numbers in errors are the file's. A rosbag2 directory
+    comes in one Table. `progress` bars the bytes read on stderr when it is a terminal.
+    """
+    if Path(path).is_dir():
+        yield read_table(path, system, required)
+        return
+    rows = rows or CHUNK_ROWS
+    required, optional = _columns(system, required)
+    path = Path(path)
+    try:
+        stream = path.open('rb')
+    except OSError as exc:
+        raise DataError(path, f'cannot read file ({exc.strerror})') from None
+    with stream, tqdm(total=path.stat().st_size, unit='B', unit_scale=True, disable=None,
+                      file=sys.stderr, leave=False, desc=path.name) as bar:
+        header = stream.readline().removeprefix(BOM)
+        skipped, last, any_rows = 0, None, False
+        while True:
+            block = list(itertools.islice(stream, rows))
+            if not block:
+                break
+            bar.update(sum(map(len, block)) + (len(header) if skipped == 0 else 0))
+            if not any(line.strip() for line in block):  # blank lines only: nothing to parse
+                skipped += len(block)
+                continue
+            table = _parse(path, header + b''.join(block), required, optional, skipped)
+            skipped += len(block)
+            _check_chunk(table, system, required, last)
+            last = float(table['t'][-1])
+            any_rows = True
+            yield table
+    if not any_rows:
+        raise DataError(path, 'no data rows after the header' if header.strip() else
+                        'empty file: expected a header row', line=2 if header.strip() else 1)
+
+
+def _check_chunk(table, system, required, last):
+    check_increasing(table, 't')
+    if last is not None and not table['t'][0] > last:
+        raise DataError(table.path, f"not increasing ({table['t'][0]:g} after {last:g})",
+                        table.line(0), 't')
+    check_units(table, system, required)
+
+
+def _columns(system, required):
+    mandatory, optional = COLUMNS[system]
+    required = mandatory if required is None else tuple(required)
+    return required, tuple(name for name in mandatory + optional if name not in required)
+
+
 def read_table(path, system, required=None):
     """
     Read a `system` ('segment' or 'actuator') file: CSV, or a rosbag2 directory.
@@ -194,9 +261,7 @@ def read_table(path, system, required=None):
         table = read_bag_table(path, system)
         check_units(table, system)
         return table
-    mandatory, optional = COLUMNS[system]
-    required = mandatory if required is None else tuple(required)
-    optional = tuple(name for name in mandatory + optional if name not in required)
+    required, optional = _columns(system, required)
     table = read_csv(path, required, optional)
     check_increasing(table, 't')
     check_units(table, system, required)
@@ -237,22 +302,61 @@ def check_units(table, system, names=None):
 
 def write_csv(path, table, outputs):
     """Write the input `table` (all its columns, in order), then `outputs` (name -> array)."""
-    names = list(table.names) + [name for name in outputs if name not in table.names]
-    columns = []
-    for name in names:
-        if name in outputs:
-            columns.append([_format(v) for v in outputs[name]])
-        elif name in table.values:
-            columns.append([_format(v) for v in table.values[name]])
-        else:
-            columns.append(table.extras[name])
-    try:
-        with atomic_file(path, 'w', newline='') as stream:
-            writer = csv.writer(stream)
-            writer.writerow(names)
-            writer.writerows(zip(*columns))
-    except OSError as exc:
-        raise DataError(path, f'cannot write file ({exc.strerror})') from None
+    with CsvOutput(path) as output:
+        output.write(table, outputs)
+
+
+class CsvOutput:
+    """
+    Write "the input plus outputs" chunk by chunk: `with CsvOutput(path) as out: out.write(..)`.
+
+    The rows go to a temporary file beside `path`, which replaces it only when the block ends
+    without an error (outputs.atomic_file): a failure half-way leaves the old file, or none.
+    """
+
+    def __init__(self, path):
+        self.path = path
+        self.names = None
+
+    def __enter__(self):
+        self._file = atomic_file(self.path, 'w', newline='')
+        try:
+            self._writer = csv.writer(self._file.__enter__())
+        except OSError as exc:
+            raise DataError(self.path, f'cannot write file ({exc.strerror})') from None
+        return self
+
+    def write(self, table, outputs):
+        """Write the rows of `table` (every column, in order), then `outputs` (name -> array)."""
+        if self.names is None:
+            self.names = list(table.names) + [n for n in outputs if n not in table.names]
+            self._writer.writerow(self.names)
+        columns = []
+        for name in self.names:
+            if name in outputs:
+                columns.append(_texts(outputs[name]))
+            elif name in table.values:
+                columns.append(_texts(table.values[name]))
+            else:
+                columns.append(table.extras[name])
+        try:
+            self._writer.writerows(zip(*columns))
+        except OSError as exc:
+            raise DataError(self.path, f'cannot write file ({exc.strerror})') from None
+
+    def __exit__(self, *error):
+        try:
+            return self._file.__exit__(*error)
+        except OSError as exc:
+            raise DataError(self.path, f'cannot write file ({exc.strerror})') from None
+
+
+def _texts(column):
+    """A column as CSV cells: the shortest text that reads back as the same float; nan else."""
+    values = np.asarray(column, dtype=float)
+    if np.isfinite(values).all():
+        return list(map(repr, values.tolist()))
+    return [_format(value) for value in values.tolist()]
 
 
 def _format(value):

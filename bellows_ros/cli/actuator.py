@@ -19,7 +19,7 @@ import numpy as np
 
 from bellows_ros import params as param_files
 from bellows_ros.config.actuator import load_actuator, params_to_flat
-from bellows_ros.data import check_moves, check_range, read_table, write_csv
+from bellows_ros.data import check_moves, check_range, CsvOutput, read_chunks, read_table
 from bellows_ros.errors import BellowsError, DataError, ParameterError
 from bellows_ros.identify.actuator import fit_actuator, parameter_count, STRUCTURE_LAG
 from bellows_ros.models.actuator import evaluate_array
@@ -40,31 +40,44 @@ def simulate(input_path, output_path, params_path, effects):
     With effects the plant is driven by the input: x_c moves the lead-screw nut (the plate follows
     through the backlash, if any), x_s is imposed; sensors are noise-free so the output shows the
     effects alone. p and f columns of the input, if any, are replaced by the simulated ones.
+    Read, run and written a chunk at a time (data.read_chunks), the plant's state carried on.
     """
     config = load_actuator(params_path)
     params = config.model
     chosen = effect_parameters(config.plant, effects) if effects else {}
-    table = read_table(input_path, 'actuator', ('t', 'x_c', 'x_s'))  # p, f are outputs here
-    _check_compressions(table, params)
-    x_c, x_s, t = table['x_c'], table['x_s'], table['t']
-    if not chosen:
-        p, f, k = evaluate_array(params, x_c, x_s)
-    else:
-        p, f, k = _run_plant(params, config.plant, chosen, t, x_c, x_s)
-    write_csv(output_path, table, {'p': p, 'f': f, 'k': k})
+    plant, last, rows = None, None, 0
+    with CsvOutput(output_path) as output:
+        # p and f are outputs here, not inputs
+        for table in read_chunks(input_path, 'actuator', ('t', 'x_c', 'x_s')):
+            _check_compressions(table, params)
+            x_c, x_s, t = table['x_c'], table['x_s'], table['t']
+            if not chosen:
+                p, f, k = evaluate_array(params, x_c, x_s)
+            else:
+                if plant is None:
+                    plant = ActuatorPlant(params, config.plant, chosen, noise=False, x_c0=x_c[0],
+                                          x_s0=x_s[0])
+                p, f, k = _run_plant(plant, t, x_c, x_s, last)
+                last = t[-1]
+            output.write(table, {'p': p, 'f': f, 'k': k})
+            rows += len(t)
     what = 'model' if not chosen else 'plant with ' + ', '.join(chosen)
-    print(f'bellows simulate actuator: {len(t)} rows, {what} -> {output_path}', file=sys.stderr)
+    print(f'bellows simulate actuator: {rows} rows, {what} -> {output_path}', file=sys.stderr)
     return 0
 
 
-def _run_plant(params, plant_params, effects, t, x_c, x_s):
-    plant = ActuatorPlant(params, plant_params, effects, noise=False, x_c0=x_c[0], x_s0=x_s[0])
+def _run_plant(plant, t, x_c, x_s, last=None):
+    """The plant's p, f, k at each row; `last` is the previous chunk's last time (None: none)."""
     n = len(t)
     p, f, k = np.empty(n), np.empty(n), np.empty(n)
-    p[0], f[0], k[0] = plant.pressure, plant.force, plant.stiffness
-    for i in range(1, n):
-        sample = plant.step_nut(t[i] - t[i - 1], x_c[i], x_s_imposed=x_s[i])
+    start = 0
+    if last is None:  # the first row is the plant's initial state
+        p[0], f[0], k[0] = plant.pressure, plant.force, plant.stiffness
+        start, last = 1, t[0]
+    for i in range(start, n):
+        sample = plant.step_nut(t[i] - last, x_c[i], x_s_imposed=x_s[i])
         p[i], f[i], k[i] = sample.p, sample.f, plant.stiffness
+        last = t[i]
     return p, f, k
 
 

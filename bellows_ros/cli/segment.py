@@ -30,7 +30,7 @@ from bellows_ros.config.segment import load_segment
 from bellows_ros.errors import DataError
 from bellows_ros.identify.segment import fit_segment, MIN_RATE_PER_CUTOFF
 from bellows_ros.models.derivatives import rates
-from bellows_ros.models.segment import OUTPUTS, simulate_model
+from bellows_ros.models.segment import OUTPUTS, SegmentModel, simulate_model
 from bellows_ros.models.segment_plant import check_effects, SegmentPlant
 
 INPUT_REQUIRED = ('t', 'psi', 'p1', 'p2')  # a simulation input needs no measured torque
@@ -44,28 +44,66 @@ def _read(path, params, required=None):
     return table
 
 
-def _psi_dot(table):
-    return table['psi_dot'] if 'psi_dot' in table else rates(table['t'], table['psi'])
-
-
 def simulate(input_path, output_path, params_path, effects):
-    """Run the model (no effects) or the plant (effects: name -> {param: float}); write the CSV."""
+    """
+    Run the model (no effects) or the plant (effects: name -> {param: float}); write the CSV.
+
+    The input is read, run and written a chunk at a time (data.read_chunks), the model's or
+    plant's state carried from one chunk to the next: the output is the same as from one pass,
+    and memory does not grow with the record.
+    """
     config = load_segment(params_path)
     params = config.model
     effects = check_effects(effects)
-    table = _read(input_path, params, INPUT_REQUIRED)
-    if not effects:
-        outputs = simulate_model(params, table['psi'], table['p1'], table['p2'], _psi_dot(table))
-    else:
-        outputs = _run_plant(params, config.plant, effects, table)
-    data.write_csv(output_path, table, outputs)
+    run = _PlantRun(params, config.plant, effects) if effects else _ModelRun(params)
+    with data.CsvOutput(output_path) as output:
+        for table in data.read_chunks(input_path, 'segment', INPUT_REQUIRED):
+            for name in ('p1', 'p2'):
+                data.check_range(table, name, 0.0, params.p_max, 'Pa')
+            output.write(table, run.chunk(table))
     return 0
 
 
-def _run_plant(params, plant_params, effects, table):
-    t = table['t']
-    steps = np.diff(t, prepend=t[0] - (t[1] - t[0] if len(t) > 1 else 1e-3))
-    plant = SegmentPlant(params, plant_params, effects, seed=0, psi0=float(table['psi'][0]))
+class _ModelRun:
+    """Paper A's model over a record's chunks: strain memory and the Ψ̇ estimate carried on."""
+
+    def __init__(self, params):
+        self.params, self.model = params, SegmentModel(params)
+        self.last = None  # (t, psi, psi_dot) of the previous chunk's last row
+
+    def chunk(self, table):
+        t, psi = table['t'], table['psi']
+        if 'psi_dot' in table:
+            psi_dot = table['psi_dot']
+        elif self.last is None:
+            psi_dot = rates(t, psi)
+        else:  # the backward difference of the first row needs the previous chunk's last
+            last_t, last_psi, last_rate = self.last
+            psi_dot = rates(np.r_[last_t, t], np.r_[last_psi, psi], initial=last_rate)[1:]
+        self.last = (t[-1], psi[-1], psi_dot[-1])
+        return simulate_model(self.params, psi, table['p1'], table['p2'], psi_dot, self.model)
+
+
+class _PlantRun:
+    """The simulated segment over a record's chunks, imposed Ψ, commanded pressures."""
+
+    def __init__(self, params, plant_params, effects):
+        self.params, self.plant_params, self.effects = params, plant_params, effects
+        self.plant = self.last_t = None
+
+    def chunk(self, table):
+        t = table['t']
+        if self.plant is None:
+            self.plant = SegmentPlant(self.params, self.plant_params, self.effects, seed=0,
+                                      psi0=float(table['psi'][0]))
+            before = t[0] - (t[1] - t[0] if len(t) > 1 else 1e-3)
+        else:
+            before = self.last_t
+        self.last_t = t[-1]
+        return _run_plant(self.plant, np.diff(t, prepend=before), table)
+
+
+def _run_plant(plant, steps, table):
     measured, true = [], []
     for dt, psi, p1, p2 in zip(steps.tolist(), table['psi'].tolist(), table['p1'].tolist(),
                                table['p2'].tolist()):

@@ -349,13 +349,14 @@ def previous_torques(p):
 _output, _SegmentOutput = tuple.__new__, SegmentOutput
 
 
-def simulate_model(params, psi, p1, p2, psi_dot):
+def simulate_model(params, psi, p1, p2, psi_dot, model=None):
     """
     Run `SegmentModel` over a record (state carried from row to row, starting from reset).
 
-    Arrays in SI (rad, Pa abs, Pa abs, rad/s); returns {name: array} for the 7 `OUTPUTS`.
+    Arrays in SI (rad, Pa abs, Pa abs, rad/s); returns {name: array} for the 7 `OUTPUTS`. Given
+    a `model`, it goes on from that model's state (a record read in chunks).
     """
-    model = SegmentModel(params)
+    model = SegmentModel(params) if model is None else model
     step = model.step
     rows = [step(a, b, c, d) for a, b, c, d in zip(
         np.asarray(psi, float).tolist(), np.asarray(psi_dot, float).tolist(),
