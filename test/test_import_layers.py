@@ -15,9 +15,12 @@
 """
 The package's import graph (from the source, with ast): no cycles, every import goes down.
 
-The layers: models -> config -> identify/doctor -> hardware -> control -> nodes/runtime ->
-bench/demos/cli. The models read no file: they import nothing of the package but other models and
-the errors; the config layer reads config/*.yaml and builds their parameter objects.
+The shape: a base (errors, files, the interface contract), the models, the configuration that
+builds their parameters; then two stacks side by side on them, which never import each other:
+offline, for records (identify, doctor), and online, for a robot (hardware -> control ->
+runtime and nodes); and on top the tools that use both (cli, bench, demos). The models read no
+file: they import nothing of the package but other models and the errors; the config layer
+reads config/*.yaml and builds their parameter objects.
 
 Every import counts, also one inside a function: a deferred import still ties the two modules
 together, it only hides the cycle until run time.
@@ -30,15 +33,15 @@ PACKAGE = Path(__file__).resolve().parents[1] / 'bellows_ros'
 # Rank of each top-level part of the package; a module may import only its own rank or lower.
 LAYERS = {
     'errors': 0, 'outputs': 0, 'interfaces': 0, 'params': 0, 'table': 0, 'data': 0, 'bag': 0,
-    'bag_repair': 6,
     'models': 1,
     'config': 2,
-    'identify': 3, 'doctor': 3,
-    'hardware': 4,
-    'control': 5,
-    'nodes': 6, 'runtime': 6,
-    'bench': 7, 'demos': 7, 'cli': 7,
+    'identify': 3, 'doctor': 3,                               # offline stack
+    'hardware': 3, 'control': 4, 'nodes': 5, 'runtime': 5,   # online stack
+    'bag_repair': 5,
+    'bench': 6, 'demos': 6, 'cli': 6,
 }
+STACKS = {'offline': {'identify', 'doctor'},
+          'online': {'hardware', 'control', 'nodes', 'runtime'}}
 
 
 def _modules():
@@ -139,6 +142,17 @@ def test_no_import_cycle_in_the_package():
 def test_every_part_of_the_package_has_a_layer():
     unplaced = {m.split('.')[1] for m in import_graph() if m.count('.') >= 1} - set(LAYERS)
     assert not unplaced, f'add {sorted(unplaced)} to LAYERS'
+
+
+def test_the_two_stacks_do_not_import_each_other():
+    stack_of = {part: name for name, parts in STACKS.items() for part in parts}
+
+    def stack(module):
+        return stack_of.get(module.split('.')[1]) if module.count('.') else None
+    across = sorted(f'{source} -> {target}' for source, targets in import_graph().items()
+                    for target in targets
+                    if stack(source) and stack(target) and stack(source) != stack(target))
+    assert across == []
 
 
 def test_layers_import_only_downward():
