@@ -68,6 +68,7 @@ setup(
             'sim_arm_node = bellows_ros.nodes.sim_arm_node:main',
             'sim_actuator_node = bellows_ros.nodes.sim_actuator_node:main',
             'scenario_node = bellows_ros.nodes.scenario_node:main',
+            'arm_graph = bellows_ros.nodes.arm_graph:main',
         ],
     },
 )

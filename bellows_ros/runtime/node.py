@@ -48,6 +48,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 from types import ModuleType
 from typing import Any, Callable, Optional, Sequence
 
@@ -297,7 +298,7 @@ def _on_signal(signum, frame):
         raise KeyboardInterrupt
 
 
-def run(node_class: type, args: Optional[Sequence[str]] = None,
+def run(node_class: Any, args: Optional[Sequence[str]] = None,
         runtime: Optional[ModuleType] = None) -> int:
     """
     Run one node until Ctrl-C/SIGTERM; a user mistake is one line on stderr and exit status 2.
@@ -308,34 +309,42 @@ def run(node_class: type, args: Optional[Sequence[str]] = None,
     A node may define `close()` for its own clean-up (devices, threads); it runs before shutdown.
     A node that declares `realtime_priority` and `cpu_latency_limit` gets them here
     (`realtime.request`, `realtime.limit_cpu_latency`), the latter until it shuts down.
+
+    `node_class` may be a sequence of node classes: a composed process (nodes/arm_graph.py). Each
+    node is built in that order, spun in a thread of its own (the first in the main thread, where
+    the signals arrive), and closed in the reverse order.
     """
     from bellows_ros.runtime import realtime
 
-    program = os.path.basename(sys.argv[0]) if args is None else node_class.__name__
+    classes = tuple(node_class) if isinstance(node_class, (list, tuple)) else (node_class,)
+    program = os.path.basename(sys.argv[0]) if args is None else classes[0].__name__
     # Installed whatever the shell gave: a shell starts background jobs with SIGINT ignored, and
     # ros2 launch stops nodes with SIGINT.
     _signals.update(spinning=False, stop=False, closing=False)
     signal.signal(signal.SIGTERM, _on_signal)
     signal.signal(signal.SIGINT, _on_signal)
-    node = None
-    latency_request = None
+    nodes, threads, latency_requests = [], [], []
     try:
         runtime = runtime or select_runtime()
         runtime.init(args)
-        node = node_class(runtime)
-        node.check_parameters()
-        node.watch_parameters()
-        realtime.request(node)
-        latency_request = realtime.limit_cpu_latency(node)
+        for cls in classes:
+            nodes.append(cls(runtime))
+        for node in nodes:
+            node.check_parameters()
+            node.watch_parameters()
+            realtime.request(node)
+            latency_requests.append(realtime.limit_cpu_latency(node))
         # Everything built so far (modules, type store, model tables) lives as long as the node:
         # keep the cyclic collector from walking it again and again in the 1 kHz callbacks.
         gc.freeze()
         _signals['spinning'] = True
-        # A node with an end (`done`) spins until it says so, then finishes (the scenario).
-        while not _signals['stop'] and not getattr(node, 'done', False) and runtime.ok():
-            runtime.spin_once(node._node, timeout_sec=None)
-        if getattr(node, 'done', False):
-            node.finish()
+        for node in nodes[1:]:
+            threads.append(threading.Thread(target=_spin, args=(runtime, node),
+                                            name=f'spin-{node.get_name()}', daemon=True))
+            threads[-1].start()
+        _spin(runtime, nodes[0])
+        if getattr(nodes[0], 'done', False):
+            nodes[0].finish()
     except KeyboardInterrupt:
         pass
     except Exception as exc:
@@ -346,16 +355,25 @@ def run(node_class: type, args: Optional[Sequence[str]] = None,
         if not (runtime and isinstance(exc, runtime.INTERRUPTED)):
             raise
     finally:
-        _signals['closing'] = True
-        if node is not None:
+        _signals['closing'] = _signals['stop'] = True
+        for thread in threads:
+            thread.join(timeout=2.0)  # a spin returns within one wait
+        for node in reversed(nodes):
             if hasattr(node, 'close'):
                 node.close()
             node.destroy_node()
         if runtime is not None and runtime.ok():
             runtime.shutdown()
-        if latency_request is not None:
-            os.close(latency_request)
+        for request in latency_requests:
+            if request is not None:
+                os.close(request)
     return 0
+
+
+def _spin(runtime: ModuleType, node: Node) -> None:
+    """Spin `node` until a signal, its end (`done`, the scenario) or the runtime's shutdown."""
+    while not _signals['stop'] and not getattr(node, 'done', False) and runtime.ok():
+        runtime.spin_once(node._node, timeout_sec=None)
 
 
 def _user_error(program: str, exc: Exception) -> int:
