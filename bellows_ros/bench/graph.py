@@ -28,7 +28,11 @@ rclpy imports, on rclpy (`graph.rclpy.*`):
 - `graph.normal.*`: every node at normal scheduling (config/nodes_sim.yaml, or a machine that does
   not grant real-time priority);
 - `graph.no_latency_limit.*`: normal scheduling, and no node holding the CPU latency limit the
-  configs ask for (`cpu_latency_limit`, runtime/realtime.py): what the limit buys on this machine.
+  configs ask for (`cpu_latency_limit`, runtime/realtime.py): what the limit buys on this machine;
+- `graph.composed.*`, `graph.rclpy.composed.*`: as `graph.*`, the driver and the model node
+  composed in one process (runtime.run with both classes, as nodes/arm_graph.py composes them):
+  what composition saves against separate processes (`cpu.driver_node+model_node` against the
+  sum of the two).
 Figures:
 - achieved rate: arm samples per second the model node evaluated (target 1000 Hz);
 - fraction of the samples the driver published that the model node evaluated (target >= 0.99),
@@ -82,6 +86,11 @@ from bellows_ros.runtime.node import rclpy_unavailable
 CONFIG = params.default_file('nodes_sim')
 ROBOT_CONFIG = params.default_file('nodes_hw')
 NODES = ('sim_arm_node', 'model_node', 'driver_node')  # in start order
+COMPOSED = 'driver_node+model_node'
+# The composed process: the model node first, so that it listens before the driver publishes.
+COMPOSE = ('from bellows_ros.nodes.driver_node import DriverNode; '
+           'from bellows_ros.nodes.model_node import ModelNode; '
+           'from bellows_ros.runtime import run; raise SystemExit(run((ModelNode, DriverNode)))')
 
 
 def _cpu_seconds(pid):
@@ -117,26 +126,31 @@ def run(quick=False, segments=4):
                                      host['model_node'], limit))
     results.append(_wakeup_reference('graph.platform.wakeup_lateness_no_latency_limit', window,
                                      host['model_node'], -1.0))
-    variants = [('graph', 'dds', fifo, limit), ('graph.normal', 'dds', normal, limit),
+    variants = [('graph', 'dds', fifo, limit), ('graph.composed', 'dds', fifo, limit),
+                ('graph.normal', 'dds', normal, limit),
                 ('graph.no_latency_limit', 'dds', normal, -1.0)]
     rclpy_missing = rclpy_unavailable()
     if not rclpy_missing:
         variants += [('graph.rclpy', 'rclpy', fifo, limit),
+                     ('graph.rclpy.composed', 'rclpy', fifo, limit),
                      ('graph.rclpy.normal', 'rclpy', normal, limit),
                      ('graph.rclpy.sim_above', 'rclpy', sim_above, limit)]
     for prefix, runtime, priorities, latency in variants:
-        results += _measure(prefix, runtime, window, segments, priorities, latency, reference)
+        results += _measure(prefix, runtime, window, segments, priorities, latency, reference,
+                            composed=prefix.endswith('.composed'))
     if rclpy_missing:
         results.append(Result('graph.rclpy.rate', float('nan'), 'Hz', 0,
                               extra={'skipped': f'rclpy not importable: {rclpy_missing}'}))
     return results
 
 
-def _measure(prefix, runtime, window, segments, priorities, latency_limit, reference):
+def _measure(prefix, runtime, window, segments, priorities, latency_limit, reference,
+             composed=False):
     """
     Run the three nodes on `runtime` ('dds' or 'rclpy') for `window` s; return their figures.
 
-    Each node runs at the given `realtime_priority` and `cpu_latency_limit`.
+    Each node runs at the given `realtime_priority` and `cpu_latency_limit`; `composed` runs the
+    driver and the model node in one process (COMPOSE).
     """
     from bellows_ros.runtime import dds_node
     from bellows_ros.runtime.messages import msg
@@ -169,16 +183,23 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
                     windows.append(values)
         node.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
         for name in NODES:
-            log = open(Path(logs.name) / f'{name}.log', 'w')
             given[name].update(realtime_priority=priorities[name],
                                cpu_latency_limit=float(latency_limit))
-            # `-p node:name:=value`: wins over the node's own section of the file (rcl's rule).
-            overrides = [arg for key, value in given[name].items()
-                         for arg in ('-p', f'{name}:{key}:={value}')]
-            processes[name] = subprocess.Popen(
-                [str(binary / name), '--ros-args', '--params-file', str(CONFIG), *overrides],
-                env=env, stdout=log, stderr=subprocess.STDOUT)
-            if name == 'model_node':
+        # `-p node:name:=value`: wins over the node's own section of the file (rcl's rule).
+        overrides = {name: [arg for key, value in given[name].items()
+                            for arg in ('-p', f'{name}:{key}:={value}')] for name in NODES}
+        commands = {name: [str(binary / name), '--ros-args', '--params-file', str(CONFIG),
+                           *overrides[name]] for name in NODES}
+        if composed:
+            commands = {'sim_arm_node': commands['sim_arm_node'],
+                        COMPOSED: [sys.executable, '-c', COMPOSE, '--ros-args', '--params-file',
+                                   str(CONFIG), *overrides['model_node'],
+                                   *overrides['driver_node']]}
+        for name, command in commands.items():
+            log = open(Path(logs.name) / f'{name}.log', 'w')
+            processes[name] = subprocess.Popen(command, env=env, stdout=log,
+                                               stderr=subprocess.STDOUT)
+            if name in ('model_node', COMPOSED):
                 # The driver publishes from its first sample on: the model must listen by then
                 # (and the driver waits until it has matched it).
                 end = time.monotonic() + 60.0
@@ -188,6 +209,7 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
         _spin(dds_node, node, 4.0)  # start-up and discovery
         _check_alive(processes, logs.name)
         cpu0 = {name: _cpu_seconds(p.pid) for name, p in processes.items()}
+        counts0 = _counts(final)
         windows.clear()
         times = _cpu_times()
         start = time.monotonic()
@@ -199,9 +221,11 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
         cpu = {name: (_cpu_seconds(p.pid) - cpu0[name]) / elapsed
                for name, p in processes.items()}
         measured = list(windows)
-        processes['driver_node'].send_signal(2)
-        processes['driver_node'].wait(timeout=10)
-        _spin(dds_node, node, 2.5)  # the model's next report carries its final count
+        counts1 = _counts(final)
+        if not composed:  # composed, the driver's last count and the model's come together
+            processes['driver_node'].send_signal(2)
+            processes['driver_node'].wait(timeout=10)
+            _spin(dds_node, node, 2.5)  # the model's next report carries its final count
     finally:
         for process in processes.values():
             if process.poll() is None:
@@ -222,6 +246,10 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
     model = final.get('model_node: driving torque', {})
     published = int(driver.get('published', 0))
     evaluated = int(model.get('evaluated', 0))
+    if composed:
+        # One process ends both nodes at once: the counts of the window, from their last reports
+        # before and after it (each a second apart at most), stand for the final counts.
+        published, evaluated = (b - a for a, b in zip(counts0, counts1))
     rates = [float(w['rate_hz']) for w in measured]
     p50 = [float(w['latency_p50_us']) * 1e-6 for w in measured]
     p99 = [float(w['latency_p99_us']) * 1e-6 for w in measured]
@@ -259,6 +287,12 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
     for name, fraction in cpu.items():
         results.append(Result(f'{prefix}.cpu.{name}', fraction, 'core', 1))
     return results
+
+
+def _counts(final):
+    """(published by the driver, evaluated by the model) in their latest /diagnostics."""
+    return (int(final.get('driver_node: arm', {}).get('published', 0)),
+            int(final.get('model_node: driving torque', {}).get('evaluated', 0)))
 
 
 def _wakeup_reference(name, seconds, priority, latency_limit):
