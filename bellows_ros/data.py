@@ -53,6 +53,11 @@ MIN_PLAUSIBLE_PRESSURE = 2e4
 MIN_ABSOLUTE_PRESSURE = 3e4
 # The segment's bending angle cannot pass a half turn; larger values are degrees.
 MAX_ANGLE = math.pi
+# s; the longest typical sample step a record of these devices can have. The models describe
+# valves and gas that settle in tens of ms, and devices sample at 100 Hz to 1 kHz; a record at
+# 2 Hz shows none of it. A time column written in ms turns a 1 kHz step into 1.0 and a 100 Hz
+# one into 10: the median step is the test (a pause in a record moves the median not at all).
+MAX_SAMPLE_PERIOD = 0.5
 
 
 def read_csv(path, required, optional=()):
@@ -291,6 +296,13 @@ def check_units(table, system, names=None):
                     table.path, f'{table[name][first]:g} Pa is below {MIN_ABSOLUTE_PRESSURE:g} '
                     'Pa: pressures are absolute (ambient is about 101325 Pa) - was the file '
                     'written as gauge pressure?', table.line(first), name)
+    if 't' in table and len(table) > 2:
+        step = float(np.median(np.diff(table['t'])))
+        if step > MAX_SAMPLE_PERIOD:
+            raise DataError(
+                table.path, f'the median time step is {step:g} s (a sample every {step:g} s): '
+                f'the devices sample at 2 Hz or faster, times are in s - was the file written '
+                'in ms?', column='t')
     if system == 'segment' and 'psi' in table:
         beyond = np.flatnonzero(np.abs(table['psi']) > MAX_ANGLE)
         if beyond.size:

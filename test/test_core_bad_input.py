@@ -91,8 +91,8 @@ def write_csv(path, header, rows):
     return path
 
 
-def segment_rows(n=100, p_scale=1.0, angle_scale=1.0):
-    t = np.arange(n) * 0.01
+def segment_rows(n=100, p_scale=1.0, angle_scale=1.0, dt=0.01):
+    t = np.arange(n) * dt
     return np.column_stack([t, 0.5 * np.sin(t) * angle_scale,
                             (101325.0 + 2e5 * (1 + np.sin(t))) * p_scale,
                             (101325.0 + 1e5 * (1 + np.cos(t))) * p_scale, 0.1 * np.sin(t)])
@@ -346,3 +346,30 @@ def test_a_name_that_is_no_parameter_name_is_one_line(tmp_path, name):
     with pytest.raises(ParameterError, match='is not a parameter name') as error:
         params.read_file(path)
     assert '\n' not in str(error.value) and repr(name) in str(error.value)
+
+
+@pytest.mark.parametrize('rate', [100.0, 1000.0])
+@pytest.mark.parametrize('command', ['identify', 'simulate', 'diagnose'])
+def test_times_in_ms_are_named_as_a_unit_mistake(tmp_path, capsys, rate, command):
+    """A record at 100 Hz or 1 kHz whose t was written in ms: steps of 10 or 1 'seconds'."""
+    rows = [(row[0] * 1e3, *row[1:]) for row in segment_rows(dt=1.0 / rate)]
+    path = write_csv(tmp_path / 'ms.csv', 't,psi,p1,p2,tau_ext', rows)
+    output = tmp_path / 'out'
+    arguments = {'identify': ['identify', 'segment', str(path), '--output', str(output),
+                              '--quiet'],
+                 'simulate': ['simulate', 'segment', '--input', str(path), '--output',
+                              str(output)],
+                 'diagnose': ['diagnose', 'segment', str(path), '--report', str(output)]}
+    status, err = run_cli(arguments[command], capsys)
+    assert status == 2
+    assert_one_line(err, "ms.csv: column 't': the median time step is", 'written in ms?')
+    assert not output.exists()
+
+
+def test_a_record_at_the_slowest_device_rate_with_a_pause_is_not_refused(tmp_path):
+    """100 Hz with a two-minute pause in it: the median step is still 0.01 s."""
+    rows = [tuple(row) for row in segment_rows(dt=0.01)]
+    half = len(rows) // 2
+    rows = rows[:half] + [(row[0] + 120.0, *row[1:]) for row in rows[half:]]
+    path = write_csv(tmp_path / 'pause.csv', 't,psi,p1,p2,tau_ext', rows)
+    assert len(data.read_table(path, 'segment')) == len(rows)
