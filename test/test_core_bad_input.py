@@ -304,8 +304,8 @@ def test_a_parameter_of_the_wrong_kind_is_named(tmp_path, capsys, body, needle):
 
 
 @pytest.mark.parametrize('body, needle', [
-    ('air_chamber: {h0: 0.0}', "'actuator.air_chamber.h0' must be > 0"),
-    ('spring: {n: 4.5}', "'actuator.spring.n' must be a positive whole number of segments, "
+    ('air_chamber: {h0: 0.0}', "'actuator.air_chamber.h0' must lie in (0, 1] m, got 0"),
+    ('spring: {n: 4.5}', "'actuator.spring.n' must be a whole number of segments in 1..1000, "
                          'got 4.5'),
     ('air_chamber: {r_small: 0.03}', "'actuator.air_chamber.r_big' must exceed r_small > 0"),
     ('air_chamber: {x_max: 0.2}', "'actuator.air_chamber.x_max' must exceed x_min and stay below "

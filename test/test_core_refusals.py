@@ -161,3 +161,34 @@ def test_a_driver_refuses_a_command_timeout_below_the_contracts_watchdog(tmp_pat
     longer = tmp_path / 'longer.yaml'
     longer.write_text(f'{section}0.5\n')
     assert arm_bus_config(longer).command_timeout == 0.5
+
+
+ABSURD = [('segment', 'segment:\n      geometry:\n        n_lambda: 1000000000\n',
+           "'segment.geometry.n_lambda' must be a whole number in 1..100000"),
+          ('segment', 'segment:\n      geometry:\n        l0: 50.0\n',
+           "'segment.geometry.l0' must lie in (0, 1] m, got 50 (in mm?)"),
+          ('actuator', 'actuator:\n      spring:\n        h0: 12.0\n',
+           "'actuator.spring.h0' must lie in (0, 1] m, got 12 (in mm?)"),
+          ('actuator', 'actuator:\n      air_chamber:\n        n: 100000\n',
+           "'actuator.air_chamber.n' must be a whole number of segments in 1..1000")]
+
+
+@pytest.mark.parametrize('system, section, message', ABSURD)
+def test_an_absurd_geometry_is_refused_before_any_work(system, section, message, tmp_path,
+                                                       capsys):
+    """A size in mm or an absurd count: one line naming it, exit 2, nothing written."""
+    params = tmp_path / 'absurd.yaml'
+    params.write_text('/**:\n  ros__parameters:\n    ' + section)
+    source = tmp_path / 'in.csv'
+    if system == 'segment':
+        t = np.arange(200) * 1e-3
+        write_csv(source, {'t': t, 'psi': 0.1 * np.sin(t), 'p1': 2e5 + 0 * t, 'p2': 2e5 + 0 * t})
+    else:
+        t = np.arange(200) * 1e-3
+        write_csv(source, {'t': t, 'x_c': -0.02 + 0 * t, 'x_s': 0.001 + 0 * t})
+    output = tmp_path / 'out.csv'
+    assert main(['simulate', system, '--input', str(source), '--output', str(output),
+                 '--params', str(params)]) == 2
+    line = error_line(capsys)
+    assert str(params) in line and message in line, line
+    assert not output.exists()

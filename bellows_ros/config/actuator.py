@@ -30,6 +30,7 @@ from bellows_ros.errors import ParameterError
 from bellows_ros.models.actuator import ActuatorParams, Buckling, NO_BUCKLING
 from bellows_ros.models.actuator_geometry import Bellows
 from bellows_ros.models.actuator_plant import ActuatorPlantParams, Sensors
+from bellows_ros.models.limits import MAX_CONVOLUTIONS, MAX_LENGTH
 
 DEFAULT_SOURCE = 'config/actuator.yaml'
 
@@ -131,12 +132,15 @@ def _check_admissible(parts, source):
         r_big, r_small = number(group, 'r_big'), number(group, 'r_small')
         h0, x_min, x_max = number(group, 'h0'), number(group, 'x_min'), number(group, 'x_max')
         n = parts[group].get('n')
-        if isinstance(n, bool) or not isinstance(n, (int, float)) or n != int(n) or n < 1:
-            fail(f'{group}.n', f'must be a positive whole number of segments, got {n!r}')
-        if not r_big > r_small > 0:
-            fail(f'{group}.r_big', f'must exceed r_small > 0 (got {r_big:g}, {r_small:g})')
-        if not h0 > 0:
-            fail(f'{group}.h0', 'must be > 0')
+        if isinstance(n, bool) or not isinstance(n, (int, float)) or n != int(n) \
+                or not 1 <= n <= MAX_CONVOLUTIONS:
+            fail(f'{group}.n', f'must be a whole number of segments in 1..{MAX_CONVOLUTIONS}, '
+                 f'got {n!r}')
+        if not MAX_LENGTH >= r_big > r_small > 0:
+            fail(f'{group}.r_big', f'must exceed r_small > 0 and stay within {MAX_LENGTH:g} m '
+                 f'(got {r_big:g}, {r_small:g}; in mm?)')
+        if not 0 < h0 <= MAX_LENGTH:
+            fail(f'{group}.h0', f'must lie in (0, {MAX_LENGTH:g}] m, got {h0:g} (in mm?)')
         if number(group, 'wall') < 0:
             fail(f'{group}.wall', 'must be >= 0')
         if not x_min < x_max < n * h0:

@@ -40,6 +40,7 @@ import numpy as np
 
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.contact import ALPHA_PER_PSI, contact_angle, StrainMemory
+from bellows_ros.models.limits import MAX_LENGTH, MAX_PROFILE_SAMPLES
 
 SIGNS = (1.0, -1.0)  # σ_j of chains 1 and 2 ([choice], docs/equations.md)
 
@@ -135,10 +136,12 @@ def check_params(p, source='parameters'):
     if not p.p_max > p.p0:
         fail('p_max', 'must exceed p0')
     for name in ('geometry_l0', 'geometry_s0', 'geometry_sa_max'):
-        if not getattr(p, name) > 0:
-            fail(name, 'must be > 0')
-    if int(p.geometry_n_lambda) != p.geometry_n_lambda or p.geometry_n_lambda < 1:
-        fail('geometry_n_lambda', 'must be a positive integer')
+        if not 0 < getattr(p, name) <= MAX_LENGTH:
+            fail(name, f'must lie in (0, {MAX_LENGTH:g}] m, got {getattr(p, name):g} (in mm?)')
+    if int(p.geometry_n_lambda) != p.geometry_n_lambda or \
+            not 1 <= p.geometry_n_lambda <= MAX_PROFILE_SAMPLES:
+        fail('geometry_n_lambda', f'must be a whole number in 1..{MAX_PROFILE_SAMPLES}, got '
+             f'{p.geometry_n_lambda:g}')
     for name in ('dynamics_inertia', 'dynamics_damping'):  # negative: energy from nowhere
         if getattr(p, name) < 0:
             fail(name, 'must be >= 0')
