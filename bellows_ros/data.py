@@ -76,7 +76,7 @@ def read_csv(path, required, optional=()):
 
 
 def _parse(path, raw, required, optional, skipped=0):
-    """A Table of CSV bytes (header line, then rows); `skipped` data lines came before them."""
+    """Parse CSV bytes (header line, then rows) into a Table; `skipped` lines came before."""
     fast = _read_numeric(path, raw, required, optional, skipped)
     if fast is not None:
         return fast
@@ -364,7 +364,7 @@ class CsvOutput:
 
 
 def _texts(column):
-    """A column as CSV cells: the shortest text that reads back as the same float; nan else."""
+    """Return a column as CSV cells: the shortest text that reads back as the float; nan else."""
     values = np.asarray(column, dtype=float)
     if np.isfinite(values).all():
         return list(map(repr, values.tolist()))

@@ -34,7 +34,7 @@ P0 = 101325.0
 
 
 def segment_record(path, rows, extra=True):
-    """A segment input (t, psi, p1, p2[, note]): a slow bend, pressures up and down."""
+    """Write a segment input (t, psi, p1, p2[, note]): a slow bend, pressures up and down."""
     t = np.arange(rows) * 1e-3
     psi = 0.4 * np.sin(2 * np.pi * 0.5 * t)
     p1 = P0 + 2e5 * (1 + np.sin(2 * np.pi * 0.3 * t))
@@ -72,8 +72,8 @@ def test_small_chunks_give_the_same_bytes_as_one(tmp_path, monkeypatch, system, 
     assert (tmp_path / 'chunked.csv').read_bytes() == whole
 
 
-def test_an_error_in_a_late_chunk_names_the_files_line_and_writes_nothing(tmp_path, monkeypatch,
-                                                                         capsys):
+def test_an_error_in_a_late_chunk_names_the_files_line_and_writes_nothing(
+        tmp_path, monkeypatch, capsys):
     source = segment_record(tmp_path / 'in.csv', 1000, extra=False)
     lines = source.read_text().splitlines(keepends=True)
     lines[900] = lines[900].replace(lines[900].split(',')[0], '0.5', 1)  # time goes back

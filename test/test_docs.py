@@ -174,7 +174,7 @@ def config_file(kind):
 
 
 def node_cell(kind, node, name):
-    """What a node table's sim/hw column must say: the value the file gives the node, or '—'."""
+    """Return what a node table's sim/hw column must say: the file's value for the node, '—'."""
     from bellows_ros.params import read_file
     from bellows_ros.runtime.parameters import value_text
     given = read_file(config_file(kind), node)
@@ -182,7 +182,7 @@ def node_cell(kind, node, name):
 
 
 def common_cell(kind, name):
-    """The common table's sim/hw column: '/**'s value for every node, then each node section's."""
+    """Return the common table's sim/hw column: '/**'s value, then each node section's."""
     from bellows_ros.params import read_sections
     from bellows_ros.runtime.parameters import value_text
     sections = read_sections(config_file(kind))

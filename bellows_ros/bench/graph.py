@@ -290,7 +290,7 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
 
 
 def _counts(final):
-    """(published by the driver, evaluated by the model) in their latest /diagnostics."""
+    """Return (published by the driver, evaluated by the model) of their latest reports."""
     return (int(final.get('driver_node: arm', {}).get('published', 0)),
             int(final.get('model_node: driving torque', {}).get('evaluated', 0)))
 

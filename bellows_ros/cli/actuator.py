@@ -67,7 +67,7 @@ def simulate(input_path, output_path, params_path, effects):
 
 
 def _run_plant(plant, t, x_c, x_s, last=None):
-    """The plant's p, f, k at each row; `last` is the previous chunk's last time (None: none)."""
+    """Return the plant's p, f, k at each row; `last`: the previous chunk's last time, or None."""
     n = len(t)
     p, f, k = np.empty(n), np.empty(n), np.empty(n)
     start = 0

@@ -178,7 +178,7 @@ class ArmControllerNode(Node):
 
     # --- live parameters (ros2 param set): from the next command ---------------------------------
     def parameter_problem(self, changed):
-        """What the Specs cannot know: the co-contraction must stay within p_max."""
+        """Say what the Specs cannot know: the co-contraction must stay within p_max."""
         try:
             check_gains(self._gains({**self.parameters, **changed}), self.params,
                         'arm_controller_node')

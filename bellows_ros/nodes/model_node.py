@@ -96,7 +96,7 @@ class ModelNode(Node):
 
     # --- pairing the two halves of a sample ------------------------------------------------------
     def on_parameters(self, changed):
-        """A live latency_budget (ros2 param set) counts from the next torque on."""
+        """Take a live latency_budget (ros2 param set) from the next torque on."""
         if 'latency_budget' in changed:
             self.latency_budget_ns = round(changed['latency_budget'] * 1e9)
 

@@ -132,7 +132,7 @@ def check_override(node_name: str, name: str, default: Any, override: Any) -> No
 
 
 def _plain(value: Any) -> Any:
-    """A parameter value as the node declared it: rclpy hands arrays over as array.array."""
+    """Return a parameter value as declared: rclpy hands arrays over as array.array."""
     return list(value) if isinstance(value, array.array) else value
 
 
