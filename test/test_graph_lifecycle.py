@@ -32,7 +32,7 @@ import textwrap
 import time
 
 import pytest
-from runtimes import launch, logs, node_env, override, require_rclpy
+from runtimes import launch, logs, node_env, override, require_rclpy, stop_all
 
 from bellows_ros import interfaces
 from bellows_ros.runtime import dds_node
@@ -67,18 +67,6 @@ def ros2(args, env, timeout=60):
     return result.stdout
 
 
-def _stop(processes):
-    for process in processes:
-        if process.poll() is None:
-            process.send_signal(signal.SIGINT)
-    for process in processes:
-        try:
-            process.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait()
-
-
 def test_the_state_machine_is_rcl_lifecycles(runtime, tmp_path):
     """`ros2 lifecycle list -a` and `list` read the same from the driver as from rclpy's node."""
     env = node_env(runtime, ROS_DOMAIN_ID=str(random.randint(100, 180)))
@@ -97,7 +85,7 @@ def test_the_state_machine_is_rcl_lifecycles(runtime, tmp_path):
         nodes = ros2(['lifecycle', 'nodes'], env).split()
         assert '/driver_node' in nodes and '/reference_lifecycle' in nodes
     finally:
-        _stop([reference, driver])
+        stop_all([reference, driver], timeout=15)
 
 
 @pytest.fixture
@@ -125,7 +113,7 @@ def rig(runtime, tmp_path, monkeypatch):
     try:
         yield start_driver, Probe(), env, tmp_path
     finally:
-        _stop(processes)
+        stop_all(processes, timeout=15)
         dds_node.shutdown()
 
 
