@@ -44,7 +44,7 @@ class TrajectoryError(ValueError):
 
 @dataclass(frozen=True)
 class Knot:
-    """A point of one joint's path: time t (s), position (rad), velocity (rad/s), accel (rad/s²)."""
+    """One joint's path point: time t (s), position (rad), velocity (rad/s), accel. (rad/s²)."""
 
     t: float
     position: float
@@ -148,7 +148,7 @@ class Path:
         return self.knots[-1].t
 
     def sample(self, t: float) -> Tuple[float, float, float]:
-        """(Ψ rad, Ψ̇ rad/s, Ψ̈ rad/s²) at `t` s: before the start the first knot, after the end the last."""
+        """Return (Ψ, Ψ̇, Ψ̈) at `t` s (rad, rad/s, rad/s²); after the end it holds."""
         knots = self.knots
         if t >= knots[-1].t:
             return knots[-1].position, 0.0, 0.0

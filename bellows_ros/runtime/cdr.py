@@ -66,7 +66,7 @@ USED_SERVICES = {
 # test_runtime_messages.py holds the RIHS01 hash to the one the ROS 2 package advertises).
 EXTRA_DEFINITIONS = {
     # control_msgs 5.x (ros2_control for Jazzy): joint_trajectory_controller's ~/controller_state.
-    'control_msgs/msg/JointTrajectoryControllerState': '''
+    'control_msgs/msg/JointTrajectoryControllerState': """
 std_msgs/Header header
 string[] joint_names
 trajectory_msgs/JointTrajectoryPoint reference
@@ -79,7 +79,7 @@ trajectory_msgs/MultiDOFJointTrajectoryPoint multi_dof_feedback
 trajectory_msgs/MultiDOFJointTrajectoryPoint multi_dof_error
 trajectory_msgs/MultiDOFJointTrajectoryPoint multi_dof_output
 float64 speed_scaling_factor
-''',
+""",
 }
 
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
