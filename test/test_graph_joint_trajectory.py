@@ -40,7 +40,7 @@ END = -0.4  # rad, trajectory B's last point
 
 
 def trajectory(names, points):
-    """A JointTrajectory starting now (stamp 0): points = [(time_from_start s, [Ψ], [Ψ̇])]."""
+    """Build a JointTrajectory starting now (stamp 0) from [(time_from_start s, [Ψ], [Ψ̇])]."""
     return msg.JointTrajectory(joint_names=names, points=[
         msg.JointTrajectoryPoint(positions=positions, velocities=velocities,
                                  time_from_start=msg.Duration(sec=int(t),

@@ -43,7 +43,7 @@ def test_fields_come_from_the_type_store():
 
 
 def installed_description(ros_name):
-    """The type description JSON a ROS 2 package installs for `ros_name`, or None."""
+    """Return the type description JSON a ROS 2 package installs for `ros_name`, or None."""
     package, _, name = ros_name.split('/')
     for prefix in os.environ.get('AMENT_PREFIX_PATH', '').split(os.pathsep):
         path = Path(prefix) / 'share' / package / 'msg' / f'{name}.json'
