@@ -30,7 +30,7 @@ import random
 import time
 
 import pytest
-from runtimes import launch, logs, node_env, override, stop_all
+from runtimes import launch_arm, logs, node_env, stop_all
 
 from bellows_ros import interfaces
 from bellows_ros.runtime import dds_node
@@ -56,15 +56,7 @@ def test_arm_controller_follows_a_joint_trajectory(runtime, tmp_path, monkeypatc
     group = f'239.74.172.{random.randint(2, 250)}'
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     env = node_env(runtime, ROS_DOMAIN_ID=domain)
-    processes = [
-        launch('sim_arm_node', override('sim_arm_node', 'can.channel', group)
-               + override('sim_arm_node', 'n_segments', 1), env, tmp_path),
-        launch('arm_controller_node', [], env, tmp_path),
-    ]
-    time.sleep(1.0)
-    processes.append(launch('driver_node', override('driver_node', 'actuator.enabled', 'false')
-                            + override('driver_node', 'arm.channel', group)
-                            + override('driver_node', 'arm.n_segments', 1), env, tmp_path))
+    processes = launch_arm(env, group, tmp_path)
     angle, states, controller = [], [], []
 
     def on_diagnostics(array):
