@@ -18,7 +18,8 @@ The interface contract: every topic with its type, QoS and naming rules, in one 
 Nodes, the recorder, the bag reader, the scenario and the tests take topic names, message types,
 queue depths and joint names from here; docs/interfaces.md is the reference that a test holds to
 this module. Names are relative, so a node's namespace (`ros2 launch ... namespace:=arm_a`,
-`--ros-args -r __ns:=/arm_a`) moves the whole graph, and `-r` remaps any of them. Three are
+`--ros-args -r __ns:=/arm_a`) moves the whole graph, and `-r` remaps any of them; a private name
+(`~/state`) lies under its node's name, as ros2_controllers' controllers name theirs. Three are
 absolute on purpose, as ROS defines them: `/diagnostics` (one aggregator reads every node's
 status) and `/clock` (one time source); and `/bellows/estop`, one stop for every driver.
 
@@ -54,6 +55,7 @@ class Topic:
     depth: int
     content: str
     latched: bool = False  # reliable, transient local, depth 1: a late joiner gets the last one
+    node: str = ''  # for a private name ('~/...'): the node it belongs to
 
     @property
     def message(self):
@@ -64,6 +66,8 @@ class Topic:
         """Return the full name in `namespace` ('/joint_states' in the root namespace)."""
         if self.name.startswith('/'):
             return self.name
+        if self.name.startswith('~'):
+            return namespace.rstrip('/') + '/' + self.node + self.name[1:]
         return namespace.rstrip('/') + '/' + self.name
 
 
@@ -87,6 +91,15 @@ MOTOR_COMMAND = Topic('actuator/motor_command', 'std_msgs/msg/Float64', COMMAND_
                       'lead-screw motor duty, -1..1')
 PSI_SETPOINT = Topic('arm/psi_setpoint', 'sensor_msgs/msg/JointState', COMMAND_DEPTH,
                      'segment angle set-points, rad, in position')
+# The arm controller's own interface, named as ros2_controllers' joint_trajectory_controller names
+# its: a trajectory in, the tracking state out, under the node's name.
+ARM_CONTROLLER_NODE = 'arm_controller_node'
+JOINT_TRAJECTORY = Topic('~/joint_trajectory', 'trajectory_msgs/msg/JointTrajectory',
+                         COMMAND_DEPTH, 'segment angle trajectories, rad, by joint name',
+                         node=ARM_CONTROLLER_NODE)
+TRAJECTORY_STATE = Topic('~/state', 'control_msgs/msg/JointTrajectoryControllerState',
+                         COMMAND_DEPTH, 'reference, measured angle and tracking error per segment',
+                         node=ARM_CONTROLLER_NODE)
 DIAGNOSTICS = Topic('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', COMMAND_DEPTH,
                     'every node: rates, loop timing, link health, counters')
 CLOCK = Topic('/clock', 'rosgraph_msgs/msg/Clock', COMMAND_DEPTH,
@@ -97,7 +110,8 @@ ESTOP = Topic('/bellows/estop', 'std_msgs/msg/Bool', 1,
               'True: every driver vents and refuses commands until released', latched=True)
 
 TOPICS = (JOINT_STATES, CHAMBERS, WRENCH, DRIVING_TORQUE, EXTERNAL_TORQUE, PRESSURE_COMMAND,
-          STIFFNESS_SETPOINT, STIFFNESS, MOTOR_COMMAND, PSI_SETPOINT, DIAGNOSTICS, CLOCK, ESTOP)
+          STIFFNESS_SETPOINT, STIFFNESS, MOTOR_COMMAND, PSI_SETPOINT, JOINT_TRAJECTORY,
+          TRAJECTORY_STATE, DIAGNOSTICS, CLOCK, ESTOP)
 
 
 def by_name(namespace='/'):

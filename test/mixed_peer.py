@@ -54,6 +54,16 @@ def build(msg, ros_type, side):
         return msg.Bool(data=tag == 'from_dds')
     if kind == 'Clock':
         return msg.Clock(clock=msg.Time(sec=seconds, nanosec=int(number * 1000)))
+    if kind == 'JointTrajectory':
+        point = msg.JointTrajectoryPoint(positions=[number, -number], velocities=[0.0, number],
+                                         time_from_start=msg.Duration(sec=seconds, nanosec=5))
+        return msg.JointTrajectory(header=msg.Header(frame_id=tag), joint_names=[tag, 'x'],
+                                   points=[point])
+    if kind == 'JointTrajectoryControllerState':
+        return msg.JointTrajectoryControllerState(
+            header=msg.Header(frame_id=tag), joint_names=[tag],
+            reference=msg.JointTrajectoryPoint(positions=[number]),
+            output=msg.JointTrajectoryPoint(effort=[-number]), speed_scaling_factor=number)
     raise ValueError(ros_type)
 
 
@@ -61,12 +71,16 @@ def signature(message):
     """Return what distinguishes one side's message from the other's, as plain values."""
     fields = []
     for path in ('header.frame_id', 'name', 'position', 'effort', 'wrench.force.z',
-                 'wrench.torque.z', 'data', 'clock.sec', 'clock.nanosec'):
+                 'wrench.torque.z', 'data', 'clock.sec', 'clock.nanosec', 'joint_names',
+                 'reference.positions', 'output.effort', 'speed_scaling_factor'):
         value = message
         for part in path.split('.'):
             value = getattr(value, part, None)
         if value is not None:
             fields.append(list(value) if not isinstance(value, (str, int, float)) else value)
+    for point in getattr(message, 'points', []):
+        fields.append([list(point.positions), list(point.velocities),
+                       point.time_from_start.sec, point.time_from_start.nanosec])
     for status in getattr(message, 'status', []):
         fields.append([status.name, status.message, [(v.key, v.value) for v in status.values]])
     return fields

@@ -24,6 +24,7 @@ from pathlib import Path
 import signal
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -72,6 +73,25 @@ def launch(name, args, env, log_dir):
     return subprocess.Popen([str(BIN / name), '--ros-args', '--params-file', str(SIM_CONFIG),
                              *AUTOSTART.get(name, []), *args], env=env, stdout=log,
                             stderr=subprocess.STDOUT)
+
+
+def launch_arm(env, group, log_dir, controller_args=()):
+    """
+    Start a one-segment simulated arm on CAN group `group`, the arm controller and the driver.
+
+    The controller (with `controller_args`) starts before the driver, so it sees the first sample;
+    returns the three processes.
+    """
+    sim = (override('sim_arm_node', 'can.channel', group)
+           + override('sim_arm_node', 'n_segments', 1))
+    driver = (override('driver_node', 'actuator.enabled', 'false')
+              + override('driver_node', 'arm.channel', group)
+              + override('driver_node', 'arm.n_segments', 1))
+    processes = [launch('sim_arm_node', sim, env, log_dir),
+                 launch('arm_controller_node', list(controller_args), env, log_dir)]
+    time.sleep(1.0)
+    processes.append(launch('driver_node', driver, env, log_dir))
+    return processes
 
 
 def logs(log_dir):

@@ -31,7 +31,7 @@ import random
 import time
 
 import pytest
-from runtimes import launch, node_env, override, stop_all
+from runtimes import launch_arm, node_env, override, stop_all
 
 from bellows_ros.control import angle_trajectory
 from bellows_ros.runtime import dds_node
@@ -54,16 +54,8 @@ def test_arm_controller_tracks_on_the_simulated_arm(runtime, tmp_path, monkeypat
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     env = node_env(runtime, ROS_DOMAIN_ID=domain)
     trajectory = angle_trajectory.SWEEP
-    processes = [
-        launch('sim_arm_node', override('sim_arm_node', 'can.channel', group)
-               + override('sim_arm_node', 'n_segments', 1), env, tmp_path),
-        launch('arm_controller_node', override('arm_controller_node', 'feedforward', 'paper_a'),
-               env, tmp_path),
-    ]
-    time.sleep(1.0)
-    processes.append(launch('driver_node', override('driver_node', 'actuator.enabled', 'false')
-                            + override('driver_node', 'arm.channel', group)
-                            + override('driver_node', 'arm.n_segments', 1), env, tmp_path))
+    processes = launch_arm(env, group, tmp_path,
+                           override('arm_controller_node', 'feedforward', 'paper_a'))
     angle, setpoints, controller, driver = [], [], [], []
     stopping = None  # the driver's last report may follow the controller's exit: not counted
 

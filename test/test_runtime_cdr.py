@@ -55,6 +55,18 @@ CASES = [
         'timestamp': 2 ** 63 + 5, 'transition': {'id': 3, 'label': 'activate'},
         'start_state': {'id': 2, 'label': 'inactive'},
         'goal_state': {'id': 13, 'label': 'activating'}}),
+    ('trajectory_msgs/msg/JointTrajectory', {
+        'header': {'stamp': STAMP}, 'joint_names': ['segment_2', 'segment_1'], 'points': [
+            {'positions': [0.5, -0.25], 'time_from_start': {'sec': 1, 'nanosec': 500_000_000}},
+            {'positions': [0.0, 0.0], 'velocities': [0.0, 0.0], 'accelerations': [1.0, -1.0],
+             'time_from_start': {'sec': 3, 'nanosec': 0}}]}),
+    ('control_msgs/msg/JointTrajectoryControllerState', {
+        'header': {'stamp': STAMP}, 'joint_names': ['segment_1'],
+        'reference': {'positions': [0.7], 'velocities': [0.1], 'accelerations': [0.0],
+                      'time_from_start': {'sec': 2, 'nanosec': 7}},
+        'feedback': {'positions': [0.69], 'velocities': [0.12]},
+        'error': {'positions': [0.01], 'velocities': [-0.02]}, 'output': {'effort': [1.5]},
+        'speed_scaling_factor': 1.0}),
 ]
 
 
@@ -68,7 +80,8 @@ def test_bytes_are_rclpys_and_decode_back():
     cases = [{'type': ros_name, 'fields': fields} for ros_name, fields in CASES]
     assert {case['type'] for case in cases} >= set(cdr.USED_TYPES.values()) - {
         'std_msgs/msg/Header', 'geometry_msgs/msg/Vector3', 'geometry_msgs/msg/Wrench',
-        'diagnostic_msgs/msg/KeyValue', 'diagnostic_msgs/msg/DiagnosticStatus'}  # nested above
+        'diagnostic_msgs/msg/KeyValue', 'diagnostic_msgs/msg/DiagnosticStatus',
+        'builtin_interfaces/msg/Duration', 'trajectory_msgs/msg/JointTrajectoryPoint'}  # nested
     result = subprocess.run([sys.executable, str(PROBE)], input='\n'.join(map(json.dumps, cases)),
                             capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr

@@ -13,8 +13,14 @@
 # limitations under the License.
 
 """Message classes built from the rosbags Jazzy type store: names, defaults, CDR round trips."""
-from rosbags.typesys import get_typestore, Stores
+import json
+import os
+from pathlib import Path
 
+from rosbags.typesys import get_typestore, Stores
+from runtimes import require_rclpy
+
+from bellows_ros.runtime.cdr import EXTRA_DEFINITIONS, TYPESTORE
 from bellows_ros.runtime.messages import (dds_type_name, from_typestore, message_class, msg,
                                           to_typestore, type_hash, USED_TYPES)
 
@@ -30,8 +36,30 @@ def test_dds_type_names_follow_ros2_convention():
 def test_fields_come_from_the_type_store():
     for ros_name in USED_TYPES.values():
         cls = message_class(ros_name)
-        _, fields = STORE.fielddefs[ros_name]
+        _, fields = TYPESTORE.fielddefs[ros_name]
         assert list(cls.__dataclass_fields__) == [name for name, _ in fields], ros_name
+        # rosbags' own definitions, but for the types it lacks
+        assert (ros_name in STORE.fielddefs) != (ros_name in EXTRA_DEFINITIONS), ros_name
+
+
+def installed_description(ros_name):
+    """Return the type description JSON a ROS 2 package installs for `ros_name`, or None."""
+    package, _, name = ros_name.split('/')
+    for prefix in os.environ.get('AMENT_PREFIX_PATH', '').split(os.pathsep):
+        path = Path(prefix) / 'share' / package / 'msg' / f'{name}.json'
+        if prefix and path.is_file():
+            return json.loads(path.read_text())
+    return None
+
+
+def test_added_definitions_have_the_hash_ros_advertises():
+    """A type registered from .msg text is the installed package's, to the RIHS01 hash."""
+    for ros_name in EXTRA_DEFINITIONS:
+        description = installed_description(ros_name)
+        if description is None:
+            require_rclpy()  # no ROS 2 here: skipped (or failed where ROS 2 was installed)
+        hashes = {h['type_name']: h['hash_string'] for h in description['type_hashes']}
+        assert type_hash(ros_name) == hashes[ros_name]
 
 
 def test_defaults_and_constants_like_rclpy():

@@ -28,12 +28,21 @@ allocation of `control.pressure_allocation`) and `control.angle_trajectory` (bui
       meets): with no samples there is no command, and the driver vents the arm.
   /arm/psi_setpoint (JointState by segment name: position = Ψ_d rad, velocity = Ψ̇_d rad/s if
       given): from its first message on, a segment follows the topic instead of its trajectory.
+  ~/joint_trajectory (trajectory_msgs/JointTrajectory, joint names `segment_i`): as
+      ros2_controllers' joint_trajectory_controller takes it (`control.joint_trajectory`: its
+      checks, its interpolation, a new trajectory replacing the rest of the old one from its
+      start time); a message it refuses is logged with the reason and counted. Its times are on
+      the samples' clock (ROS time); a header.stamp of zero means the latest sample's stamp.
+  ~/state (control_msgs/JointTrajectoryControllerState, every STATE_PERIOD s of samples): per
+      segment the reference (Ψ_d, Ψ̇_d, Ψ̈_d), the measured Ψ, Ψ̇, the error, the torque asked for.
   /diagnostics: per segment the tracking error (RMS and largest since the last report), the
       set-point, saturated commands, plus the loop timing and the age of the samples when a
       command is due (`sample_age_*_us`: their latency plus any backlog).
 
 Before any set-point a segment holds the angle it had at the first sample (or follows the
 built-in `trajectory`, started `trajectory_delay` s after the first sample, on sample stamps).
+The newest command decides: a set-point ends a segment's joint trajectory, a joint trajectory
+takes over from its start time.
 
 Parameters: segments (int array), feedforward ('paper_a' | 'previous' | 'none' = feedback only),
 trajectory ('' | 'reversals' | 'sweep'), trajectory_delay (s), pid.kp (N·m/rad), pid.ki
@@ -55,7 +64,7 @@ import numpy as np
 
 from bellows_ros import interfaces
 from bellows_ros.config.segment import load_segment_params
-from bellows_ros.control import angle_trajectory
+from bellows_ros.control import angle_trajectory, joint_trajectory
 from bellows_ros.control.angle_tracking import (AngleTracker, check_gains, FEEDFORWARDS,
                                                 TrackingGains)
 from bellows_ros.errors import ParameterError
@@ -64,9 +73,11 @@ from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.nodes import diagnostics
 from bellows_ros.nodes.sample_pairing import CHAMBERS, JOINTS, SamplePairs, segment_rows
 from bellows_ros.runtime import Node, realtime, run
+from bellows_ros.runtime.node import stamp_ns
 from bellows_ros.runtime.parameters import Spec
 
 SAMPLE_PERIOD = 1e-3  # s, the arm's sampling (the devices' 1 kHz clock)
+STATE_PERIOD = 0.02   # s of sample time between ~/state messages (50 Hz)
 
 
 PARAMETERS = (
@@ -108,30 +119,44 @@ class SegmentLoop:
         self.chains = (interfaces.chain_chamber(segment, 1), interfaces.chain_chamber(segment, 2))
         self.tracker = tracker
         self.trajectory = trajectory
+        self.origin = None          # s, sample time at which the built-in trajectory starts
         self.topic_setpoint = None  # (Ψ_d, Ψ̇_d) from /arm/psi_setpoint
+        self.path = None            # control.joint_trajectory.Path from ~/joint_trajectory
         self.hold = None            # Ψ at the first sample
         self.setpoint = (math.nan, 0.0, 0.0)
+        self.measured = (math.nan, math.nan)  # Ψ, Ψ̇ of the latest command's sample
+        self.tau = math.nan         # N·m, the torque the latest command asked for
         self.squares, self.count, self.largest, self.saturated = 0.0, 0, 0.0, 0
 
-    def desired(self, t, later=0.0):
+    def desired(self, now, later=0.0):
         """
-        Return (Ψ_d, Ψ̇_d, Ψ̈_d) at `t` s on the trajectory clock, or `later` s after it.
+        Return (Ψ_d, Ψ̇_d, Ψ̈_d) at sample time `now` s, or `later` s after it.
 
-        A topic set-point is extrapolated with its velocity.
+        A joint trajectory from its start on; before it (or without one) the topic set-point,
+        extrapolated with its velocity, else the built-in trajectory, else the held angle.
         """
-        t += later
+        t = now + later
+        if self.path is not None and t >= self.path.start:
+            return self.path.sample(t)
         if self.topic_setpoint is not None:
             psi, psi_dot = self.topic_setpoint
             return psi + later * psi_dot, psi_dot, 0.0
-        if self.trajectory is not None and t >= 0.0:
-            return angle_trajectory.setpoint(self.trajectory, t)
+        if self.trajectory is not None and t >= self.origin:
+            return angle_trajectory.setpoint(self.trajectory, t - self.origin)
         return self.hold, 0.0, 0.0
+
+    def source(self, now):
+        """Name what the segment follows at sample time `now` s (for /diagnostics)."""
+        if self.path is not None and now >= self.path.start:
+            return 'joint_trajectory'
+        return ('topic' if self.topic_setpoint is not None else
+                'trajectory' if self.trajectory is not None else 'hold')
 
 
 class ArmControllerNode(Node):
 
     def __init__(self, runtime):
-        super().__init__('arm_controller_node', runtime)
+        super().__init__(interfaces.ARM_CONTROLLER_NODE, runtime)
         given = self.declare_specs(PARAMETERS)
         segments, feedforward = given['segments'], given['feedforward']
         trajectory, self.delay = given['trajectory'], given['trajectory_delay']
@@ -153,7 +178,10 @@ class ArmControllerNode(Node):
         self.samples = 0
         self.first_stamp = self.last_stamp = None
         self.counts = dict.fromkeys(['commands', 'stale_skipped', 'restarts', 'rejected_samples',
-                                     'rejected_setpoints'], 0)
+                                     'rejected_setpoints', 'trajectories',
+                                     'rejected_trajectories'], 0)
+        self.trajectory_start = None  # s, start of the latest joint trajectory (its progress)
+        self.last_state = None        # ns, stamp of the latest ~/state
         self.last_command = None
         self.stats = LoopStats()
         self.ages = deque(maxlen=1000)  # s, age of the sample at each command (or skip)
@@ -162,9 +190,11 @@ class ArmControllerNode(Node):
 
         self.command_pub = self.publisher(interfaces.PRESSURE_COMMAND)
         self.diag_pub = self.publisher(interfaces.DIAGNOSTICS)
+        self.state_pub = self.publisher(interfaces.TRAJECTORY_STATE)
         self.subscription(interfaces.JOINT_STATES, self.on_joint_states)
         self.subscription(interfaces.CHAMBERS, self.on_chambers)
         self.subscription(interfaces.PSI_SETPOINT, self.on_setpoint)
+        self.subscription(interfaces.JOINT_TRAJECTORY, self.on_trajectory)
         self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
         self.get_logger().info(
             f"tracking {', '.join(loop.name for loop in self.loops)}, feedforward {feedforward}"
@@ -205,6 +235,38 @@ class ArmControllerNode(Node):
                 self.counts['rejected_setpoints'] += 1
                 continue
             loop.topic_setpoint = (psi, psi_dot)
+            loop.path = None  # the newest command decides
+
+    def on_trajectory(self, msg):
+        try:
+            taken = self._take_trajectory(msg)
+        except joint_trajectory.TrajectoryError as error:
+            self.counts['rejected_trajectories'] += 1
+            self.get_logger().error(f'joint trajectory refused: {error}')
+            return
+        self.counts['trajectories'] += 1
+        self.get_logger().info(f"joint trajectory for {', '.join(taken)}")
+
+    def _take_trajectory(self, msg):
+        """Check a JointTrajectory and hand each named segment its new path; the names."""
+        points = [joint_trajectory.Point(stamp_ns(p.time_from_start) * 1e-9, p.positions,
+                                         p.velocities, p.accelerations, p.effort)
+                  for p in msg.points]
+        knots = joint_trajectory.parse(msg.joint_names, points,
+                                       [loop.name for loop in self.loops])
+        if self.last_stamp is None:
+            raise joint_trajectory.TrajectoryError("no sample yet: the segments' angles are "
+                                                   'unknown')
+        # The controller's present is its latest sample: the paths run on sample stamps.
+        now = self.last_stamp * 1e-9
+        start = joint_trajectory.start_time(stamp_ns(msg.header.stamp) * 1e-9, now,
+                                            points[-1].time_from_start)
+        for loop in self.loops:
+            if loop.name in knots:
+                loop.path = joint_trajectory.splice(knots[loop.name], start, now, loop.desired,
+                                                    loop.path)
+        self.trajectory_start = start
+        return list(knots)
 
     def on_joint_states(self, msg):
         if self.loops[0].name in msg.name:
@@ -231,6 +293,7 @@ class ArmControllerNode(Node):
             self.first_stamp = stamp
             for loop, row in zip(self.loops, inputs):
                 loop.hold = row[0]
+                loop.origin = stamp * 1e-9 + self.delay
         dt = SAMPLE_PERIOD if self.last_stamp is None else (stamp - self.last_stamp) * 1e-9
         self.last_stamp = stamp
         for loop, (psi, psi_dot, p1, p2) in zip(self.loops, inputs):
@@ -250,7 +313,7 @@ class ArmControllerNode(Node):
             for loop in self.loops:
                 loop.tracker.restart()
         self.last_command = now
-        t = (stamp - self.first_stamp) * 1e-9 - self.delay
+        t = stamp * 1e-9
         names, efforts = [], []
         for loop, row in zip(self.loops, inputs):
             psi_d, psi_dot_d, psi_ddot_d = loop.setpoint = loop.desired(t)
@@ -259,6 +322,7 @@ class ArmControllerNode(Node):
                                        loop.desired(t, self.lead))
             names.extend(loop.chains)
             efforts.extend((out.p1, out.p2))
+            loop.measured, loop.tau = row[:2], out.tau
             error = psi_d - row[0]
             loop.squares += error * error
             loop.count += 1
@@ -268,7 +332,32 @@ class ArmControllerNode(Node):
         command.header.stamp = joints.header.stamp
         self.command_pub.publish(command)
         self.counts['commands'] += 1
+        if self.last_state is None or stamp - self.last_state >= STATE_PERIOD * 1e9 - 1:
+            self.last_state = stamp
+            self.publish_state(joints.header.stamp, t)
         self.stats.record(dt * self.control_every, 0.0, time.perf_counter() - start)
+
+    def publish_state(self, stamp, now):
+        """~/state as joint_trajectory_controller fills it: reference, feedback, error, output."""
+        point = self.msg.JointTrajectoryPoint
+        reference = point(positions=[loop.setpoint[0] for loop in self.loops],
+                          velocities=[loop.setpoint[1] for loop in self.loops],
+                          accelerations=[loop.setpoint[2] for loop in self.loops])
+        if self.trajectory_start is not None and now > self.trajectory_start:
+            since = round((now - self.trajectory_start) * 1e9)
+            reference.time_from_start = self.msg.Duration(sec=since // 1_000_000_000,
+                                                          nanosec=since % 1_000_000_000)
+        feedback = point(positions=[loop.measured[0] for loop in self.loops],
+                         velocities=[loop.measured[1] for loop in self.loops])
+        error = point(positions=[r - f for r, f in zip(reference.positions, feedback.positions)],
+                      velocities=[r - f for r, f in zip(reference.velocities,
+                                                        feedback.velocities)])
+        state = self.msg.JointTrajectoryControllerState(
+            joint_names=[loop.name for loop in self.loops], reference=reference,
+            feedback=feedback, error=error, output=point(effort=[loop.tau for loop in self.loops]),
+            speed_scaling_factor=1.0)
+        state.header.stamp = stamp
+        self.state_pub.publish(state)
 
     def publish_diagnostics(self):
         values, rate, _ = self.report.values()
@@ -284,13 +373,15 @@ class ArmControllerNode(Node):
         values['feedforward'] = self.feedforward
         statuses = []
         stale = rate == 0.0
+        now = self.last_stamp * 1e-9 if self.last_stamp is not None else -math.inf
         for loop in self.loops:
             mine = dict(values)
             rms = math.sqrt(loop.squares / loop.count) if loop.count else math.nan
             mine.update(error_rms=f'{rms:.5f}', error_max=f'{loop.largest:.5f}',
                         setpoint=f'{loop.setpoint[0]:.5f}', saturated=str(loop.saturated),
-                        source='topic' if loop.topic_setpoint is not None else (
-                            'trajectory' if loop.trajectory is not None else 'hold'))
+                        source=loop.source(now))
+            if loop.path is not None:  # progress: how long until the trajectory's end
+                mine['trajectory_remaining_s'] = f'{max(0.0, loop.path.end - now):.3f}'
             loop.squares, loop.count, loop.largest, loop.saturated = 0.0, 0, 0.0, 0
             level = diagnostics.WARN if stale or mine['saturated'] != '0' else diagnostics.OK
             message = ('no samples (stale)' if stale else

@@ -31,7 +31,7 @@ import dataclasses
 import struct
 import sys
 
-from rosbags.typesys import get_typestore, Stores
+from rosbags.typesys import get_types_from_msg, get_typestore, Stores
 from rosbags.typesys.base import Nodetype
 
 # The message types the nodes publish or subscribe to (ROS names), and the short names they go by.
@@ -49,6 +49,10 @@ USED_TYPES = {
     'DiagnosticArray': 'diagnostic_msgs/msg/DiagnosticArray',
     'Clock': 'rosgraph_msgs/msg/Clock',
     'TransitionEvent': 'lifecycle_msgs/msg/TransitionEvent',
+    'Duration': 'builtin_interfaces/msg/Duration',
+    'JointTrajectoryPoint': 'trajectory_msgs/msg/JointTrajectoryPoint',
+    'JointTrajectory': 'trajectory_msgs/msg/JointTrajectory',
+    'JointTrajectoryControllerState': 'control_msgs/msg/JointTrajectoryControllerState',
 }
 
 # The services the nodes offer, as their .srv files define them (request --- response); the
@@ -76,7 +80,30 @@ USED_SERVICES = {
         'rcl_interfaces/Parameter[] parameters\n---\nrcl_interfaces/SetParametersResult result',
 }
 
+# Types the rosbags Jazzy store lacks (it holds only ROS 2's core packages): their .msg text as
+# Jazzy's package installs it, comments left out (they are not part of the type, nor of its hash:
+# test_runtime_messages.py holds the RIHS01 hash to the one the ROS 2 package advertises).
+EXTRA_DEFINITIONS = {
+    # control_msgs 5.x (ros2_control for Jazzy): joint_trajectory_controller's ~/controller_state.
+    'control_msgs/msg/JointTrajectoryControllerState': """
+std_msgs/Header header
+string[] joint_names
+trajectory_msgs/JointTrajectoryPoint reference
+trajectory_msgs/JointTrajectoryPoint feedback
+trajectory_msgs/JointTrajectoryPoint error
+trajectory_msgs/JointTrajectoryPoint output
+string[] multi_dof_joint_names
+trajectory_msgs/MultiDOFJointTrajectoryPoint multi_dof_reference
+trajectory_msgs/MultiDOFJointTrajectoryPoint multi_dof_feedback
+trajectory_msgs/MultiDOFJointTrajectoryPoint multi_dof_error
+trajectory_msgs/MultiDOFJointTrajectoryPoint multi_dof_output
+float64 speed_scaling_factor
+""",
+}
+
 TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
+for _name, _text in EXTRA_DEFINITIONS.items():
+    TYPESTORE.register(get_types_from_msg(_text, _name))
 
 LITTLE_ENDIAN = sys.byteorder == 'little'
 HEADER = b'\x00\x01\x00\x00'  # encapsulation: plain CDR, little endian, no options
