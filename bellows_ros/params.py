@@ -313,11 +313,22 @@ def overlay(defaults, overrides, source):
     return merged
 
 
-def load(name, params_path=None):
-    """Defaults of `config/<name>.yaml`, with the user's file (if any) laid over them."""
-    flat = read_file(default_file(name))
+def load(name, params_path=None, check=None):
+    """
+    Defaults of `config/<name>.yaml`, with the user's file (if any) laid over them.
+
+    `check(flat, source)` (e.g. `config.ranges.check_ranges`) sees each file's own values, so that
+    its error names the file a bad value came from.
+    """
+    path = default_file(name)
+    flat = read_file(path)
+    if check is not None:
+        check(flat, path)
     if params_path is not None:
-        flat = overlay(flat, read_file(params_path), params_path)
+        user = read_file(params_path)
+        flat = overlay(flat, user, params_path)
+        if check is not None:
+            check(user, params_path)
     return flat
 
 

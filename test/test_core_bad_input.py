@@ -297,14 +297,16 @@ def _check_named(tmp_path, capsys, system, body, needle):
     ('ogden: {mu: [a, 400.0]}', "'segment.ogden.mu' expects a list of numbers (like [4000.0, "
                                 "400.0]), got 'a' in it"),
     ('p_max: 1' + '0' * 400, "'segment.p_max' is beyond float range"),
-    ('dynamics: {inertia: -1.0}', "'segment.dynamics.inertia' must be >= 0"),
+    ('dynamics: {inertia: -1.0}', "'segment.dynamics.inertia' is -1, outside its physical "
+                                  'range 0..100'),
 ])
 def test_a_parameter_of_the_wrong_kind_is_named(tmp_path, capsys, body, needle):
     _check_named(tmp_path, capsys, 'segment', body, needle)
 
 
 @pytest.mark.parametrize('body, needle', [
-    ('air_chamber: {h0: 0.0}', "'actuator.air_chamber.h0' must lie in (0, 1] m, got 0"),
+    ('air_chamber: {h0: 0.0}', "'actuator.air_chamber.h0' is 0, outside its physical range "
+                               '0.001..1 m'),
     ('spring: {n: 4.5}', "'actuator.spring.n' must be a whole number of segments in 1..1000, "
                          'got 4.5'),
     ('air_chamber: {r_small: 0.03}', "'actuator.air_chamber.r_big' must exceed r_small > 0"),
@@ -312,7 +314,7 @@ def test_a_parameter_of_the_wrong_kind_is_named(tmp_path, capsys, body, needle):
                                   'n*h0 = 0.0746 m'),
     ('air_chamber: {x_min: -0.2}', "'actuator.air_chamber.x_min' -0.2 m lies beyond the frustum "
                                    'geometry (3)'),
-    ('gas: {x_c_ref: 0.047, p_ref: 0.0}', "'actuator.gas.p_ref' must be > 0"),
+    ('gas: {x_c_ref: 0.047, p_ref: 0.0}', "'actuator.gas.p_ref' is 0, outside its physical range"),
 ])
 def test_an_inadmissible_actuator_parameter_is_named(tmp_path, capsys, body, needle):
     _check_named(tmp_path, capsys, 'actuator', body, needle)

@@ -71,7 +71,7 @@ def test_the_driver_configuration_follows_the_users_files(tmp_path):
 
 @pytest.mark.parametrize('name, body, needle', [
     ('h.yaml', 'hardware: {actuator_board: {drive: {lead: 0.0}}}',
-     "'hardware.actuator_board.drive.lead' must be > 0"),
+     "'hardware.actuator_board.drive.lead' is 0, outside its physical range"),
     ('a.yaml', 'actuator: {air_chamber: {x_min: true}}', "'actuator.air_chamber.x_min'"),
     ('s.yaml', 'segment: {p_max: 9.0e4}', "'segment.p_max' must exceed p0"),
     ('h.yaml', 'hardware: {actuator_board: {end_stop_margin: 0.05}}', 'leaves no travel'),
@@ -100,10 +100,13 @@ def test_the_segment_file_splits_into_model_plant_and_identification():
 
 
 @pytest.mark.parametrize('body, needle', [
-    ('plant: {valve_tau: 0.0}', "'segment.plant.valve_tau' must be > 0"),
-    ('plant: {noise: {psi: -1.0}}', "'segment.plant.noise.psi' must be >= 0"),
-    ('identify: {input_cutoff: -1.0}', "'segment.identify.input_cutoff' must be >= 0"),
-    ('ogden: {gamma: [1.5, 6.0]}', "'segment.ogden.gamma' needs two values > 2"),
+    ('plant: {valve_tau: 0.0}', "'segment.plant.valve_tau' is 0, outside its physical range"),
+    ('plant: {noise: {psi: -1.0}}', "'segment.plant.noise.psi' is -1, outside its physical range"),
+    ('identify: {input_cutoff: -1.0}', "'segment.identify.input_cutoff' is -1, outside its "
+     'physical range'),
+    ('ogden: {gamma: [1.5, 6.0]}', "'segment.ogden.gamma' item 1 is 1.5, outside its physical "
+     'range 2..30'),
+    ('ogden: {gamma: [2.0, 6.0]}', "'segment.ogden.gamma' needs two values > 2"),
 ])
 def test_each_part_of_the_segment_file_is_checked(tmp_path, body, needle):
     path = write(tmp_path / 'p.yaml', f'/**:\n  ros__parameters:\n    segment:\n      {body}\n')

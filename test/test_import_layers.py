@@ -223,7 +223,9 @@ def reachable(graph, start):
 DRIVER_MODULES = ('bellows_ros.config.hardware', 'bellows_ros.hardware.actuator_board',
                   'bellows_ros.hardware.arm_bus', 'bellows_ros.hardware.sim_arm_bus',
                   'bellows_ros.hardware.sim_actuator_board', 'bellows_ros.nodes.driver_node')
-DRIVER_MODELS = {'bellows_ros.models.actuator_drive', 'bellows_ros.models.derivatives'}
+# models.limits holds plain numbers (the parameter ranges' physical limits) and computes nothing.
+DRIVER_MODELS = {'bellows_ros.models.actuator_drive', 'bellows_ros.models.derivatives',
+                 'bellows_ros.models.limits'}
 
 
 def test_the_drivers_configuration_imports_no_physics_model():

@@ -25,6 +25,7 @@ import dataclasses
 from typing import NamedTuple
 
 from bellows_ros import params as param_files
+from bellows_ros.config import ranges
 from bellows_ros.config.hardware import load_drive
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.actuator import ActuatorParams, Buckling, NO_BUCKLING
@@ -52,7 +53,7 @@ def load_actuator(params_path=None, hardware_params_path=None):
 
     The plant's drive train comes from config/hardware.yaml (`hardware_params_path` over it).
     """
-    flat = param_files.load('actuator', params_path)
+    flat = ranges.load('actuator', params_path)
     return actuator_from_flat(flat, load_drive(hardware_params_path),
                               params_path or DEFAULT_SOURCE)
 
@@ -159,6 +160,11 @@ def _check_admissible(parts, source):
         fail('gas.x_c_ref', 'must lie within the air chamber travel [x_min, x_max]')
     if not number('stiffness', 'x_s_low') < number('stiffness', 'x_s_high'):
         fail('stiffness.x_s_high', 'must exceed x_s_low')
+    # The stiffness window is spring compression: outside the spring's travel F_MTS has no data,
+    # and the rest-point search (`rest_compression`) would walk to it in 0.5 mm steps.
+    for name in ('x_s_low', 'x_s_high'):
+        if not number('spring', 'x_min') <= number('stiffness', name) <= number('spring', 'x_max'):
+            fail(f'stiffness.{name}', 'must lie within the spring travel [x_min, x_max]')
     for name, value in parts['sensors'].items():
         if number('sensors', name) < 0:
             fail(f'sensors.{name}', 'must be >= 0')

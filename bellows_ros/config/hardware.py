@@ -26,6 +26,7 @@ config/segment.yaml).
 import dataclasses
 
 from bellows_ros import params as param_files
+from bellows_ros.config import ranges
 from bellows_ros.errors import ParameterError
 from bellows_ros.interfaces import COMMAND_WATCHDOG
 from bellows_ros.models.actuator_drive import Drive
@@ -105,7 +106,7 @@ def drive_from_flat(values, source='parameters'):
 
 def load_drive(params_path=None):
     """Return the actuator's `Drive` of config/hardware.yaml with the user's file laid over it."""
-    flat = param_files.load('hardware', params_path)
+    flat = ranges.load('hardware', params_path)
     return drive_from_flat(param_files.section(flat, 'hardware.actuator_board.drive'),
                            params_path or HARDWARE_SOURCE)
 
@@ -119,12 +120,12 @@ def actuator_board_config(params_path=None, actuator_params_path=None):
     `actuator_params_path` over it), their one source, and the soft end stops lie
     `end_stop_margin` (m) inside them.
     """
-    flat = param_files.section(param_files.load('hardware', params_path),
+    flat = param_files.section(ranges.load('hardware', params_path),
                                'hardware.actuator_board')
     source = params_path or HARDWARE_SOURCE
     drive = drive_from_flat(param_files.section(flat, 'drive'), source)
     flat = {name: value for name, value in flat.items() if not name.startswith('drive.')}
-    actuator = param_files.load('actuator', actuator_params_path)
+    actuator = ranges.load('actuator', actuator_params_path)
     actuator_source = actuator_params_path or 'config/actuator.yaml'
     x_min, x_max = (_number(actuator, f'actuator.air_chamber.{end}', actuator_source)
                     for end in ('x_min', 'x_max'))
@@ -146,8 +147,8 @@ def arm_bus_config(params_path=None, segment_params_path=None):
     `segment_params_path` over it): the valves exhaust to ambient, and above p_max the model's
     scaled pressure leaves [0, 1].
     """
-    flat = param_files.section(param_files.load('hardware', params_path), 'hardware.arm_bus')
-    segment = param_files.load('segment', segment_params_path)
+    flat = param_files.section(ranges.load('hardware', params_path), 'hardware.arm_bus')
+    segment = ranges.load('segment', segment_params_path)
     segment_source = segment_params_path or 'config/segment.yaml'
     p0, p_max = (_number(segment, f'segment.{name}', segment_source) for name in ('p0', 'p_max'))
     if not p_max > p0 > 0:
@@ -166,5 +167,5 @@ def arm_bus_config(params_path=None, segment_params_path=None):
 
 def vent_pressure(segment_params_path=None):
     """Pressure that vented chambers hold, Pa abs: the segment's ambient p0 (segment.yaml)."""
-    segment = param_files.load('segment', segment_params_path)
+    segment = ranges.load('segment', segment_params_path)
     return float(_number(segment, 'segment.p0', segment_params_path or 'config/segment.yaml'))

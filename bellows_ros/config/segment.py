@@ -24,6 +24,7 @@ from dataclasses import dataclass, fields
 from typing import NamedTuple
 
 from bellows_ros import params as param_files
+from bellows_ros.config import ranges
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.segment import check_params, SegmentParams, UNDOTTED
 from bellows_ros.models.segment_plant import (check_plant_params, PLANT_DOTTED,
@@ -60,7 +61,7 @@ def load_segment(params_path=None):
     Unknown or missing names raise ParameterError; so do physically inadmissible values (μ_k ≤ 0,
     γ_k ≤ 2, p_max ≤ p0, non-positive geometry, a negative noise or lag).
     """
-    flat = param_files.section(param_files.load('segment', params_path), 'segment')
+    flat = param_files.section(ranges.load('segment', params_path), 'segment')
     source = params_path or param_files.default_file('segment')
     return segment_from_flat(flat, source)
 

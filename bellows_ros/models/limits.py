@@ -29,3 +29,6 @@ MAX_PROFILE_SAMPLES = 100_000
 # Segments (convolutions) of one bellows: tens in practice; the equations loop over none, but a
 # count in the thousands is a typing mistake.
 MAX_CONVOLUTIONS = 1000
+# Pa abs: ambient pressure, about 50 kPa 5000 m up to 108 kPa at the lowest places on earth; a p0
+# outside it was written in bar, kPa or hPa.
+AMBIENT_RANGE = (5e4, 1.1e5)

@@ -40,7 +40,7 @@ import numpy as np
 
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.contact import ALPHA_PER_PSI, contact_angle, StrainMemory
-from bellows_ros.models.limits import MAX_LENGTH, MAX_PROFILE_SAMPLES
+from bellows_ros.models.limits import AMBIENT_RANGE, MAX_LENGTH, MAX_PROFILE_SAMPLES
 
 SIGNS = (1.0, -1.0)  # σ_j of chains 1 and 2 ([choice], docs/equations.md)
 
@@ -111,10 +111,6 @@ DOTTED = {name: name for name in ('p0', 'p_max')}
 DOTTED.update({f.name: f.name.replace('_', '.', 1) for f in fields(SegmentParams)
                if f.name not in DOTTED})
 UNDOTTED = {dotted: name for name, dotted in DOTTED.items()}
-
-
-# Ambient pressure, Pa abs: about 50 kPa 5000 m up to 108 kPa at the lowest places on earth.
-AMBIENT_RANGE = (5e4, 1.1e5)
 
 
 def check_params(p, source='parameters'):
