@@ -58,6 +58,12 @@ MAX_ANGLE = math.pi
 # 2 Hz shows none of it. A time column written in ms turns a 1 kHz step into 1.0 and a 100 Hz
 # one into 10: the median step is the test (a pause in a record moves the median not at all).
 MAX_SAMPLE_PERIOD = 0.5
+# A measured rate column (psi_dot) against the rate of its own angle over t: 1 when both are in
+# SI units, 1000 with t in ms, 57 with psi_dot in deg/s. Noise only pulls the least-squares ratio
+# towards 0, so above 10 a unit is wrong. Compared over RATE_WINDOWS windows of the record; it
+# catches t in ms at any rate (a 5 kHz record in ms steps by 0.2, under MAX_SAMPLE_PERIOD).
+MAX_RATE_RATIO = 10.0
+RATE_WINDOWS = 100
 
 
 def read_csv(path, required, optional=()):
@@ -275,7 +281,7 @@ def read_table(path, system, required=None):
 
 def check_units(table, system, names=None):
     """
-    Refuse columns whose values can only mean another unit: kPa or bar, degrees.
+    Refuse columns whose values can only mean another unit: kPa or bar, degrees, ms.
 
     Only the columns in `names` (default: all of the system's) are checked; a simulation input may
     carry old output columns that are replaced anyway.
@@ -303,6 +309,7 @@ def check_units(table, system, names=None):
                 table.path, f'the median time step is {step:g} s (a sample every {step:g} s): '
                 f'the devices sample at 2 Hz or faster, times are in s - was the file written '
                 'in ms?', column='t')
+    _check_rate_units(table)
     if system == 'segment' and 'psi' in table:
         beyond = np.flatnonzero(np.abs(table['psi']) > MAX_ANGLE)
         if beyond.size:
@@ -310,6 +317,25 @@ def check_units(table, system, names=None):
             raise DataError(
                 table.path, f"{table['psi'][first]:g} is beyond a half turn: angles are in rad - "
                 'was the file written in degrees?', table.line(first), 'psi')
+
+
+def _check_rate_units(table):
+    """Refuse a measured psi_dot that disagrees with the angle's change over t (ms or deg/s)."""
+    if 't' in table and len(table) > 2 and 'psi' in table and 'psi_dot' in table:
+        steps = np.diff(table['t'])
+        # The angle change over each of ~100 windows against the integral of psi_dot over t: over
+        # a window the angle's noise is small beside its motion (single differences would
+        # drown in it), and over a hundredth of the record a rate offset stays small too.
+        integral = np.concatenate([[0.0], np.cumsum(
+            0.5 * (table['psi_dot'][1:] + table['psi_dot'][:-1]) * steps)])
+        every = max(1, len(table) // RATE_WINDOWS)
+        moved, integrated = np.diff(table['psi'][::every]), np.diff(integral[::every])
+        power = float(np.dot(moved, moved))
+        ratio = float(np.dot(moved, integrated)) / power if power > 0.0 else 0.0
+        if ratio > MAX_RATE_RATIO:
+            raise DataError(table.path, f'psi_dot is {ratio:.3g} times the rate of psi over t: '
+                            'time is in s and rates in rad/s - was t written in ms, or psi_dot '
+                            'in deg/s?', column='t')
 
 
 def write_csv(path, table, outputs):

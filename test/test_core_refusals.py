@@ -21,6 +21,7 @@ rate, the leak's size), not only the default one.
 import csv
 import dataclasses
 from pathlib import Path
+import re
 
 import numpy as np
 import pytest
@@ -28,8 +29,12 @@ import pytest
 from bellows_ros import params as param_files
 from bellows_ros.cli import main
 from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
+from bellows_ros.config.hardware import actuator_board_config, arm_bus_config
+from bellows_ros.config.ranges import check_ranges, range_of, RANGES
+from bellows_ros.config.segment import load_segment
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.actuator_experiments import actuator_record
+from bellows_ros.models.segment_experiments import dynamic_record
 
 PARAMS, PLANT = load_actuator_params(), load_actuator_plant_params()
 
@@ -164,13 +169,14 @@ def test_a_driver_refuses_a_command_timeout_below_the_contracts_watchdog(tmp_pat
 
 
 ABSURD = [('segment', 'segment:\n      geometry:\n        n_lambda: 1000000000\n',
-           "'segment.geometry.n_lambda' must be a whole number in 1..100000"),
+           "'segment.geometry.n_lambda' is 1e+09, outside its physical range 1..100000 samples"),
           ('segment', 'segment:\n      geometry:\n        l0: 50.0\n',
-           "'segment.geometry.l0' must lie in (0, 1] m, got 50 (in mm?)"),
+           "'segment.geometry.l0' is 50, outside its physical range 0.001..1 m (was it written "
+           'in mm?)'),
           ('actuator', 'actuator:\n      spring:\n        h0: 12.0\n',
-           "'actuator.spring.h0' must lie in (0, 1] m, got 12 (in mm?)"),
+           "'actuator.spring.h0' is 12, outside its physical range 0.001..1 m"),
           ('actuator', 'actuator:\n      air_chamber:\n        n: 100000\n',
-           "'actuator.air_chamber.n' must be a whole number of segments in 1..1000")]
+           "'actuator.air_chamber.n' is 100000, outside its physical range 1..1000")]
 
 
 @pytest.mark.parametrize('system, section, message', ABSURD)
@@ -192,3 +198,146 @@ def test_an_absurd_geometry_is_refused_before_any_work(system, section, message,
     line = error_line(capsys)
     assert str(params) in line and message in line, line
     assert not output.exists()
+
+
+# --- parameter ranges (config.ranges): every number of the three files ---------------------------
+
+def numbers_of(name):
+    """{dotted name: default} of the numbers (and lists of numbers) of config/<name>.yaml."""
+    return {key: value for key, value in param_files.load(name).items()
+            if not isinstance(value, (str, bool))}
+
+
+def test_every_number_of_the_three_files_has_a_range_and_every_range_a_number():
+    names = set()
+    for name in ('segment', 'actuator', 'hardware'):
+        for key, value in numbers_of(name).items():
+            assert range_of(key) is not None, f'{key} has no range in config.ranges'
+            check_ranges({key: value}, name)  # the default device lies inside
+            names.add(key)
+    assert set(RANGES) <= names, sorted(set(RANGES) - names)  # no range of a removed parameter
+
+
+# (system, the user's file below `system:`, what the one error line names). Each class beyond the
+# absurd geometry above: a pressure in bar, a time constant, a list item, a radius in mm, an
+# effect, a fit bound, and a stiffness window that the range allows but the spring does not.
+OUT_OF_RANGE = [
+    ('segment', 'p_max: 7.5', "'segment.p_max' is 7.5, outside its physical range"),
+    ('segment', 'plant: {valve_tau: 1.0e-9}', "'segment.plant.valve_tau' is 1e-09, outside"),
+    ('segment', 'ogden: {mu: [4000.0, 1.0e12]}', "'segment.ogden.mu' item 2 is 1e+12, outside"),
+    ('actuator', 'gas: {p_ref: 1.01325}', "'actuator.gas.p_ref' is 1.01325, outside its physical "
+     'range 10000..1.1e+06 Pa abs (was it written in bar or kPa?)'),
+    ('actuator', 'air_chamber: {r_big: 20.1}', "'actuator.air_chamber.r_big' is 20.1, outside"),
+    ('actuator', 'force: {e_f: [2.36, 0.5, 527.0, -6.6]}', "'actuator.force.e_f' item 2 is 0.5, "
+     'outside its physical range -0.0002..0.0002 1/Pa'),
+    ('actuator', 'effects: {air_leak: {conductance: 1.0}}',
+     "'actuator.effects.air_leak.conductance' is 1, outside"),
+    ('actuator', 'buckling: {bounds: {critical_pressure: [0.0, 3.0e5]}}',
+     "'actuator.buckling.bounds.critical_pressure' item 1 is 0, outside"),
+    ('actuator', 'stiffness: {x_s_high: 0.5}',
+     "'actuator.stiffness.x_s_high' must lie within the spring travel"),
+]
+
+
+@pytest.mark.parametrize('system, body, needle', OUT_OF_RANGE,
+                         ids=[body for _, body, _ in OUT_OF_RANGE])
+def test_a_parameter_outside_its_range_is_one_line_naming_file_and_range(
+        system, body, needle, tmp_path, capsys):
+    params = tmp_path / 'p.yaml'
+    params.write_text(f'/**:\n  ros__parameters:\n    {system}:\n      {body}\n')
+    if system == 'segment':
+        t = np.arange(200) * 1e-3
+        data = write_csv(tmp_path / 'in.csv', {'t': t, 'psi': 0.3 * np.sin(5 * t),
+                                               'p1': 2e5 + 0 * t, 'p2': 1.2e5 + 0 * t})
+    else:
+        data = write_csv(tmp_path / 'in.csv', actuator_record(PARAMS, PLANT, seed=1, duration=0.5))
+    output = tmp_path / 'o.csv'
+    assert main(['simulate', system, '--input', data, '--output', str(output),
+                 '--params', str(params)]) == 2
+    line = error_line(capsys)
+    assert line.startswith(f'bellows simulate: error: {params}: parameter {needle}'), line
+    assert not output.exists()
+
+
+@pytest.mark.parametrize('body, needle', [
+    ('actuator_board: {drive: {inductance: 0.0}}',  # divided by in the motor's exp(-R dt / L)
+     "'hardware.actuator_board.drive.inductance' is 0, outside its physical range 1e-07..1 H"),
+    ('actuator_board: {heartbeat_period: 1.0e-6}',  # a timer that busy-loops the driver
+     "'hardware.actuator_board.heartbeat_period' is 1e-06, outside"),
+    ('arm_bus: {n_segments: 1000000000}',  # per-segment lists of the driver
+     "'hardware.arm_bus.n_segments' is 1e+09, outside its physical range 1..64 segments"),
+])
+def test_a_hardware_parameter_outside_its_range_names_the_file(body, needle, tmp_path):
+    path = tmp_path / 'h.yaml'
+    path.write_text(f'/**:\n  ros__parameters:\n    hardware:\n      {body}\n')
+    with pytest.raises(ParameterError) as error:
+        actuator_board_config(path) if 'actuator_board' in body else arm_bus_config(path)
+    assert str(error.value).startswith(f'{path}: parameter {needle}'), error.value
+
+
+def test_a_default_file_out_of_range_is_named(tmp_path, monkeypatch):
+    """A value of the defaults is blamed on the defaults, not on the user's file."""
+    for name in ('segment', 'actuator', 'hardware'):
+        (tmp_path / f'{name}.yaml').write_text(param_files.default_file(name).read_text())
+    (tmp_path / 'segment.yaml').write_text(
+        param_files.default_file('segment').read_text().replace('l0: 0.05 ', 'l0: 50.0 '))
+    monkeypatch.setenv('BELLOWS_CONFIG_DIR', str(tmp_path))
+    user = tmp_path / 'u.yaml'
+    user.write_text('/**:\n  ros__parameters:\n    segment: {p_max: 6.0e5}\n')
+    with pytest.raises(ParameterError, match=rf"^{tmp_path / 'segment.yaml'}: parameter "
+                                             r"'segment.geometry.l0' is 50, outside"):
+        load_segment(user)
+
+
+# --- time in ms ---------------------------------------------------------------------------------
+
+def segment_record(dt, seed=2):
+    config = load_segment()
+    return dynamic_record(config.model, config.plant, seed=seed, duration=2.0, dt=dt)
+
+
+RATE_MISMATCH = re.compile(r"column 't': psi_dot is ([\d.e+]+) times the rate of psi over t")
+
+
+# (record, what the line names; for a rate mismatch the factor it must find to 10 %)
+@pytest.mark.parametrize('case, needle', [
+    ('segment 1 kHz, t in ms', "column 't': the median time step is 1 s"),
+    ('segment 100 Hz, t in ms', "column 't': the median time step is 10 s"),
+    ('segment 5 kHz, t in ms', 1000.0),  # steps of 0.2 "s" pass the period rule
+    ('segment psi_dot in deg/s', 180.0 / np.pi),
+    ('actuator 1 kHz, t in ms', "column 't': the median time step is 1 s"),
+])
+@pytest.mark.parametrize('command', ['simulate', 'identify'])
+def test_a_time_column_in_ms_is_refused(case, needle, command, tmp_path, capsys):
+    system = case.split()[0]
+    if system == 'segment':
+        record = segment_record(2e-4 if '5 kHz' in case else 1e-2 if '100 Hz' in case else 1e-3)
+        record.pop('tau_motion', None)
+    else:
+        record = actuator_record(PARAMS, PLANT, seed=1, duration=2.0)
+    if 'ms' in case:
+        record['t'] = record['t'] * 1e3
+    else:
+        record['psi_dot'] = np.degrees(record['psi_dot'])
+    data = write_csv(tmp_path / 'r.csv', record)
+    output = tmp_path / ('o.csv' if command == 'simulate' else 'o.yaml')
+    argv = ([command, system, '--input', data] if command == 'simulate' else
+            [command, system, data, '--quiet']) + ['--output', str(output)]
+    assert main(argv) == 2
+    line = error_line(capsys)
+    assert f'{data}: ' in line, line
+    if isinstance(needle, str):
+        assert needle in line, line
+    else:
+        found = RATE_MISMATCH.search(line)
+        assert found and float(found.group(1)) == pytest.approx(needle, rel=0.1), line
+    assert not output.exists()
+
+
+@pytest.mark.parametrize('dt', [2e-4, 1e-3, 0.01, 0.1])
+def test_a_time_column_in_s_passes_at_any_device_rate(dt, tmp_path, capsys):
+    """The negative control: the same records in s, noisy measured rates included, run."""
+    record = segment_record(dt, seed=3)
+    data = write_csv(tmp_path / 'r.csv', record)
+    assert main(['simulate', 'segment', '--input', data, '--output',
+                 str(tmp_path / 'o.csv')]) == 0, capsys.readouterr().err
