@@ -96,8 +96,18 @@ STARTS = {
     'sensor_lag': [[-2.5], [-0.5]],
     'backlash': [[1.0], [0.05]],
     'wall_bulging': [],
-    'buckling': [[4.0, 15.0, 15.0], [1.0, 60.0, 40.0]],
+    'buckling': [],   # from the record: `buckling_profile`
 }
+# Buckling's onset profile (`buckling_profile`): onsets on a grid over the bounds, kept where the
+# record's rows reach them; the best PROFILE_STARTS of them start the fit.
+PROFILE_COMPRESSIONS = 16
+PROFILE_PRESSURES = 8
+PROFILE_STARTS = 3
+# The strongest buckling the bounds allow must change the force by at least this many (averaged)
+# noise floors, in the least-squares sense and beyond what the material force absorbs, at some
+# onset the record reaches; else the record cannot show buckling (a chi-square of 25 on one added
+# parameter: far beyond chance, yet any real effect the held-out rule would name clears it).
+DETECTABLE = 5.0
 # SI factor of each scaled buckling variable.
 _BUCKLING_SI = {'stiffness_loss_kn': ('stiffness_loss', 1e3),
                 'critical_pressure_kpa': ('critical_pressure', 1e3),
@@ -119,6 +129,80 @@ def buckling_specs(params):
 
 def _onset_width(params):
     return params.buckling.onset_width if params.buckling is not None else 0.15
+
+
+@dataclasses.dataclass
+class Onset:
+    """One onset of the buckling profile: where it lies and what the record can show of it."""
+
+    critical_compression: float   # x_cr, m
+    critical_pressure: float      # p_cr, Pa
+    detectable: float             # the strongest k_b's force change beyond F_mat, noise floors
+    stiffness_loss: float         # k_b, N/m, that fits the record best at this onset (>= 0)
+    improvement: float            # the fall of the force's squared error (noise floors²)
+
+
+def buckling_profile(record, params, force_scale):
+    """
+    Profile buckling over its onset across the record's range: a list of `Onset`, best first.
+
+    For every onset (x_cr, p_cr) on a grid over `actuator.buckling.bounds` that the record's rows
+    reach on one side and not on another, the buckling force per unit stiffness loss on the
+    measured pressure and compression, minus what the baseline's linear material force (F_MTS,
+    load-cell zero, E_F) can absorb of it. Its norm with the largest k_b of the bounds, over the
+    averaged force noise floor `force_scale` (N), is how far the record can show buckling there
+    (`detectable`); the k_b >= 0 fitted to the baseline's force residual gives the improvement.
+    No nonlinear fit: a few least-squares projections, cheap at any onset.
+    """
+    specs = {name: (low, high) for name, _, low, high in buckling_specs(params)}
+    k_max = specs['stiffness_loss_kn'][1] * 1e3
+    x_s, p, f = record['x_s'], record['p'], record['f']
+    known, columns = force_columns(params, (), {}, x_s, p)
+    basis, _ = np.linalg.qr(columns / np.sqrt(np.mean(columns ** 2, axis=0) + 1e-300))
+    residual = f - known
+    residual = residual - basis @ (basis.T @ residual)
+    width = _onset_width(params)
+    gauge = p - P_ATM
+    onsets = []
+    for x_cr in np.geomspace(*specs['critical_compression_mm'], PROFILE_COMPRESSIONS) * 1e-3:
+        for p_cr in np.geomspace(*specs['critical_pressure_kpa'], PROFILE_PRESSURES) * 1e3:
+            load = x_s / x_cr + gauge / p_cr
+            if not (load.max() > 1.0 and load.min() < 1.0):
+                continue    # buckled everywhere or nowhere: no onset in this record
+            shape = buckling_force(Buckling(1.0, p_cr, x_cr, width), x_s, p, np.exp)[0]
+            shape = shape - basis @ (basis.T @ shape)
+            norm2 = float(shape @ shape)
+            if norm2 <= 0.0:
+                continue
+            k_b = min(max(float(shape @ residual) / norm2, 0.0), k_max)
+            improvement = (2.0 * k_b * float(shape @ residual) - k_b ** 2 * norm2)
+            onsets.append(Onset(x_cr, p_cr, k_max * np.sqrt(norm2) / force_scale, k_b,
+                                improvement / force_scale ** 2))
+    onsets.sort(key=lambda o: -o.improvement)
+    return onsets
+
+
+def identifiability(record, params, scales):
+    """
+    Why this record cannot show the model-based causes ({cause: reason or None}): buckling.
+
+    Buckling is identifiable when, at some onset the record reaches, the strongest stiffness loss
+    the bounds allow changes the force by at least `DETECTABLE` noise floors beyond what the
+    material force absorbs (`buckling_profile`). No span of compression or pressure is assumed:
+    an onset near atmospheric pressure at 8 mm counts as one at 40 kPa and 2 mm.
+    """
+    onsets = buckling_profile(record, params, scales['f'])
+    best = max((o.detectable for o in onsets), default=0.0)
+    if best >= DETECTABLE:
+        return {'buckling': None}
+    k_max = buckling_specs(params)[0][3]
+    x_s, gauge = 1e3 * record['x_s'], (record['p'] - P_ATM) / 1e3
+    return {'buckling': (
+        'at every onset within the bounds that the record reaches (spring '
+        f'{x_s.min():.1f}-{x_s.max():.1f} mm, {gauge.min():.1f}-{gauge.max():.1f} kPa gauge; '
+        f'{len(onsets)} of {PROFILE_COMPRESSIONS * PROFILE_PRESSURES} onsets), the strongest '
+        f'buckling (k_b {k_max:.0f} kN/m) would change the force by at most {best:.1f} noise '
+        f'floors beyond what the material force absorbs (needs {DETECTABLE:g})')}
 
 
 def noise_floors(record):
@@ -320,7 +404,10 @@ def build_model(record, params, causes, warm=None, scales=None):
     starts = []
     if causes:
         width = len(SPECS[causes[-1]])
-        for alternative in STARTS[causes[-1]]:
+        alternatives = STARTS[causes[-1]]
+        if causes[-1] == 'buckling':
+            alternatives = _profile_starts(record, params, scales)
+        for alternative in alternatives:
             starts.append(x0[:-width] + list(alternative))
         if warm:
             # A cold start too: an earlier model may have bent v_tube to mimic the missing effect.
@@ -352,6 +439,20 @@ def build_model(record, params, causes, warm=None, scales=None):
 
     return Model(causes, names, x0, lower, upper, run, report,
                  n_linear=F_MTS_DEGREE + 2, starts=starts)
+
+
+def _profile_starts(record, params, scales):
+    """Starts of the buckling fit: the best onsets of `buckling_profile` (scaled variables)."""
+    specs = buckling_specs(params)
+    force_scale = (scales or {}).get('f') or noise_floors(record)['f']
+    starts = []
+    for onset in buckling_profile(record, params, force_scale)[:PROFILE_STARTS]:
+        k_b = onset.stiffness_loss or 0.25 * specs[0][3] * 1e3
+        start = [k_b / 1e3, onset.critical_pressure / 1e3, onset.critical_compression / 1e3]
+        # inside the bounds, off their edges (a start on an edge stays there under trf)
+        starts.append([min(max(v, low + 0.01 * (high - low)), high - 0.01 * (high - low))
+                       for v, (_, _, low, high) in zip(start, specs)])
+    return starts
 
 
 def extended_flat(config, causes, values):

@@ -183,6 +183,7 @@ def diagnose(system, data, config, progress=False, causes=None, source='<arrays>
         y = module.measured(record, scales)
         noise = floors[outputs[0][0]]
         reasons = checks.identifiability(record, scales[outputs[0][0]])
+        reasons.update(module.identifiability(record, params, scales))
     else:
         noise = scoring.noise_floor(module.measured(full))
         y = module.measured(record)
