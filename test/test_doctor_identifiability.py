@@ -64,3 +64,16 @@ def test_buckling_the_record_cannot_reach_is_not_identifiable_with_numbers():
     candidate = found.candidates['buckling']
     assert not candidate.identifiable and candidate.score is None
     assert 'noise floors' in candidate.reason and '0.0-1.0 mm' in candidate.reason
+
+
+def test_structure_left_names_the_closest_candidate_and_the_data_to_decide_it():
+    from bellows_ros.doctor.report import markdown
+    record, config = near_atmospheric_record(None)
+    # a 0.3 Hz pressure ripple: nothing in the vocabulary describes it
+    record['p'] = record['p'] + 120.0 * np.sin(2 * np.pi * 0.3 * record['t'])
+    found = diagnose('actuator', record, config, causes=('air_leak', 'sensor_lag'))
+    assert found.unexplained and found.causes == []
+    text = markdown(found, [])
+    gains = {c: found.candidates[c].gain for c in ('air_leak', 'sensor_lag')}
+    assert f'Closest candidate: `{max(gains, key=gains.get)}`' in text
+    assert 'would decide it' in text

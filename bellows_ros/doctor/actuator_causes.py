@@ -59,6 +59,15 @@ from bellows_ros.models.actuator import (air_force, Buckling, buckling_force, fo
 from bellows_ros.models.actuator_geometry import P_ATM, volume_geo
 
 CAUSES = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash', 'buckling')
+# What a record must hold to decide each cause when it came closest but did not pay (report.md).
+DECIDING_DATA = {
+    'air_leak': 'long holds (tens of s) with the pressure well away from ambient',
+    'heat_exchange': 'fast chamber steps followed by holds of several seconds',
+    'wall_bulging': 'sealed runs at several gas amounts over a wide pressure range',
+    'sensor_lag': 'fast chamber steps sampled at >= 10 x 1/tau',
+    'backlash': 'the chamber reversing often by more than the play',
+    'buckling': 'the spring cycled past the fitted onset at several pressures (gas amounts)',
+}
 BASELINE = ('paper B (17): geometric volume (no E_V), isothermal sealed gas, '
             'p_ref and v_tube refitted; force (7)-(12) on the predicted pressure, F_MTS a cubic '
             'in x_s and E_F amplitude refitted, no buckling')
