@@ -117,6 +117,8 @@ PROFILE_STARTS = 3
 # onset the record reaches; else the record cannot show buckling (a chi-square of 25 on one added
 # parameter: far beyond chance, yet any real effect the held-out rule would name clears it).
 DETECTABLE = 5.0
+# Values of each parameter across its bounds at which `_detectable` profiles a cause.
+PROFILE_POINTS = 5
 # SI factor of each scaled buckling variable.
 _BUCKLING_SI = {'stiffness_loss_kn': ('stiffness_loss', 1e3),
                 'critical_pressure_kpa': ('critical_pressure', 1e3),
@@ -193,25 +195,77 @@ def buckling_profile(record, params, force_scale):
 
 def identifiability(record, params, scales):
     """
-    Why this record cannot show the model-based causes ({cause: reason or None}): buckling.
+    Why this record cannot show each model-based cause: {cause: reason or None}.
 
-    Buckling is identifiable when, at some onset the record reaches, the strongest stiffness loss
-    the bounds allow changes the force by at least `DETECTABLE` noise floors beyond what the
-    material force absorbs (`buckling_profile`). No span of compression or pressure is assumed:
-    an onset near atmospheric pressure at 8 mm counts as one at 40 kPa and 2 mm.
+    No span of pressure, compression or time is assumed; the question is what the strongest
+    effect the physical bounds allow would change in this record beyond what the baseline's own
+    parameters absorb, in (averaged) noise floors, against `DETECTABLE`:
+    - buckling: at every onset the record reaches (`buckling_profile`);
+    - the gas and sensor causes: each parameter profiled across its range (`PROFILE_POINTS`
+      values, the others at their start), the baseline's Jacobian (p_ref, V_tube, the encoder's
+      zero; the force's linear terms are refitted inside every prediction) projected out
+      (`_detectable`).
+    Backlash keeps its structural condition (`checks.identifiability`): a chamber that never
+    reverses turns a play into a constant offset, which the encoder's zero is.
     """
     onsets = buckling_profile(record, params, scales['f'])
     best = max((o.detectable for o in onsets), default=0.0)
-    if best >= DETECTABLE:
-        return {'buckling': None}
-    k_max = buckling_specs(params)[0][3]
-    x_s, gauge = 1e3 * record['x_s'], (record['p'] - P_ATM) / 1e3
-    return {'buckling': (
-        'at every onset within the bounds that the record reaches (spring '
-        f'{x_s.min():.1f}-{x_s.max():.1f} mm, {gauge.min():.1f}-{gauge.max():.1f} kPa gauge; '
-        f'{len(onsets)} of {PROFILE_COMPRESSIONS * PROFILE_PRESSURES} onsets), the strongest '
-        f'buckling (k_b {k_max:.0f} kN/m) would change the force by at most {best:.1f} noise '
-        f'floors beyond what the material force absorbs (needs {DETECTABLE:g})')}
+    reasons = {'buckling': None}
+    if best < DETECTABLE:
+        k_max = buckling_specs(params)[0][3]
+        x_s, gauge = 1e3 * record['x_s'], (record['p'] - P_ATM) / 1e3
+        reasons['buckling'] = (
+            'at every onset within the bounds that the record reaches (spring '
+            f'{x_s.min():.1f}-{x_s.max():.1f} mm, {gauge.min():.1f}-{gauge.max():.1f} kPa gauge; '
+            f'{len(onsets)} of {PROFILE_COMPRESSIONS * PROFILE_PRESSURES} onsets), the strongest '
+            f'buckling (k_b {k_max:.0f} kN/m) would change the force by at most {best:.1f} '
+            f'noise floors beyond what the material force absorbs (needs {DETECTABLE:g})')
+    for cause in ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag'):
+        size, where = _detectable(record, params, scales, cause)
+        reasons[cause] = None if size >= DETECTABLE else (
+            f'the strongest {cause.replace("_", " ")} within its physical range ({where}) would '
+            f'change pressure and force by at most {size:.1f} noise floors beyond what the '
+            f"baseline's p_ref, V_tube and encoder zero absorb (needs {DETECTABLE:g})")
+    return reasons
+
+
+def _detectable(record, params, scales, cause):
+    """
+    Largest change `cause` can make beyond the baseline's parameters: (noise floors, where).
+
+    Each of the cause's parameters is set to `PROFILE_POINTS` values across its bounds (the others
+    at their start); the baseline's prediction at its initial guess and its Jacobian in its own
+    parameters are projected out of the change. Outputs are in noise floors, so the norm of what
+    is left is the chi-square an ideal fit would gain: the Fisher information of the strongest
+    effect, not a rule drawn around one device.
+    """
+    everything = np.ones(len(record), bool)
+    base = build_model(record, params, (), scales=scales)
+    extended = build_model(record, params, (cause,), scales=scales)
+    theta = np.asarray(base.x0, float)
+    y0 = base.predict(theta, everything)[0].ravel()
+    columns = []
+    for k, (low, high) in enumerate(zip(base.lower, base.upper)):
+        step = 1e-3 * (high - low)
+        shifted = theta.copy()
+        shifted[k] += step
+        columns.append((base.predict(shifted, everything)[0].ravel() - y0) / step)
+    jacobian = np.column_stack(columns)
+    best, where = 0.0, ''
+    start = [spec[1] for spec in SPECS[cause]]
+    for k, (name, _, low, high) in enumerate(SPECS[cause]):
+        for value in np.linspace(low, high, PROFILE_POINTS):
+            trial = list(start)
+            trial[k] = value
+            prediction = extended.predict(np.concatenate([theta, trial]), everything)[0].ravel()
+            if not np.all(np.abs(prediction) < 1e8):
+                continue    # no pressure root at this extreme: says nothing about the record
+            change = prediction - y0
+            coef, *_ = np.linalg.lstsq(jacobian, change, rcond=None)
+            size = float(np.linalg.norm(change - jacobian @ coef))
+            if size > best:
+                best, where = size, f'{name} {value:.3g}'
+    return best, where
 
 
 def noise_floors(record):
