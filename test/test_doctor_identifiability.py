@@ -32,7 +32,7 @@ from bellows_ros.models.actuator_experiments import actuator_record
 
 
 def near_atmospheric_record(effects, seed=3):
-    """A volume-test-like record (chamber 0-12 mm: ~92-103 kPa), buckling onset at 10 mm."""
+    """Simulate a volume-test-like record (chamber 0-12 mm: ~92-103 kPa), buckling onset 10 mm."""
     config = load_actuator()
     buckling = dataclasses.replace(config.model.buckling, critical_compression=0.010,
                                    critical_pressure=250e3, stiffness_loss=2000.0)

@@ -14,7 +14,7 @@
 
 
 """
-The doctor on drawn actuators: does it name what is there, and only that (issue 21)?
+The doctor on drawn actuators: does it name what is there, and only that (issue 21).
 
 Per device (`devices.draw_actuator`, seeded: geometry, material, gas, tube, friction, sensors,
 sample rate, record length and programme, and the effect's strength and shape all drawn): a record
@@ -108,7 +108,7 @@ def miss_reason(found, cause):
 
 
 def draw(index, cause):
-    """The `index`-th device of `cause` (None: a null device)."""
+    """Return the `index`-th device of `cause` (None: a null device)."""
     offset = 0 if cause is None else 1 + CAUSES.index(cause)
     return devices.draw_actuator(SEED + 1000 * offset + index, () if cause is None else (cause,))
 

@@ -505,7 +505,7 @@ def build_model(record, params, causes, warm=None, scales=None):
 
 
 def _profile_starts(record, params, scales):
-    """Starts of the buckling fit: the best onsets of `buckling_profile` (scaled variables)."""
+    """Return the buckling fit's starts: the best onsets of `buckling_profile` (scaled)."""
     specs = buckling_specs(params)
     force_scale = (scales or {}).get('f') or noise_floors(record)['f']
     starts = []
