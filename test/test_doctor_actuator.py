@@ -140,6 +140,9 @@ def test_effect_outside_the_vocabulary_is_unexplained(tmp_path):
     details = json.loads((directory / 'details.json').read_text())
     assert details['evidence']['rmse_over_noise'] > 2.0
     assert 'Unexplained structure remains' in (directory / 'report.md').read_text()
+    # it says which candidate came closest and what data would decide it
+    assert details['closest']['cause'] in details['candidates']
+    assert 'would decide it' in (directory / 'report.md').read_text()
 
 
 @pytest.mark.slow

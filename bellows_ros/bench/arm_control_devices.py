@@ -15,7 +15,7 @@
 """
 Arm control on drawn segments, with the tracker's model identified from the device's own record.
 
-Per device (drawn at random, `draw_segment`, seeded):
+Per device (drawn at random, `devices.draw_segment`, seeded):
 1. an excitation record as on paper A's rig (section 3: imposed angle, pressures stepped and
    ramped on their own schedule over p0..p_max, force-torque sensor; `segment_experiments`: a
    dynamic run, then a quasi-static run with `pressure_hold`), at the device's noise;
@@ -34,13 +34,13 @@ for the model-based ones the median and worst per-device ratio to feedback only 
 device. Targets (issue 21): paper A's median ratio <= 0.5, its worst ratio <= 1. Control effort
 (`control.effort`) as extras.
 """
-from collections import namedtuple
 import sys
 
 import numpy as np
 
-from bellows_ros.bench import log_uniform, Result
+from bellows_ros.bench import Result
 from bellows_ros.bench.arm_control import effort_figures, TARGET_RATIO
+from bellows_ros.bench.devices import draw_segment  # noqa: F401 (this bench's devices)
 from bellows_ros.config.segment import load_segment
 from bellows_ros.control import angle_trajectory, closed_loop
 from bellows_ros.identify.segment import fit_segment
@@ -57,40 +57,6 @@ PRESSURE_HOLD = (0.5, 2.0)  # s between pressure changes of the quasi-static run
 # one ~1.5 min, held-out RMSE within 1.3x of the default's on the default device).
 BUDGET = {'starts': 2, 'max_evaluations': 80, 'screen': 16, 'polish_evaluations': 10}
 QUICK_BUDGET = {'starts': 1, 'max_evaluations': 40, 'screen': 8, 'polish_evaluations': 0}
-
-
-Device = namedtuple('Device', 'physics plant effects seed')
-Device.__doc__ = ('A drawn segment: true physics (SegmentParams), SegmentPlantParams, effects '
-                  '(name -> parameters), seed of its records and noise.')
-
-
-def draw_segment(seed):
-    """Return a `Device` drawn from the ranges of docs/arm_control.md, seeded."""
-    rng = np.random.default_rng(seed)
-    config = load_segment()
-    base, plant = config.model, config.plant
-
-    def scale(low, high):
-        return log_uniform(rng, low, high)
-    theta = list(base.actuator_theta)
-    theta[1] *= scale(0.7, 1.4)
-    physics = base.replace(
-        geometry_l0=base.geometry_l0 * rng.uniform(0.85, 1.15),
-        geometry_s0=base.geometry_s0 * rng.uniform(0.85, 1.15),
-        ogden_mu=(base.ogden_mu[0] * scale(0.5, 2.0), base.ogden_mu[1] * scale(0.5, 2.0)),
-        ogden_gamma=(rng.uniform(2.2, 3.5), rng.uniform(4.0, 8.0)),
-        actuator_theta=tuple(theta),
-        restoring_k_s=rng.uniform(-2.5, -0.8), restoring_k_sp=rng.uniform(-2.0, -0.3),
-        restoring_c_psi0=rng.uniform(1.5, 5.0), restoring_c_psi0_p=rng.uniform(0.2, 0.8),
-        friction_c_f=rng.uniform(-0.8, -0.1), friction_c_fp=rng.uniform(-1.5, -0.2))
-    plant = plant.replace(
-        valve_tau=rng.uniform(0.03, 0.08), inertia=scale(0.01, 0.04), damping=scale(0.5, 2.0),
-        noise_p=scale(500.0, 3000.0), noise_psi=scale(5e-4, 2e-3),
-        noise_tau=scale(0.02, 0.1))
-    effects = {name: {} for name in FULL_MODEL}
-    if rng.random() < 0.3:
-        effects['sensor_lag'] = {'tau': rng.uniform(0.01, 0.04)}
-    return Device(physics, plant, effects, seed)
 
 
 def excitation_record(device):

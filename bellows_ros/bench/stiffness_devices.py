@@ -15,12 +15,12 @@
 """
 The stiffness controller on drawn actuators, with the map identified from the device's record.
 
-Per device (drawn at random, `draw_actuator`, seeded): the sealed gas amount, the tube volume, the
-drive's friction, the air leak and the strengths of wall bulging and buckling differ from
-config/actuator.yaml. Then:
+Per device (drawn at random, `devices.draw_actuator`, seeded, with a leak, wall bulging and
+buckling): the sealed gas amount, the tube volume, the geometry, material, the drive's friction,
+the sensors and the effects' strengths and shapes differ from config/actuator.yaml. Then:
 1. an excitation record on the device (`actuator_experiments.actuator_record`: the chamber moved
    by its PD loop through steps, ramps and holds, the spring cycled as by paper B's test machine),
-   sensors as configured;
+   the device's sensors;
 2. `bellows identify actuator` on it (`identify.actuator.fit_actuator`, as the CLI calls it, from
    config/actuator.yaml);
 3. stiffness steps on the same device, gas as after the record: `StiffnessSetpoint` (the inverse
@@ -33,14 +33,12 @@ position and gas, `models.actuator.stiffness` of the plant's physics) stays with
 STEP_BAND of the set-point; and the error at the end of the hold (mean over the last second),
 relative to the set-point. Reported: median and worst over all steps of all devices.
 """
-from collections import namedtuple
-import dataclasses
 import math
 
 import numpy as np
 
 from bellows_ros import params as parameters
-from bellows_ros.bench import log_uniform, Result
+from bellows_ros.bench import devices, Result
 from bellows_ros.config.actuator import load_actuator
 from bellows_ros.control.pd import PDController, PDGains
 from bellows_ros.control.stiffness import StiffnessSetpoint
@@ -60,25 +58,12 @@ STEP_BAND = 0.02  # relative band around the set-point for the step time
 DT = 1e-3
 
 
-Device = namedtuple('Device', 'params plant effects seed')
-Device.__doc__ = ('A drawn actuator: true physics (ActuatorParams, its p_ref the sealed gas), '
-                  'ActuatorPlantParams, effects (name -> parameters), seed.')
+EFFECTS = ('air_leak', 'wall_bulging', 'buckling')
 
 
 def draw_actuator(seed):
-    """Return a `Device` drawn from the ranges of docs/arm_control.md, seeded."""
-    rng = np.random.default_rng(seed)
-    config = load_actuator()
-    params, plant = config.model, config.plant
-    params = dataclasses.replace(params, p_ref=params.p_ref * rng.uniform(0.9, 1.1),
-                                 v_tube=params.v_tube * rng.uniform(0.7, 1.4))
-    drive = dataclasses.replace(plant.drive, viscous_friction=plant.drive.viscous_friction
-                                * log_uniform(rng, 0.5, 3.0))
-    plant = dataclasses.replace(plant, drive=drive)
-    effects = {'air_leak': {'conductance': log_uniform(rng, 2e-12, 3e-11)},
-               'wall_bulging': {'scale': rng.uniform(0.5, 1.5)},
-               'buckling': {'scale': rng.uniform(0.5, 1.5)}}
-    return Device(params, plant, effects, seed)
+    """Return a drawn actuator (`devices.draw_actuator`) with a leak, wall bulging and buckling."""
+    return devices.draw_actuator(seed, EFFECTS)
 
 
 def controller_settings():

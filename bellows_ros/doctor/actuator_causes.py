@@ -59,6 +59,15 @@ from bellows_ros.models.actuator import (air_force, Buckling, buckling_force, fo
 from bellows_ros.models.actuator_geometry import P_ATM, volume_geo
 
 CAUSES = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash', 'buckling')
+# What a record must hold to decide each cause when it came closest but did not pay (report.md).
+DECIDING_DATA = {
+    'air_leak': 'long holds (tens of s) with the pressure well away from ambient',
+    'heat_exchange': 'fast chamber steps followed by holds of several seconds',
+    'wall_bulging': 'sealed runs at several gas amounts over a wide pressure range',
+    'sensor_lag': 'fast chamber steps sampled at >= 10 x 1/tau',
+    'backlash': 'the chamber reversing often by more than the play',
+    'buckling': 'the spring cycled past the fitted onset at several pressures (gas amounts)',
+}
 BASELINE = ('paper B (17): geometric volume (no E_V), isothermal sealed gas, '
             'p_ref and v_tube refitted; force (7)-(12) on the predicted pressure, F_MTS a cubic '
             'in x_s and E_F amplitude refitted, no buckling')
@@ -96,8 +105,20 @@ STARTS = {
     'sensor_lag': [[-2.5], [-0.5]],
     'backlash': [[1.0], [0.05]],
     'wall_bulging': [],
-    'buckling': [[4.0, 15.0, 15.0], [1.0, 60.0, 40.0]],
+    'buckling': [],   # from the record: `buckling_profile`
 }
+# Buckling's onset profile (`buckling_profile`): onsets on a grid over the bounds, kept where the
+# record's rows reach them; the best PROFILE_STARTS of them start the fit.
+PROFILE_COMPRESSIONS = 16
+PROFILE_PRESSURES = 8
+PROFILE_STARTS = 3
+# The strongest buckling the bounds allow must change the force by at least this many (averaged)
+# noise floors, in the least-squares sense and beyond what the material force absorbs, at some
+# onset the record reaches; else the record cannot show buckling (a chi-square of 25 on one added
+# parameter: far beyond chance, yet any real effect the held-out rule would name clears it).
+DETECTABLE = 5.0
+# Values of each parameter across its bounds at which `_detectable` profiles a cause.
+PROFILE_POINTS = 5
 # SI factor of each scaled buckling variable.
 _BUCKLING_SI = {'stiffness_loss_kn': ('stiffness_loss', 1e3),
                 'critical_pressure_kpa': ('critical_pressure', 1e3),
@@ -119,6 +140,132 @@ def buckling_specs(params):
 
 def _onset_width(params):
     return params.buckling.onset_width if params.buckling is not None else 0.15
+
+
+@dataclasses.dataclass
+class Onset:
+    """One onset of the buckling profile: where it lies and what the record can show of it."""
+
+    critical_compression: float   # x_cr, m
+    critical_pressure: float      # p_cr, Pa
+    detectable: float             # the strongest k_b's force change beyond F_mat, noise floors
+    stiffness_loss: float         # k_b, N/m, that fits the record best at this onset (>= 0)
+    improvement: float            # the fall of the force's squared error (noise floors²)
+
+
+def buckling_profile(record, params, force_scale):
+    """
+    Profile buckling over its onset across the record's range: a list of `Onset`, best first.
+
+    For every onset (x_cr, p_cr) on a grid over `actuator.buckling.bounds` that the record's rows
+    reach on one side and not on another, the buckling force per unit stiffness loss on the
+    measured pressure and compression, minus what the baseline's linear material force (F_MTS,
+    load-cell zero, E_F) can absorb of it. Its norm with the largest k_b of the bounds, over the
+    averaged force noise floor `force_scale` (N), is how far the record can show buckling there
+    (`detectable`); the k_b >= 0 fitted to the baseline's force residual gives the improvement.
+    No nonlinear fit: a few least-squares projections, cheap at any onset.
+    """
+    specs = {name: (low, high) for name, _, low, high in buckling_specs(params)}
+    k_max = specs['stiffness_loss_kn'][1] * 1e3
+    x_s, p, f = record['x_s'], record['p'], record['f']
+    known, columns = force_columns(params, (), {}, x_s, p)
+    basis, _ = np.linalg.qr(columns / np.sqrt(np.mean(columns ** 2, axis=0) + 1e-300))
+    residual = f - known
+    residual = residual - basis @ (basis.T @ residual)
+    width = _onset_width(params)
+    gauge = p - P_ATM
+    onsets = []
+    for x_cr in np.geomspace(*specs['critical_compression_mm'], PROFILE_COMPRESSIONS) * 1e-3:
+        for p_cr in np.geomspace(*specs['critical_pressure_kpa'], PROFILE_PRESSURES) * 1e3:
+            load = x_s / x_cr + gauge / p_cr
+            if not (load.max() > 1.0 and load.min() < 1.0):
+                continue    # buckled everywhere or nowhere: no onset in this record
+            shape = buckling_force(Buckling(1.0, p_cr, x_cr, width), x_s, p, np.exp)[0]
+            shape = shape - basis @ (basis.T @ shape)
+            norm2 = float(shape @ shape)
+            if norm2 <= 0.0:
+                continue
+            k_b = min(max(float(shape @ residual) / norm2, 0.0), k_max)
+            improvement = (2.0 * k_b * float(shape @ residual) - k_b ** 2 * norm2)
+            onsets.append(Onset(x_cr, p_cr, k_max * np.sqrt(norm2) / force_scale, k_b,
+                                improvement / force_scale ** 2))
+    onsets.sort(key=lambda o: -o.improvement)
+    return onsets
+
+
+def identifiability(record, params, scales):
+    """
+    Why this record cannot show each model-based cause: {cause: reason or None}.
+
+    No span of pressure, compression or time is assumed; the question is what the strongest
+    effect the physical bounds allow would change in this record beyond what the baseline's own
+    parameters absorb, in (averaged) noise floors, against `DETECTABLE`:
+    - buckling: at every onset the record reaches (`buckling_profile`);
+    - the gas and sensor causes: each parameter profiled across its range (`PROFILE_POINTS`
+      values, the others at their start), the baseline's Jacobian (p_ref, V_tube, the encoder's
+      zero; the force's linear terms are refitted inside every prediction) projected out
+      (`_detectable`).
+    Backlash keeps its structural condition (`checks.identifiability`): a chamber that never
+    reverses turns a play into a constant offset, which the encoder's zero is.
+    """
+    onsets = buckling_profile(record, params, scales['f'])
+    best = max((o.detectable for o in onsets), default=0.0)
+    reasons = {'buckling': None}
+    if best < DETECTABLE:
+        k_max = buckling_specs(params)[0][3]
+        x_s, gauge = 1e3 * record['x_s'], (record['p'] - P_ATM) / 1e3
+        reasons['buckling'] = (
+            'at every onset within the bounds that the record reaches (spring '
+            f'{x_s.min():.1f}-{x_s.max():.1f} mm, {gauge.min():.1f}-{gauge.max():.1f} kPa gauge; '
+            f'{len(onsets)} of {PROFILE_COMPRESSIONS * PROFILE_PRESSURES} onsets), the strongest '
+            f'buckling (k_b {k_max:.0f} kN/m) would change the force by at most {best:.1f} '
+            f'noise floors beyond what the material force absorbs (needs {DETECTABLE:g})')
+    for cause in ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag'):
+        size, where = _detectable(record, params, scales, cause)
+        reasons[cause] = None if size >= DETECTABLE else (
+            f'the strongest {cause.replace("_", " ")} within its physical range ({where}) would '
+            f'change pressure and force by at most {size:.1f} noise floors beyond what the '
+            f"baseline's p_ref, V_tube and encoder zero absorb (needs {DETECTABLE:g})")
+    return reasons
+
+
+def _detectable(record, params, scales, cause):
+    """
+    Largest change `cause` can make beyond the baseline's parameters: (noise floors, where).
+
+    Each of the cause's parameters is set to `PROFILE_POINTS` values across its bounds (the others
+    at their start); the baseline's prediction at its initial guess and its Jacobian in its own
+    parameters are projected out of the change. Outputs are in noise floors, so the norm of what
+    is left is the chi-square an ideal fit would gain: the Fisher information of the strongest
+    effect, not a rule drawn around one device.
+    """
+    everything = np.ones(len(record), bool)
+    base = build_model(record, params, (), scales=scales)
+    extended = build_model(record, params, (cause,), scales=scales)
+    theta = np.asarray(base.x0, float)
+    y0 = base.predict(theta, everything)[0].ravel()
+    columns = []
+    for k, (low, high) in enumerate(zip(base.lower, base.upper)):
+        step = 1e-3 * (high - low)
+        shifted = theta.copy()
+        shifted[k] += step
+        columns.append((base.predict(shifted, everything)[0].ravel() - y0) / step)
+    jacobian = np.column_stack(columns)
+    best, where = 0.0, ''
+    start = [spec[1] for spec in SPECS[cause]]
+    for k, (name, _, low, high) in enumerate(SPECS[cause]):
+        for value in np.linspace(low, high, PROFILE_POINTS):
+            trial = list(start)
+            trial[k] = value
+            prediction = extended.predict(np.concatenate([theta, trial]), everything)[0].ravel()
+            if not np.all(np.abs(prediction) < 1e8):
+                continue    # no pressure root at this extreme: says nothing about the record
+            change = prediction - y0
+            coef, *_ = np.linalg.lstsq(jacobian, change, rcond=None)
+            size = float(np.linalg.norm(change - jacobian @ coef))
+            if size > best:
+                best, where = size, f'{name} {value:.3g}'
+    return best, where
 
 
 def noise_floors(record):
@@ -320,7 +467,10 @@ def build_model(record, params, causes, warm=None, scales=None):
     starts = []
     if causes:
         width = len(SPECS[causes[-1]])
-        for alternative in STARTS[causes[-1]]:
+        alternatives = STARTS[causes[-1]]
+        if causes[-1] == 'buckling':
+            alternatives = _profile_starts(record, params, scales)
+        for alternative in alternatives:
             starts.append(x0[:-width] + list(alternative))
         if warm:
             # A cold start too: an earlier model may have bent v_tube to mimic the missing effect.
@@ -352,6 +502,20 @@ def build_model(record, params, causes, warm=None, scales=None):
 
     return Model(causes, names, x0, lower, upper, run, report,
                  n_linear=F_MTS_DEGREE + 2, starts=starts)
+
+
+def _profile_starts(record, params, scales):
+    """Return the buckling fit's starts: the best onsets of `buckling_profile` (scaled)."""
+    specs = buckling_specs(params)
+    force_scale = (scales or {}).get('f') or noise_floors(record)['f']
+    starts = []
+    for onset in buckling_profile(record, params, force_scale)[:PROFILE_STARTS]:
+        k_b = onset.stiffness_loss or 0.25 * specs[0][3] * 1e3
+        start = [k_b / 1e3, onset.critical_pressure / 1e3, onset.critical_compression / 1e3]
+        # inside the bounds, off their edges (a start on an edge stays there under trf)
+        starts.append([min(max(v, low + 0.01 * (high - low)), high - 0.01 * (high - low))
+                       for v, (_, _, low, high) in zip(start, specs)])
+    return starts
 
 
 def extended_flat(config, causes, values):

@@ -182,11 +182,12 @@ def diagnose(system, data, config, progress=False, causes=None, source='<arrays>
         extra['scales'] = scales
         y = module.measured(record, scales)
         noise = floors[outputs[0][0]]
-        reasons = checks.identifiability(record, scales[outputs[0][0]])
+        reasons = checks.identifiability(record)
+        reasons.update(module.identifiability(record, params, scales))
     else:
         noise = scoring.noise_floor(module.measured(full))
         y = module.measured(record)
-        reasons = checks.identifiability(record, noise / np.sqrt(record.factor), params.p0)
+        reasons = checks.identifiability(record, params.p0)
     timings = {'load': time.perf_counter() - started}   # checks (the caller reads the data)
     bar = _progress(progress, total=1 + len(module.CAUSES if causes is None else causes))
     if system == 'segment':

@@ -114,10 +114,30 @@ def details_dict(d):
                  'failure_over_noise': scoring.FAILURE_NOISE,
                  'failure_over_insample': scoring.FAILURE_INSAMPLE},
         'candidates': candidates,
+        'closest': closest(d),
         'evidence': d.evidence,
         'extended_params': d.values,
         'timings_s': d.timings,
     }
+
+
+def closest(d):
+    """
+    Return the candidate that came closest to removing the structure left, or None.
+
+    {'cause', 'gain', 'why_not', 'deciding_data'}: among the causes scored against the final
+    model and not named, the one with the largest held-out gain; its note or the rule it missed,
+    and the data that would decide it (`DECIDING_DATA` of the system's causes module).
+    """
+    tried = [c for c in d.candidates.values() if c.score is not None and not c.pays
+             and c.gain is not None]
+    if not tried:
+        return None
+    best = max(tried, key=lambda c: c.gain)
+    why = best.note or (f'held-out gain {100 * best.gain:.1f} % < '
+                        f'{100 * scoring.MIN_GAIN:.0f} % (or its BIC did not fall)')
+    deciding = engine.system_module(d.system).DECIDING_DATA[best.cause]
+    return {'cause': best.cause, 'gain': best.gain, 'why_not': why, 'deciding_data': deciding}
 
 
 def fold_rmse(heldout):
@@ -185,6 +205,11 @@ def markdown(d, plots):
                      f'{engine.UNEXPLAINED_RATIO:g} × the noise floor and correlated in time, and '
                      'no candidate in the vocabulary removes it. Something outside the vocabulary '
                      'is at work; the correlations above say what it moves with.')
+        near = closest(d)
+        if near:
+            lines.append(f"\nClosest candidate: `{near['cause']}`, held-out gain "
+                         f"{100 * near['gain']:.1f} %, not named: {near['why_not']}. A record "
+                         f"with {near['deciding_data']} would decide it.")
     else:
         lines.append('No structure beyond the noise is left that the doctor can tell apart.')
     lines += ['', '## Candidates (held-out, greedy forward selection)', '',

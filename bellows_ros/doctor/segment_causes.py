@@ -43,6 +43,13 @@ from bellows_ros.models.segment import (actuator_regressor, contact_lengths, fri
                                         previous_regressor, restoring_regressor, scaled_pressure)
 
 CAUSES = ('contact_hysteresis', 'pressure_friction', 'natural_curvature', 'sensor_lag')
+# What a record must hold to decide each cause when it came closest but did not pay (report.md).
+DECIDING_DATA = {
+    'contact_hysteresis': 'several angle reversals with a chain held pressurised',
+    'pressure_friction': 'motion in both directions at several held pressures',
+    'natural_curvature': 'the chain pressures stepped over many levels, 0 to > 1 bar gauge',
+    'sensor_lag': 'pressure steps faster than the lag, sampled at >= 10 x 1/tau',
+}
 BASELINE = ('paper A previous model (34), constant friction c_f, no natural curvature '
             '(psi_j0 = 0, k_s,p = 0); coefficients refitted')
 # Hz, highest rate the doctor fits at: quasi-static bench records; the sensor lag is ~30 ms

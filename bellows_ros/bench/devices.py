@@ -1,0 +1,215 @@
+# Copyright 2026 bellows_ros maintainers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+Devices drawn at random: paper A segments and paper B actuators that are not config's defaults.
+
+One generator for every bench that must hold on devices the package was not built from (issue 21):
+the doctor on drawn devices (`doctor_devices`), arm control (`arm_control_devices`) and stiffness
+control (`stiffness_devices`). Every draw comes from a `numpy.random.Generator` seeded by the
+caller, so a device is its seed.
+
+Paper B actuator (`draw_actuator`). Factors multiply config/actuator.yaml's value; logU is uniform
+in the logarithm; the last column says why (notes below the table).
+
+| drawn | range | why |
+|---|---|---|
+| sealed gas p_ref | ×U(0.9, 1.1) | 1 |
+| tube volume V_tube | ×U(0.5, 2.0) | 2 |
+| bellows R0 (chamber, spring) | ×U(0.95, 1.05) each | 3 |
+| spring material F_MTS | ×U(0.7, 1.4) | 4 |
+| E_F amplitude C1 | ×logU(0.5, 2) | 5 |
+| drive viscous friction | ×logU(0.5, 3) | 6 |
+| pressure noise, quantum | logU(5, 60) Pa; one of 1, 2, 5, 10 Pa | 7 |
+| force noise, quantum | logU(0.01, 0.1) N; one of 0.005, 0.01, 0.02 N | 8 |
+| sample rate | one of 100, 200, 250, 500, 1000 Hz | 9 |
+| record length | U(30, 60) s | 10 |
+| chamber targets | within [U(-20, 0), U(15, 40)] mm | 11 |
+| spring peaks | U(4, 10) .. U(10, 20) mm | 12 |
+| air_leak | conductance logU(1e-12, 3e-11) m³/(s·Pa), laminar: flow ∝ P (P - P_atm) | 13 |
+| heat_exchange | τ_th logU(0.3, 10) s, γ U(1.3, 1.4) | 14 |
+| wall_bulging | E_V × U(0.3, 2) | 15 |
+| sensor_lag | τ logU(5, 150) ms | 16 |
+| backlash | width logU(0.1, 1) mm | 17 |
+| buckling | k_b logU(500, 8000) N/m, x_cr U(5, 30) mm, p_cr logU(10, 300) kPa | 18 |
+
+1. Sealed at ambient (weather, altitude to ~900 m); paper B's volume test filled 0.92-1.08 × with
+   a syringe.
+2. Tube length and fittings differ by rig (the doctor refits it).
+3. Moulding tolerance. Geometry is measured, so the doctor is given the device's.
+4. Silicone hardness between batches (Shore A ± 5).
+5. Paper B's force error is an empirical fit of one device.
+6. Lead-screw lubrication and wear.
+7. 0.02-0.2 % of a 30 kPa gauge sensor; 12-16 bit converters.
+8. Load cells of 20-100 N at 0.05-0.1 %.
+9. The drivers' range: serial boards to the 1 kHz CAN rig.
+10. A short excitation run (the doctor needs 5 s; 30 s is what its tests take).
+11. The part of the chamber's travel a user's test covers.
+12. Paper B's test machine cycles the spring to 8-20 mm.
+13. A pin-hole to a loose fitting: the gas halves in minutes down to ~10 s.
+14. Thin to thick silicone walls; humid to dry air.
+15. Wall thickness and hardness (paper B's E_V is one device).
+16. Fast piezo sensors to long thin tubes in front of the sensor.
+17. New to worn lead-screw nuts.
+18. Strength and shape: the load index x_s/x_cr + (P - P_atm)/p_cr reaches 1 anywhere from
+    atmospheric pressure (p_cr large: compression alone decides, e.g. 8-12 mm) to pressures the
+    record reaches (p_cr small), at any compression inside or beyond the spring's range.
+
+Paper A segment (`draw_segment`; ranges as docs/arm_control.md gives them, where they were first
+drawn): geometry l0, s0 ×U(0.85, 1.15); Ogden μ ×logU(0.5, 2), γ1 U(2.2, 3.5), γ2 U(4, 8); actuator
+torque scale θ_a[1] ×logU(0.7, 1.4); restoring k_s U(-2.5, -0.8), k_s,p U(-2, -0.3), c_Ψ0
+U(1.5, 5), c_Ψ0,p U(0.2, 0.8) rad; friction c_f U(-0.8, -0.1), c_f,p U(-1.5, -0.2) N·m; valve
+lag U(30, 80) ms; M logU(0.01, 0.04) kg·m², C logU(0.5, 2) N·m·s/rad; noise p logU(0.5, 3) kPa,
+Ψ logU(0.5, 2) mrad, τ logU(0.02, 0.1) N·m; a pressure-sensor lag U(10, 40) ms on 30 % of them.
+"""
+from collections import namedtuple
+import dataclasses
+
+import numpy as np
+
+from bellows_ros.bench import log_uniform
+
+RATES = (100.0, 200.0, 250.0, 500.0, 1000.0)   # Hz
+SIM_DT = 1e-3   # s: the actuator plant runs at 1 kHz; a slower sensor reads every k-th step
+
+# Per effect: {parameter: (kind, low, high)}, kind 'u' uniform, 'log' log-uniform (SI units).
+EFFECT_RANGES = {
+    'air_leak': {'conductance': ('log', 1e-12, 3e-11)},
+    'heat_exchange': {'time_constant': ('log', 0.3, 10.0), 'gamma': ('u', 1.3, 1.4)},
+    'wall_bulging': {'scale': ('u', 0.3, 2.0)},
+    'sensor_lag': {'time_constant': ('log', 0.005, 0.15)},
+    'backlash': {'width': ('log', 1e-4, 1e-3)},
+    'buckling': {'stiffness_loss': ('log', 500.0, 8000.0),
+                 'critical_compression': ('u', 0.005, 0.030),
+                 'critical_pressure': ('log', 1e4, 3e5)},
+}
+# Shape parameters of buckling live in ActuatorParams.buckling, not in the plant's effect.
+_BUCKLING_SHAPE = ('stiffness_loss', 'critical_compression', 'critical_pressure')
+
+
+Actuator = namedtuple('Actuator', 'params plant effects rate duration x_c_range spring_range seed')
+Actuator.__doc__ = ('A drawn actuator: true physics (ActuatorParams; p_ref the sealed gas), '
+                    'ActuatorPlantParams (drive, sensors), effects {name: parameters} as '
+                    '`ActuatorPlant` takes them, sample rate Hz, record length s, the record '
+                    "programme's chamber targets and spring peaks (m), seed.")
+Segment = namedtuple('Segment', 'physics plant effects seed')
+Segment.__doc__ = ('A drawn segment: true physics (SegmentParams), SegmentPlantParams, effects '
+                   '(name -> parameters), seed of its records and noise.')
+
+
+def _draw(rng, kind, low, high):
+    return log_uniform(rng, low, high) if kind == 'log' else float(rng.uniform(low, high))
+
+
+def draw_effect(rng, name):
+    """Parameters of effect `name` drawn from `EFFECT_RANGES` (SI)."""
+    return {key: _draw(rng, *spec) for key, spec in EFFECT_RANGES[name].items()}
+
+
+def draw_actuator(seed, effects=()):
+    """
+    Return an `Actuator` drawn from the ranges of the module docstring, seeded.
+
+    `effects`: names of the effects it has (their strength and shape drawn too). The device's
+    physics is drawn before its effects, so the same seed gives the same device with or without
+    an effect.
+    """
+    from bellows_ros.config.actuator import load_actuator
+    rng = np.random.default_rng(seed)
+    config = load_actuator()
+    params, plant = config.model, config.plant
+    chamber = dataclasses.replace(params.chamber,
+                                  r_big=params.chamber.r_big * rng.uniform(0.95, 1.05))
+    spring = dataclasses.replace(params.spring,
+                                 r_big=params.spring.r_big * rng.uniform(0.95, 1.05))
+    e_f = list(params.e_f)
+    e_f[0] *= log_uniform(rng, 0.5, 2.0)
+    params = dataclasses.replace(
+        params, chamber=chamber, spring=spring, p_ref=params.p_ref * rng.uniform(0.9, 1.1),
+        v_tube=params.v_tube * rng.uniform(0.5, 2.0),
+        f_mts=tuple(float(c) for c in np.asarray(params.f_mts) * rng.uniform(0.7, 1.4)),
+        e_f=tuple(e_f))
+    drive = dataclasses.replace(plant.drive, viscous_friction=plant.drive.viscous_friction
+                                * log_uniform(rng, 0.5, 3.0))
+    sensors = dataclasses.replace(
+        plant.sensors, pressure_noise=log_uniform(rng, 5.0, 60.0),
+        pressure_quantum=float(rng.choice((1.0, 2.0, 5.0, 10.0))),
+        force_noise=log_uniform(rng, 0.01, 0.1),
+        force_quantum=float(rng.choice((0.005, 0.01, 0.02))))
+    plant = dataclasses.replace(plant, drive=drive, sensors=sensors)
+    rate = float(rng.choice(RATES))
+    duration = float(rng.uniform(30.0, 60.0))
+    x_c_range = (rng.uniform(-0.020, 0.0), rng.uniform(0.015, 0.040))
+    spring_range = (rng.uniform(0.004, 0.010), rng.uniform(0.010, 0.020))
+    # Effects last, each from its own stream: adding one leaves the device and the others as
+    # they are.
+    drawn = {}
+    for name in effects:
+        drawn[name] = draw_effect(np.random.default_rng([seed, list(EFFECT_RANGES).index(name)]),
+                                  name)
+    if 'buckling' in drawn:
+        shape = drawn.pop('buckling')
+        params = dataclasses.replace(params, buckling=dataclasses.replace(
+            params.buckling, bounds=(), **{k: shape[k] for k in _BUCKLING_SHAPE}))
+        drawn['buckling'] = {'scale': 1.0}
+    return Actuator(params, plant, drawn, rate, duration, x_c_range, spring_range, seed)
+
+
+def actuator_device_record(device, effects=None, noise=None):
+    """
+    Simulate `device`'s excitation record: {column: array} at the device's sample rate.
+
+    `effects` (default the device's) and `noise` (None: the device's sensors; False: none) as
+    `actuator_experiments.actuator_record`. The plant runs at 1 kHz; a slower sensor reads every
+    k-th step (no averaging: what a slower board samples).
+    """
+    from bellows_ros.models.actuator_experiments import actuator_record
+    record = actuator_record(device.params, device.plant,
+                             device.effects if effects is None else effects, noise,
+                             seed=device.seed, duration=device.duration, dt=SIM_DT,
+                             x_c_range=device.x_c_range, spring_range=device.spring_range)
+    every = int(round(1.0 / (device.rate * SIM_DT)))
+    return {name: column[::every] for name, column in record.items()}
+
+
+def draw_segment(seed):
+    """Return a `Segment` drawn from the ranges of the module docstring, seeded."""
+    from bellows_ros.config.segment import load_segment
+    from bellows_ros.models.segment_plant import FULL_MODEL
+    rng = np.random.default_rng(seed)
+    config = load_segment()
+    base, plant = config.model, config.plant
+
+    def scale(low, high):
+        return log_uniform(rng, low, high)
+    theta = list(base.actuator_theta)
+    theta[1] *= scale(0.7, 1.4)
+    physics = base.replace(
+        geometry_l0=base.geometry_l0 * rng.uniform(0.85, 1.15),
+        geometry_s0=base.geometry_s0 * rng.uniform(0.85, 1.15),
+        ogden_mu=(base.ogden_mu[0] * scale(0.5, 2.0), base.ogden_mu[1] * scale(0.5, 2.0)),
+        ogden_gamma=(rng.uniform(2.2, 3.5), rng.uniform(4.0, 8.0)),
+        actuator_theta=tuple(theta),
+        restoring_k_s=rng.uniform(-2.5, -0.8), restoring_k_sp=rng.uniform(-2.0, -0.3),
+        restoring_c_psi0=rng.uniform(1.5, 5.0), restoring_c_psi0_p=rng.uniform(0.2, 0.8),
+        friction_c_f=rng.uniform(-0.8, -0.1), friction_c_fp=rng.uniform(-1.5, -0.2))
+    plant = plant.replace(
+        valve_tau=rng.uniform(0.03, 0.08), inertia=scale(0.01, 0.04), damping=scale(0.5, 2.0),
+        noise_p=scale(500.0, 3000.0), noise_psi=scale(5e-4, 2e-3),
+        noise_tau=scale(0.02, 0.1))
+    effects = {name: {} for name in FULL_MODEL}
+    if rng.random() < 0.3:
+        effects['sensor_lag'] = {'tau': rng.uniform(0.01, 0.04)}
+    return Segment(physics, plant, effects, seed)

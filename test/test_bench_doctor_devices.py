@@ -1,0 +1,58 @@
+# Copyright 2026 bellows_ros maintainers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+
+"""
+The doctor on drawn actuators (`bellows bench --only doctor_devices`): a seeded subset.
+
+The devices are drawn as the bench draws them; the doctor gets only each record (and the
+device's measured geometry), never the hidden effect.
+"""
+import pytest
+
+from bellows_ros.bench import devices, doctor_devices as bench
+
+
+def test_drawn_devices_differ_repeat_and_keep_their_physics_with_an_effect():
+    first, again, other = (devices.draw_actuator(s) for s in (5, 5, 6))
+    assert first == again and first.params != other.params and first.plant != other.plant
+    leaky = devices.draw_actuator(5, ('air_leak',))
+    assert leaky.params == first.params and leaky.plant == first.plant
+    low, high = devices.EFFECT_RANGES['air_leak']['conductance'][1:]
+    assert low <= leaky.effects['air_leak']['conductance'] <= high
+    record = devices.actuator_device_record(first)
+    assert abs(record['t'][1] - record['t'][0] - 1.0 / first.rate) < 1e-9
+
+
+def test_a_null_device_and_a_buckling_device():
+    rows = [bench.diagnose_device(bench.draw(0, None)),
+            bench.diagnose_device(bench.draw(1, 'buckling'))]
+    null, buckled = rows
+    assert null['named'] == [] and null['size'] == 0.0
+    assert buckled['size'] > bench.DUE          # this draw's buckling shows in its record
+    assert buckled['named'] == ['buckling']
+    results = {r.name: r for r in bench.summarise(rows, ('buckling',))}
+    assert results['doctor_devices.buckling.named'].value == 1.0
+    assert results['doctor_devices.none.false_names'].value == 0.0
+
+
+@pytest.mark.slow  # one device per cause and a null device: 7 diagnoses, a few minutes
+def test_one_device_per_cause_meets_the_targets():
+    rows = bench.run_devices(1, progress=False)
+    for result in bench.summarise(rows):
+        if result.name.endswith('.named'):
+            assert result.value >= bench.TARGET_NAMED, result.extra['misses']
+            assert result.extra['false_name_rate_null'] <= bench.TARGET_FALSE
+        else:
+            assert result.value <= bench.TARGET_FALSE, result.extra['named']
