@@ -187,24 +187,27 @@ def test_bad_yaml_names_the_line(tmp_path, env):
 def test_publisher_waits_until_readers_acknowledged(env):
     dds_node.init([])
     node = dds_node.Node('acked')
-    publisher = node.create_publisher(msg.JointState, '/acked', 100)
-    assert publisher.wait_for_all_acked(dds_node.Duration(seconds=0.0))   # no reader: nothing owed
-    received = []
-    node.create_subscription(msg.JointState, '/acked', received.append, 100)
-    for i in range(50):
-        publisher.publish(msg.JointState(name=['segment_1'], position=[float(i)]))
-    assert publisher.wait_for_all_acked(dds_node.Duration(seconds=2.0))
-    assert [m.position[0] for m in receive(node, received, 50)] == [float(i) for i in range(50)]
+    try:
+        publisher = node.create_publisher(msg.JointState, '/acked', 100)
+        assert publisher.wait_for_all_acked(dds_node.Duration(seconds=0.0))   # no reader: none owed
+        received = []
+        node.create_subscription(msg.JointState, '/acked', received.append, 100)
+        for i in range(50):
+            publisher.publish(msg.JointState(name=['segment_1'], position=[float(i)]))
+        assert publisher.wait_for_all_acked(dds_node.Duration(seconds=2.0))
+        assert [m.position[0] for m in receive(node, received, 50)] == [float(i) for i in range(50)]
+    finally:
+        node.destroy_node()   # its reader would otherwise acknowledge for the next test's
 
 
 @pytest.mark.slow  # node processes
 def test_waiting_for_a_dead_reader_times_out(env):
     """A reader killed without goodbye stays matched until its lease ends: never acknowledges."""
     dds_node.init([])
-    node = dds_node.Node('acked')
-    publisher = node.create_publisher(msg.JointState, '/acked', 100)
+    node = dds_node.Node('dead_reader')
+    publisher = node.create_publisher(msg.JointState, '/dead_reader', 100)
     reader = subprocess.Popen([sys.executable, '-c', JOINT_STATE_SUBSCRIBER + textwrap.dedent("""\
-        reader = DataReader(participant, Topic(participant, 'rt/acked', JointState),
+        reader = DataReader(participant, Topic(participant, 'rt/dead_reader', JointState),
                             qos=Qos(Policy.Reliability.Reliable(0), Policy.History.KeepLast(10)))
         time.sleep(60)
         """), DOMAIN], env={k: v for k, v in env.items() if k != 'PYTHONPATH'})
@@ -221,6 +224,7 @@ def test_waiting_for_a_dead_reader_times_out(env):
         assert time.monotonic() - start < 5.0   # bounded (a generous bound, not a timing claim)
     finally:
         reader.kill()
+        node.destroy_node()
 
 
 def test_a_backlog_of_two_topics_is_served_in_step(env):
