@@ -110,3 +110,22 @@ def stop_all(processes, timeout=10.0):
         except subprocess.TimeoutExpired:
             process.kill()
             process.wait()
+
+
+def ros2_cli(args, env, timeout=60.0):
+    """
+    Run the ros2 command line (`ros2 ARGS`) without its daemon; the finished process.
+
+    Without `--no-daemon` each call would leave a ros2 daemon running for the test's domain, and
+    a later test drawing the same domain would ask that daemon's stale graph. Without a daemon
+    each call discovers for itself (`--spin-time`), so a node not found yet is asked again, until
+    `timeout` s.
+    """
+    require_rclpy()  # the ros2 command line is ROS 2's own
+    own_discovery = [] if args[:2] == ['service', 'call'] else ['--no-daemon', '--spin-time', '1']
+    end = time.monotonic() + timeout
+    while True:
+        result = subprocess.run(['ros2', *args, *own_discovery], capture_output=True, text=True,
+                                timeout=timeout, env=env)
+        if 'Node not found' not in result.stdout + result.stderr or time.monotonic() > end:
+            return result

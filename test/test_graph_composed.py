@@ -26,8 +26,8 @@ import subprocess
 import time
 
 import pytest
-from runtimes import (BIN, launch, logs, node_env, override, require_rclpy, SIM_CONFIG,
-                      stop_all)
+from runtimes import (BIN, launch, logs, node_env, override, require_rclpy, ros2_cli,
+                      SIM_CONFIG, stop_all)
 
 from bellows_ros import interfaces
 from bellows_ros.runtime import dds_node
@@ -69,8 +69,7 @@ def test_the_composed_arm_graph_runs_the_three_nodes(runtime, tmp_path, monkeypa
         require_rclpy()
         for node, name in (('driver_node', 'startup_timeout'), ('model_node', 'latency_budget'),
                            ('arm_controller_node', 'pid.kp')):
-            answer = subprocess.run(['ros2', 'param', 'get', f'/{node}', name], env=env,
-                                    capture_output=True, text=True, timeout=60)
+            answer = ros2_cli(['param', 'get', f'/{node}', name], env)
             assert 'value is' in answer.stdout, (node, answer.stdout + answer.stderr)
         graph.send_signal(signal.SIGINT)
         assert graph.wait(timeout=30) == 0, logs(tmp_path)

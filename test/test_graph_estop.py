@@ -28,7 +28,7 @@ import subprocess
 import time
 
 import pytest
-from runtimes import launch, logs, node_env, override, require_rclpy
+from runtimes import launch, logs, node_env, override, ros2_cli
 
 from bellows_ros import interfaces
 from bellows_ros.runtime import dds_node
@@ -42,10 +42,8 @@ COMMAND = 4.0e5
 
 def call(service, env):
     """`ros2 service call /driver_node/SERVICE std_srvs/srv/Trigger`: its output."""
-    require_rclpy()  # the ros2 command line is ROS 2's own
-    result = subprocess.run(['ros2', 'service', 'call', f'/driver_node/{service}',
-                             'std_srvs/srv/Trigger'], capture_output=True, text=True, timeout=60,
-                            env=env)
+    result = ros2_cli(['service', 'call', f'/driver_node/{service}', 'std_srvs/srv/Trigger'],
+                      env)
     assert result.returncode == 0, result.stderr
     return result.stdout
 

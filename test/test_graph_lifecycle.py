@@ -31,8 +31,9 @@ import sys
 import textwrap
 import time
 
+from polling import wait_for
 import pytest
-from runtimes import launch, logs, node_env, override, require_rclpy, stop_all
+from runtimes import launch, logs, node_env, override, require_rclpy, ros2_cli, stop_all
 
 from bellows_ros import interfaces
 from bellows_ros.runtime import dds_node
@@ -58,11 +59,9 @@ REFERENCE = textwrap.dedent("""
 """)
 
 
-def ros2(args, env, timeout=60):
+def ros2(args, env):
     """Run the ros2 command line; its stdout."""
-    require_rclpy()
-    result = subprocess.run(['ros2', *args], capture_output=True, text=True, timeout=timeout,
-                            env=env)
+    result = ros2_cli(args, env)
     assert result.returncode == 0, result.stdout + result.stderr
     return result.stdout
 
@@ -74,6 +73,9 @@ def test_the_state_machine_is_rcl_lifecycles(runtime, tmp_path):
     driver = launch('driver_node', override('driver_node', 'autostart', 'false')
                     + override('driver_node', 'actuator.enabled', 'false'), env, tmp_path)
     try:
+        # Both must be up and discovered first (a loaded host starts a node in seconds).
+        assert wait_for(lambda: {'/driver_node', '/reference_lifecycle'} <= set(
+            ros2(['lifecycle', 'nodes'], env).split()), timeout=60)
         ours = ros2(['lifecycle', 'list', '/driver_node', '-a'], env)
         theirs = ros2(['lifecycle', 'list', '/reference_lifecycle', '-a'], env)
         # rcl lists the graph in its own order: compare the 25 transitions as a set.
@@ -147,7 +149,8 @@ class Probe:
     def lifecycle(self, env, *args):
         """`ros2 lifecycle ARGS /driver_node` while the commands keep coming; its output."""
         require_rclpy()
-        process = subprocess.Popen(['ros2', 'lifecycle', *args[:1], '/driver_node', *args[1:]],
+        process = subprocess.Popen(['ros2', 'lifecycle', *args[:1], '/driver_node', *args[1:],
+                                    '--no-daemon', '--spin-time', '2'],
                                    env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                    text=True)
         return self.flood(until=process)

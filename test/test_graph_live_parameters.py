@@ -22,11 +22,10 @@ a value outside its Spec is refused with the reason; a read-only one is refused 
 a change reaches the running node (its /diagnostics show the new feedforward).
 """
 import random
-import subprocess
 import time
 
 import pytest
-from runtimes import launch, logs, node_env, require_rclpy, stop_all
+from runtimes import launch, logs, node_env, ros2_cli, stop_all
 
 from bellows_ros.runtime import dds_node
 from bellows_ros.runtime.messages import msg
@@ -60,9 +59,7 @@ REFUSED = [
 
 
 def ros2_param(env, *args):
-    require_rclpy()
-    result = subprocess.run(['ros2', 'param', *args], capture_output=True, text=True,
-                            timeout=60, env=env)
+    result = ros2_cli(['param', *args], env)
     return result.stdout + result.stderr
 
 

@@ -189,13 +189,14 @@ def test_publisher_waits_until_readers_acknowledged(env):
     node = dds_node.Node('acked')
     try:
         publisher = node.create_publisher(msg.JointState, '/acked', 100)
-        assert publisher.wait_for_all_acked(dds_node.Duration(seconds=0.0))   # no reader: none owed
+        assert publisher.wait_for_all_acked(dds_node.Duration(seconds=0.0))  # no reader yet
         received = []
         node.create_subscription(msg.JointState, '/acked', received.append, 100)
         for i in range(50):
             publisher.publish(msg.JointState(name=['segment_1'], position=[float(i)]))
         assert publisher.wait_for_all_acked(dds_node.Duration(seconds=2.0))
-        assert [m.position[0] for m in receive(node, received, 50)] == [float(i) for i in range(50)]
+        positions = [m.position[0] for m in receive(node, received, 50)]
+        assert positions == [float(i) for i in range(50)]
     finally:
         node.destroy_node()   # its reader would otherwise acknowledge for the next test's
 
