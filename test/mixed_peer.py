@@ -89,9 +89,9 @@ def signature(message):
 class Peer(Node):
     """Publishes its side's values, checks the other side's."""
 
-    def __init__(self, runtime):
+    def __init__(self, **kwargs):
         self.side = sys.argv[1]
-        super().__init__(f'mixed_{self.side}', runtime)
+        super().__init__(f'mixed_{self.side}', **kwargs)
         other = next(side for side in SIDES if side != self.side)
         self.received, self.complete = {}, False
         self.publishers = []
