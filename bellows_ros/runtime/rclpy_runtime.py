@@ -15,8 +15,14 @@
 """
 The rclpy runtime: the nodes on ROS 2 itself (what `ros2 run` and `ros2 launch` start).
 
-The same names as the DDS runtime (`dds_node`), so `runtime.node.run` uses either unchanged. Import
+The same names as the DDS runtime (`dds_node`): the `Runtime` Protocol of runtime/contract.py, so
+`runtime.node.run` uses either unchanged. `Node` is an `rclpy.node.Node`, the base every bellows
+node is composed with here (`NodeClass.on(rclpy_runtime)`): any rclpy executor spins it. Import
 fails with ImportError where rclpy or the message packages are absent.
+
+Public rclpy API only, but for `WaitLoop` (what `run` spins a node with, for speed): rclpy has no
+public wait set, so it uses rclpy's own (`rclpy.impl.implementation_singleton`, as rclpy's
+executors do), and `init` maps rclpy's argument errors, which are classes of that module.
 
 The nodes' messages travel as serialized CDR: publishers and subscriptions are rclpy's own (same
 types, type hashes, QoS and graph entries as any rclpy node), but a message is encoded and decoded
