@@ -20,11 +20,15 @@ Prints one JSON object: what the Protocols say of the runtime and its node, and 
 (parameters, a publish/subscribe roundtrip between two nodes of this process, a timer). On rclpy
 the nodes are spun by rclpy's own SingleThreadedExecutor as well as by the runtime's loop.
 """
+import importlib
+import inspect
 import json
+import pkgutil
 import sys
 import time
 
 from bellows_ros.errors import ParameterError
+import bellows_ros.nodes
 from bellows_ros.runtime import contract, Node, select_runtime
 from bellows_ros.runtime.parameters import Spec
 
@@ -65,6 +69,16 @@ def spin_until(spin, done, seconds=20.0):
     return done()
 
 
+def node_classes():
+    """Every bellows node class of bellows_ros/nodes (what the executables run)."""
+    found = set()
+    for module in pkgutil.iter_modules(bellows_ros.nodes.__path__):
+        loaded = importlib.import_module(f'bellows_ros.nodes.{module.name}')
+        found.update(value for value in vars(loaded).values() if inspect.isclass(value)
+                     and issubclass(value, Node) and value is not Node)
+    return sorted(found, key=lambda cls: cls.__name__)
+
+
 def main():
     runtime = select_runtime()
     out = {'runtime': runtime.NAME, 'runtime_protocol': isinstance(runtime, contract.Runtime)}
@@ -82,10 +96,15 @@ def main():
                                isinstance(talker.timer, contract.Timer),
                                isinstance(talker.get_clock(), contract.Clock),
                                isinstance(talker.get_logger(), contract.Logger)]
+    classes = node_classes()
+    out['node_classes'] = {cls.__name__: issubclass(cls.on(runtime), runtime.Node)
+                           for cls in classes}
     out['rclpy_node'] = False
     if runtime.NAME == 'rclpy':
         import rclpy.node
         out['rclpy_node'] = all(isinstance(n, rclpy.node.Node) for n in (talker, listener))
+        out['node_classes'] = {cls.__name__: issubclass(cls.on(runtime), rclpy.node.Node)
+                               for cls in classes}
     out['values'] = talker.values
     out['get_parameter'] = talker.get_parameter('gain').value
     out['has_parameter'] = [talker.has_parameter('gain'), talker.has_parameter('nothing')]

@@ -20,7 +20,8 @@ Each runtime runs in a child process (contract_probe.py; the pytest process neve
 its module and node class must satisfy the Protocols, and its nodes must behave: a parameter
 given with -p wins over the default and passes its Spec, one of another type is refused, a
 timer fires, and one node's messages reach another in the same process. On rclpy every node is
-an `rclpy.node.Node` and rclpy's own executor spins them too.
+an `rclpy.node.Node` (every node class of bellows_ros/nodes composed with rclpy_runtime.Node
+subclasses it) and rclpy's own executor spins them too.
 """
 import json
 from pathlib import Path
@@ -31,6 +32,8 @@ from runtimes import node_env
 
 PROBE = Path(__file__).resolve().parent / 'contract_probe.py'
 DOMAIN = '196'
+NODE_CLASSES = {'ArmControllerNode', 'DriverNode', 'ModelNode', 'ScenarioNode', 'SimActuatorNode',
+                'SimArmNode', 'StiffnessControllerNode'}
 
 
 def test_each_runtime_keeps_the_contract(runtime, tmp_path):
@@ -42,6 +45,9 @@ def test_each_runtime_keeps_the_contract(runtime, tmp_path):
     assert out['runtime_protocol'] and out['check'] == '', out['check']
     assert out['node_protocol'] and all(out['entity_protocols']), out['entity_protocols']
     assert out['rclpy_node'] == (runtime == 'rclpy')
+    # Every node class the executables run is composed with the runtime's node class.
+    assert set(out['node_classes']) >= NODE_CLASSES and all(out['node_classes'].values()), \
+        out['node_classes']
     assert out['values'] == {'gain': 2.5, 'label': 'given'}
     assert out['get_parameter'] == 2.5
     assert out['has_parameter'] == [True, False]
