@@ -47,7 +47,7 @@ def feeder(monkeypatch, tmp_path):
     params_file.write_text(yaml.safe_dump({'/**': {'ros__parameters': DYNAMICS}}))
     dds_node.init(['--ros-args', '-p', f'model_node:params_file:={params_file}',
                    '-p', 'model_node:segments:=[1, 2]'])
-    yield ModelNode(dds_node), dds_node.Node('feeder'), params_file
+    yield ModelNode.on(dds_node)(), dds_node.Node('feeder'), params_file
     dds_node.shutdown()
 
 
@@ -86,10 +86,10 @@ def test_the_topics_carry_the_models_torques_sample_by_sample(feeder):
             half.header.stamp.sec, half.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
         joints.publish(state)
         chambers.publish(chamber)
-        dds_node.spin_once(node._node, timeout_sec=0.0)   # the node serves as it would spinning
+        dds_node.spin_once(node, timeout_sec=0.0)   # the node serves as it would spinning
     end = time.monotonic() + 10.0
     while min(len(v) for v in received.values()) < len(stream) and time.monotonic() < end:
-        dds_node.spin_once(node._node, timeout_sec=0.01)
+        dds_node.spin_once(node, timeout_sec=0.01)
         dds_node.spin_once(peer, timeout_sec=0.01)
     assert [len(v) for v in received.values()] == [len(stream)] * 2
     assert node.counts['evaluated'] == len(stream)

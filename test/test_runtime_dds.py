@@ -32,8 +32,8 @@ TALKER = textwrap.dedent("""
     from bellows_ros.runtime import Node, run
 
     class Talker(Node):
-        def __init__(self, runtime):
-            super().__init__('talker', runtime)
+        def __init__(self, **kwargs):
+            super().__init__('talker', **kwargs)
             rate = self.declare_parameter('rate', 100.0).value
             self.offset = self.declare_parameter('offset', 0.0).value
             self.publisher = self.create_publisher(self.msg.JointState, 'joint_states', 10)

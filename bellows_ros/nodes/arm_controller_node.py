@@ -155,8 +155,8 @@ class SegmentLoop:
 
 class ArmControllerNode(Node):
 
-    def __init__(self, runtime):
-        super().__init__(interfaces.ARM_CONTROLLER_NODE, runtime)
+    def __init__(self, **kwargs):
+        super().__init__(interfaces.ARM_CONTROLLER_NODE, **kwargs)
         given = self.declare_specs(PARAMETERS)
         segments, feedforward = given['segments'], given['feedforward']
         trajectory, self.delay = given['trajectory'], given['trajectory_delay']

@@ -163,8 +163,8 @@ PARAMETERS = (
 
 class DriverNode(Node):
 
-    def __init__(self, runtime):
-        super().__init__('driver_node', runtime)
+    def __init__(self, **kwargs):
+        super().__init__('driver_node', **kwargs)
         self.given = self.declare_specs(PARAMETERS)
         self.use_arm = self.given['arm.enabled']
         self.use_actuator = self.given['actuator.enabled']

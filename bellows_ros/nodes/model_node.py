@@ -62,8 +62,8 @@ PARAMETERS = (
 
 class ModelNode(Node):
 
-    def __init__(self, runtime):
-        super().__init__('model_node', runtime)
+    def __init__(self, **kwargs):
+        super().__init__('model_node', **kwargs)
         given = self.declare_specs(PARAMETERS)
         segments, max_pending = given['segments'], given['max_pending']
         params_file, latency_budget = given['params_file'] or None, given['latency_budget']

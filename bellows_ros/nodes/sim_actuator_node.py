@@ -69,8 +69,8 @@ PARAMETERS = (
 
 class SimActuatorNode(Node):
 
-    def __init__(self, runtime):
-        super().__init__('sim_actuator_node', runtime)
+    def __init__(self, **kwargs):
+        super().__init__('sim_actuator_node', **kwargs)
         given = self.declare_specs(PARAMETERS)
         port, actuator_params = given['port'], given['actuator_params'] or None
         hardware_params = given['hardware_params'] or None

@@ -62,8 +62,8 @@ PARAMETERS = (
 
 class SimArmNode(Node):
 
-    def __init__(self, runtime):
-        super().__init__('sim_arm_node', runtime)
+    def __init__(self, **kwargs):
+        super().__init__('sim_arm_node', **kwargs)
         given = self.declare_specs(PARAMETERS)
         interface, channel = given['can.interface'], given['can.channel']
         n_segments, segment_params = given['n_segments'], given['segment_params'] or None

@@ -83,8 +83,8 @@ PARAMETERS = (
 
 class StiffnessControllerNode(Node):
 
-    def __init__(self, runtime):
-        super().__init__('stiffness_controller_node', runtime)
+    def __init__(self, **kwargs):
+        super().__init__('stiffness_controller_node', **kwargs)
         given = self.declare_specs(PARAMETERS)
         actuator_params = given['actuator_params'] or None
         gains = PDGains(**{field: given[name] for name, field in _PD_GAINS.items()})

@@ -56,8 +56,7 @@ from bellows_ros.errors import ParameterError
 from bellows_ros.runtime import parameter_services, ros_args
 from bellows_ros.runtime.messages import (message_class, msg,  # noqa: F401 (msg: the interface)
                                           type_hash)
-from bellows_ros.runtime.node import check_override
-from bellows_ros.runtime.parameters import descriptor_message
+from bellows_ros.runtime.parameters import check_type, descriptor_message
 from bellows_ros.runtime.services import fields_of, srv  # noqa: F401 (srv: the interface)
 
 NAME = 'dds'
@@ -442,6 +441,9 @@ class Node:
     def get_name(self):
         return self._name
 
+    def get_fully_qualified_name(self):
+        return self._namespace.rstrip('/') + '/' + self._name
+
     def get_namespace(self):
         return self._namespace
 
@@ -455,7 +457,7 @@ class Node:
         if name in self._overrides:
             override, source = self._overrides[name]
             try:
-                check_override(self._name, name, value, override)
+                check_type(self._name, name, value, override)
             except ParameterError as exc:
                 raise ParameterError(f'{source}: {exc}') from None
             value = override
@@ -496,7 +498,7 @@ class Node:
                 result.successful, result.reason = False, f"parameter '{name}': no value given"
             else:
                 try:
-                    check_override(self._name, name, self._parameters[name].value, value)
+                    check_type(self._name, name, self._parameters[name].value, value)
                 except ParameterError as exc:
                     result.successful, result.reason = False, str(exc)
             if not result.successful:
@@ -626,10 +628,6 @@ class Node:
 
 def spin_once(node, timeout_sec=None):
     node._spin_once(timeout_sec)
-
-
-def create_node(name):
-    return Node(name)
 
 
 def descriptor(spec):
