@@ -180,12 +180,31 @@ def ok():
 
 
 def shutdown():
-    """Leave the domain (deletes every reader and writer of the process)."""
+    """Leave the domain: delete every node's entities, then the participant's."""
     _context.shutdown.set()
+    for node in list(_context.nodes):
+        node.destroy_node()
+    _delete(_context.graph_writer, *_context.topics.values(), _context.participant)
     _context.participant = None
     _context.topics = {}
     _context.nodes = []
     _context.graph_writer = None
+
+
+def _delete(*entities):
+    """
+    Delete DDS entities now, in the order given: children before their parent.
+
+    cyclonedds-python deletes an entity in its `__del__`. Left to the garbage collector, a node's
+    entities sit in reference cycles (a ReadCondition holds its reader, a callback its node), are
+    collected at a random moment in no particular order, and a reader or participant deleted
+    before what hangs on it corrupted the heap: a test process that joined and left the domain
+    some tens of times crashed in a later write. `__del__` deletes once and then forgets the
+    handle, so an entity deleted here is not deleted again.
+    """
+    for entity in entities:
+        if entity is not None:
+            entity.__del__()
 
 
 _GRAPH_TYPE = 'rmw_dds_common/msg/ParticipantEntitiesInfo'
@@ -586,8 +605,17 @@ class Node:
         return self._clock
 
     def destroy_node(self):
+        if self._waitset is None:  # destroyed already
+            return
         self._wakeup.set(True)
+        endpoints = self._subscriptions + self._services
+        for endpoint in endpoints:
+            self._waitset.detach(endpoint.condition)
+        self._waitset.detach(self._wakeup)
+        _delete(*[e.condition for e in endpoints], *[e.reader for e in endpoints],
+                *[s.writer for s in self._services], *self._writers, self._wakeup, self._waitset)
         self._subscriptions, self._timers, self._writers, self._services = [], [], [], []
+        self._waitset = self._wakeup = None
         if self in _context.nodes and _context.graph_writer is not None:
             _context.nodes.remove(self)
             _publish_graph()
