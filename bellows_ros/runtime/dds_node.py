@@ -447,6 +447,12 @@ class Node:
         _context.nodes.append(self)
         # What rclpy's Node offers: `ros2 param list/get/set/describe` reach this node too.
         self._parameter_services = parameter_services.ParameterServices(self, srv)
+        # rclpy's /parameter_events: every declaration and change, for rqt_reconfigure and
+        # `ros2 param` watchers (depth 1000, reliable, volatile: rclpy's
+        # qos_profile_parameter_events).
+        self._parameter_events = self.create_publisher(
+            message_class('rcl_interfaces/msg/ParameterEvent'), '/parameter_events',
+            QoSProfile(depth=1000))
         _publish_graph()
         if self.declare_parameter('use_sim_time', False).value:
             self._clock.sim_time = 0
@@ -482,7 +488,16 @@ class Node:
             value = override
         self._parameters[name] = Parameter(name, value)
         self._descriptors[name] = descriptor
+        self._publish_parameter_event(new=[self._parameters[name]])
         return self._parameters[name]
+
+    def _publish_parameter_event(self, new=(), changed=()):
+        def entries(parameters):
+            return [message_class('rcl_interfaces/msg/Parameter')(
+                name=p.name, value=parameter_services.to_message(p.value)) for p in parameters]
+        self._parameter_events.publish(message_class('rcl_interfaces/msg/ParameterEvent')(
+            stamp=self._clock.now().to_msg(), node=self.get_fully_qualified_name(),
+            new_parameters=entries(new), changed_parameters=entries(changed)))
 
     def parameter_names(self):
         return list(self._parameters)
@@ -529,6 +544,7 @@ class Node:
                 return result
         for change in changes:
             self._parameters[change.name] = change
+        self._publish_parameter_event(changed=changes)
         for callback in self._post_set:
             callback(changes)
         return result
