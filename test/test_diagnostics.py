@@ -150,10 +150,24 @@ def test_a_group_reports_one_status_per_concern():
     class Segments(d.DiagnosticTaskGroup):
         def statuses(self):
             return [d.DiagnosticStatusWrapper(d.OK, f'segment_{i}', 'tracking') for i in (1, 2)]
+    updater.setHardwareID('none')
     updater.add(Segments('segments'))
     updater.force_update()
-    assert sorted(statuses(node)) == ['arm_controller_node: segment_1',
-                                      'arm_controller_node: segment_2']
+    assert statuses(node) == {f'arm_controller_node: segment_{i}': (d.OK, 'tracking', 'none', {})
+                              for i in (1, 2)}
+
+
+def test_a_group_that_raises_is_one_stale_status():
+    node = FakeNode('arm_controller_node')
+    updater = d.Updater(node)
+
+    class Broken(d.DiagnosticTaskGroup):
+        def statuses(self):
+            raise RuntimeError('no loops')
+    updater.add(Broken('segments'))
+    updater.force_update()
+    level, message, _, _ = statuses(node)['arm_controller_node: segments']
+    assert level == d.STALE and 'RuntimeError: no loops' in message
 
 
 def test_merge_summary_follows_diagnostic_updater():

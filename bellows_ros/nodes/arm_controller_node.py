@@ -392,7 +392,7 @@ class ArmControllerTask(diagnostics.DiagnosticTaskGroup):
         self.reported_rejected = node.counts['rejected_samples']
         out = []
         for loop in node.loops:
-            stat = diagnostics.DiagnosticStatusWrapper(name=loop.name, hardware_id='none')
+            stat = diagnostics.DiagnosticStatusWrapper(name=loop.name)
             stat.update(values)
             rms = math.sqrt(loop.squares / loop.count) if loop.count else math.nan
             stat.update({'error_rms': f'{rms:.5f}', 'error_max': f'{loop.largest:.5f}',

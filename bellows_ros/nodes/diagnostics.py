@@ -154,7 +154,8 @@ class DiagnosticTaskGroup(DiagnosticTask):
 
     Not in diagnostic_updater: for a node whose concerns share numbers taken once per report
     (a controller's segment loops share its rate window). Each status is named and published as
-    a task's; should `statuses()` raise, one STALE status named after the group says so.
+    a task's (with the updater's hardware_id unless it has its own); should `statuses()` raise,
+    one STALE status named after the group says so.
     """
 
     def statuses(self):
@@ -245,6 +246,8 @@ class Updater:
         try:
             if isinstance(task, DiagnosticTaskGroup):
                 stats = task.statuses()
+                for each in stats:
+                    each.hardware_id = each.hardware_id or self.hwid
             else:
                 stat = task.run(stat) or stat
                 stat.name = task.name
