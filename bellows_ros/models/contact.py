@@ -71,13 +71,12 @@ class StrainMemory:
         self.reset()
 
     def reset(self):
-        """Reset to the initial state of Algorithm 1: a = 0, empty profile."""
+        """Reset to the initial state of Algorithm 1: empty profile (a = 0, n = 0), λ1 = 1."""
         # in place: `models.segment._fused_step` keeps a reference to this list
         self.profile[:] = [0.0] * self.n_lambda
         self.n = 0
         self.total = 0.0
         self.lam1 = 1.0
-        self.a = 0.0
         self.s_a = 0.0  # always the clamped sample_length·total (28): step 1 reads it
         self._steps = 0
 
@@ -121,7 +120,7 @@ class StrainMemory:
         if n > 0:  # the transition point carries the free strain (26)
             self.total += lam1 - profile[n - 1]
             profile[n - 1] = lam1
-        self.n, self.lam1, self.a = n, lam1, a
+        self.n, self.lam1 = n, lam1
         self._steps += 1
         if self._steps >= self.RESUM_EVERY:
             self._steps = 0

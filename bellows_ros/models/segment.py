@@ -334,11 +334,14 @@ class SegmentModel:
         q2 = (p2 - p0) * inv_span
         # actuator torque (29): chain 2 sees Ψ_2 = -Ψ and acts with σ_2 = -1
         t0, t1, t2, t3, t4, t5, t6, t7 = self._theta_a
+        # (the chains' common terms once: `_fused_step` repeats these lines)
         psi_sq = psi * psi
-        tau_a = (q1 * (t0 + s1 * (t1 + t2 * s1 + t3 * q1 + t4 * psi + t5 * psi_sq)
-                       + t6 * q1 * psi + t7 * psi_sq)
-                 - q2 * (t0 + s2 * (t1 + t2 * s2 + t3 * q2 - t4 * psi + t5 * psi_sq)
-                         - t6 * q2 * psi + t7 * psi_sq))
+        even_s = t1 + t5 * psi_sq
+        odd_s = t4 * psi
+        even = t0 + t7 * psi_sq
+        odd = t6 * psi
+        tau_a = (q1 * (even + s1 * (even_s + odd_s + t2 * s1 + t3 * q1) + odd * q1)
+                 - q2 * (even + s2 * (even_s - odd_s + t2 * s2 + t3 * q2) - odd * q2))
         tau_s, tau_f, tau_prev = self._previous(psi, psi_dot, q1, q2)
         return tau_a, tau_s, tau_f, tau_a + tau_s + tau_f, tau_prev
 
@@ -436,7 +439,6 @@ def _fused_step(p, memory1, memory2, table):
             profile1[n - 1] = lam1
         memory1.n = n
         memory1.lam1 = lam1
-        memory1.a = a
         # --- chain 2 (σ_2 = -1: α_2 = -α), the same lines
         radius = l0 - (s0 + memory2.s_a) * tan_a
         load = r2 * radius
@@ -467,15 +469,14 @@ def _fused_step(p, memory1, memory2, table):
             profile2[n - 1] = lam2
         memory2.n = n
         memory2.lam1 = lam2
-        memory2.a = a
         # the running sums re-summed exactly every RESUM_EVERY steps (`StrainMemory.step`); the
-        # chains step together, so memory1 keeps the count of both
+        # chains step together, so memory1's count serves both (memory2's is not kept here)
         steps = memory1._steps + 1
         if steps >= resum_every:
             steps = 0
             total = fsum(profile1[:memory1.n])
             total2 = fsum(profile2[:n])
-        memory1._steps = memory2._steps = steps
+        memory1._steps = steps
         memory1.total = total
         memory2.total = total2
         s1 = sample_length * total
@@ -486,10 +487,12 @@ def _fused_step(p, memory1, memory2, table):
         q1 = r1 * inv_span
         q2 = r2 * inv_span
         psi_sq = psi * psi
-        tau_a = (q1 * (t0 + s1 * (t1 + t2 * s1 + t3 * q1 + t4 * psi + t5 * psi_sq)
-                       + t6 * q1 * psi + t7 * psi_sq)
-                 - q2 * (t0 + s2 * (t1 + t2 * s2 + t3 * q2 - t4 * psi + t5 * psi_sq)
-                         - t6 * q2 * psi + t7 * psi_sq))
+        even_s = t1 + t5 * psi_sq
+        odd_s = t4 * psi
+        even = t0 + t7 * psi_sq
+        odd = t6 * psi
+        tau_a = (q1 * (even + s1 * (even_s + odd_s + t2 * s1 + t3 * q1) + odd * q1)
+                 - q2 * (even + s2 * (even_s - odd_s + t2 * s2 + t3 * q2) - odd * q2))
         bend1 = psi - c_psi0_p * tanh(c_psi0 * q1)
         bend2 = psi + c_psi0_p * tanh(c_psi0 * q2)
         tau_s = bend1 * (k_s + k_sp * q1) + bend2 * (k_s + k_sp * q2)
