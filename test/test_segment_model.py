@@ -414,3 +414,22 @@ def test_fused_step_is_the_per_chain_step_bit_for_bit(params, monkeypatch):
             assert fused.step(*row) == SegmentModel.step(per_chain, *row), (k, device)
             assert fused.memory2.total == per_chain.memory2.total
         assert fused.memory1.profile == per_chain.memory1.profile
+
+
+@pytest.mark.parametrize('how', ['deepcopy', 'pickle'])
+def test_a_copied_model_steps_its_own_memories(params, how):
+    """A copy (deepcopy, pickle) steps its own strain memories, not the original's."""
+    import copy
+    import pickle
+    model = SegmentModel(params)
+    for k in range(300):
+        model.step(0.5 * k / 299, 0.0, 4e5, 2e5)
+    before = (model.memory1.n, model.memory1.total, list(model.memory1.profile))
+    twin = copy.deepcopy(model) if how == 'deepcopy' else pickle.loads(pickle.dumps(model))
+    moved = [twin.step(-0.8, 0.0, 6e5, params.p0) for _ in range(200)]
+    assert (model.memory1.n, model.memory1.total, list(model.memory1.profile)) == before
+    assert twin.memory1.n != before[0]
+    again = SegmentModel(params)
+    for k in range(300):
+        again.step(0.5 * k / 299, 0.0, 4e5, 2e5)
+    assert [again.step(-0.8, 0.0, 6e5, params.p0) for _ in range(200)] == moved

@@ -300,6 +300,21 @@ class SegmentModel:
         self.memory1.reset()
         self.memory2.reset()
 
+    def __getstate__(self):
+        # copy.deepcopy (the pressure allocation's trial steps) and pickle: the closures are
+        # rebuilt on the copy's own memories (a closure copied by reference would step the
+        # original's)
+        state = dict(self.__dict__)
+        state.pop('step', None)
+        state.pop('_previous', None)
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._previous = previous_torques(self.params)
+        if self.table is not None:
+            self.step = _fused_step(self.params, self.memory1, self.memory2, self.table)
+
     def step(self, psi, psi_dot, p1, p2):
         """
         One sample of both chains: the strain memories advance (Algorithm 1), then `torques`.
@@ -385,8 +400,8 @@ def _fused_step(p, memory1, memory2, table):
     costs about as much as a line of the arithmetic, and the step is ~100 lines of it. So it gives
     the same bits as the per-chain form; test/test_segment_model.py holds it to that. The
     parameters are closure constants; the state stays in the two `StrainMemory` objects (peek,
-    reset and the tests read it there). tan(-α) = -tan(α) and π/2 + (-α) = π/2 - α exactly, so
-    chain 2 reuses chain 1's tangent.
+    reset and the tests read it there). tan(-α) = -tan(α) (an odd libm tan; the bit-for-bit test
+    checks it) and π/2 + (-α) = π/2 - α exactly, so chain 2 reuses chain 1's tangent.
     """
     tan, tanh, log1p, ceil, fsum = math.tan, math.tanh, math.log1p, math.ceil, math.fsum
     l0, s0, sa_max = memory1.l0, memory1.s0, memory1.sa_max
@@ -396,11 +411,12 @@ def _fused_step(p, memory1, memory2, table):
     cells, inv_scale, inv_spacing, count = (table.cells, table.inv_scale, table.inv_spacing,
                                             table.count)
     material = table.material
-    p0, inv_span = p.p0, 1.0 / (p.p_max - p.p0)
+    # plain floats: a NumPy scalar among them would make every operation several times dearer
+    p0, inv_span = float(p.p0), 1.0 / float(p.p_max - p.p0)
     t0, t1, t2, t3, t4, t5, t6, t7 = (float(v) for v in p.actuator_theta)
-    k_s, k_sp = p.restoring_k_s, p.restoring_k_sp
-    c_psi0, c_psi0_p = p.restoring_c_psi0, p.restoring_c_psi0_p
-    c_f, c_fp, c_vel = p.friction_c_f, p.friction_c_fp, p.friction_c_vel
+    k_s, k_sp, c_psi0, c_psi0_p, c_f, c_fp, c_vel = (float(v) for v in (
+        p.restoring_k_s, p.restoring_k_sp, p.restoring_c_psi0, p.restoring_c_psi0_p,
+        p.friction_c_f, p.friction_c_fp, p.friction_c_vel))
     u0, u1, u2, u3 = (float(v) for v in p.previous_theta)
 
     def step(psi, psi_dot, p1, p2):
