@@ -149,18 +149,19 @@ class StretchTable:
         c3 = 10.0 * dy - 6.0 * d0 - 4.0 * d1 - 1.5 * s0 + 0.5 * s1
         c4 = -15.0 * dy + 8.0 * d0 + 7.0 * d1 + 1.5 * s0 - s1
         c5 = 6.0 * dy - 3.0 * d0 - 3.0 * d1 - 0.5 * s0 + 0.5 * s1
-        self.cells = [tuple(row) for row in
-                      np.column_stack([y0, d0, 0.5 * s0, c3, c4, c5]).tolist()]
+        # each cell starts with its own x/h as a float: x - x0 is a float subtraction (a float
+        # minus the int index is dearer in CPython), and floor() is a cheaper int than int()
+        self.cells = [tuple(row) for row in np.column_stack(
+            [np.arange(self.count, dtype=float), y0, d0, 0.5 * s0, c3, c4, c5]).tolist()]
 
     def __call__(self, load):
         """Return λ1 ≥ 1 for `load` = p_rel·R (N/m); as `free_strain`, to STRETCH_TABLE_ERROR."""
         # `bellows_ros.models.segment` inlines these lines in the fused step: keep them alike.
         if load > 0.0:
             x = math.log1p(load * self.inv_scale) * self.inv_spacing
-            if x < self.count:  # (before int(): x may be inf)
-                k = int(x)
-                c0, c1, c2, c3, c4, c5 = self.cells[k]
-                t = x - k
+            if x < self.count:  # (before floor(): x may be inf)
+                x0, c0, c1, c2, c3, c4, c5 = self.cells[math.floor(x)]
+                t = x - x0
                 return c0 + t * (c1 + t * (c2 + t * (c3 + t * (c4 + t * c5))))
             return free_strain(load, *self.material)
         return 1.0 if load == load else load

@@ -403,13 +403,17 @@ def _fused_step(p, memory1, memory2, table):
     reset and the tests read it there). tan(-α) = -tan(α) (an odd libm tan; the bit-for-bit test
     checks it) and π/2 + (-α) = π/2 - α exactly, so chain 2 reuses chain 1's tangent.
     """
-    tan, tanh, log1p, ceil, fsum = math.tan, math.tanh, math.log1p, math.ceil, math.fsum
+    tan, tanh, log1p, ceil, floor, fsum = (math.tan, math.tanh, math.log1p, math.ceil,
+                                           math.floor, math.fsum)
     l0, s0, sa_max = memory1.l0, memory1.s0, memory1.sa_max
-    length0, sample_length, n_lambda = memory1.length0, memory1.sample_length, memory1.n_lambda
+    length0, sample_length = memory1.length0, memory1.sample_length
+    # float: a float times an int takes CPython's slow path (the same product, exactly)
+    n_lambda = float(memory1.n_lambda)
+    half_pi, alpha_per_psi, output, output_type = HALF_PI, ALPHA_PER_PSI, _output, _SegmentOutput
     profile1, profile2 = memory1.profile, memory2.profile  # for good: reset() clears in place
     resum_every = memory1.RESUM_EVERY
-    cells, inv_scale, inv_spacing, count = (table.cells, table.inv_scale, table.inv_spacing,
-                                            table.count)
+    cells, inv_scale, inv_spacing = table.cells, table.inv_scale, table.inv_spacing
+    count = float(table.count)  # compared with a float: the same answer, CPython's fast path
     material = table.material
     # plain floats: a NumPy scalar among them would make every operation several times dearer
     p0, inv_span = float(p.p0), 1.0 / float(p.p_max - p.p0)
@@ -420,7 +424,7 @@ def _fused_step(p, memory1, memory2, table):
     u0, u1, u2, u3 = (float(v) for v in p.previous_theta)
 
     def step(psi, psi_dot, p1, p2):
-        alpha = ALPHA_PER_PSI * psi
+        alpha = alpha_per_psi * psi
         tan_a = tan(alpha)
         r1 = p1 - p0
         r2 = p2 - p0
@@ -430,15 +434,14 @@ def _fused_step(p, memory1, memory2, table):
         if load > 0.0:  # λ1 of (22), `StretchTable.__call__`
             x = log1p(load * inv_scale) * inv_spacing
             if x < count:
-                k = int(x)
-                c0, c1, c2, c3, c4, c5 = cells[k]
-                t = x - k
+                x0, c0, c1, c2, c3, c4, c5 = cells[floor(x)]
+                t = x - x0
                 lam1 = c0 + t * (c1 + t * (c2 + t * (c3 + t * (c4 + t * c5))))
             else:
                 lam1 = free_strain(load, *material)
         else:
             lam1 = 1.0 if load == load else load
-        a = 1.0 - radius * (HALF_PI + alpha) / (lam1 * length0)
+        a = 1.0 - radius * (half_pi + alpha) / (lam1 * length0)
         a = 0.0 if a < 0.0 else (a if a < 1.0 else 1.0 - 1e-12)
         n = ceil(a * n_lambda)
         # ... step 5 (26) and s̃_a (28)
@@ -461,15 +464,14 @@ def _fused_step(p, memory1, memory2, table):
         if load > 0.0:
             x = log1p(load * inv_scale) * inv_spacing
             if x < count:
-                k = int(x)
-                c0, c1, c2, c3, c4, c5 = cells[k]
-                t = x - k
+                x0, c0, c1, c2, c3, c4, c5 = cells[floor(x)]
+                t = x - x0
                 lam2 = c0 + t * (c1 + t * (c2 + t * (c3 + t * (c4 + t * c5))))
             else:
                 lam2 = free_strain(load, *material)
         else:
             lam2 = 1.0 if load == load else load
-        a = 1.0 - radius * (HALF_PI - alpha) / (lam2 * length0)
+        a = 1.0 - radius * (half_pi - alpha) / (lam2 * length0)
         a = 0.0 if a < 0.0 else (a if a < 1.0 else 1.0 - 1e-12)
         n = ceil(a * n_lambda)
         old = memory2.n
@@ -515,8 +517,7 @@ def _fused_step(p, memory1, memory2, table):
         tau_f = tanh(c_vel * psi_dot) * (c_f + c_fp * (q1 + q2))
         tau_prev = (tau_f + tau_s + q1 * (u0 + q1 * (u1 + u3 * q1) + u2 * psi)
                     - q2 * (u0 + q2 * (u1 + u3 * q2) - u2 * psi))
-        return _output(_SegmentOutput, (s1, s2, tau_a, tau_s, tau_f, tau_a + tau_s + tau_f,
-                                        tau_prev))
+        return output(output_type, (s1, s2, tau_a, tau_s, tau_f, tau_a + tau_s + tau_f, tau_prev))
     return step
 
 
