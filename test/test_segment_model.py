@@ -400,11 +400,15 @@ def test_fused_step_is_the_per_chain_step_bit_for_bit(params, monkeypatch):
 
     Same table, so the same bits: through fill, release, emptying, a `reset()` in between (the
     fused step keeps the profile lists, reset clears them in place) and the periodic exact
-    re-summing (every 97 steps here instead of 65536).
+    re-summing (every 97 steps here instead of 65536); devices with the calibrated θ_a (two
+    columns, the fused step's short form of (29)) and with all eight.
     """
     monkeypatch.setattr(StrainMemory, 'RESUM_EVERY', 97)
     rng = np.random.default_rng(2228)
-    for device in _drawn_devices(params)[::2]:
+    devices = _drawn_devices(params)[::2]
+    # both forms of τ_a (29) in the fused step: θ_a with only the p·[1, s] columns, and all eight
+    assert {any(device.actuator_theta[2:]) for device in devices} == {False, True}
+    for device in devices:
         psi, psi_dot, p1, p2 = _states(device, rng, n=1000)
         fused, per_chain = SegmentModel(device), SegmentModel(device)
         for k, row in enumerate(zip(psi.tolist(), psi_dot.tolist(), p1.tolist(), p2.tolist())):
