@@ -397,8 +397,10 @@ def _fused_step(p, memory1, memory2, table):
     The same operations in the same order as `StrainMemory.step` (with `StretchTable.__call__`
     for λ1 of (22)) on `memory1` and `memory2`, then `SegmentModel.torques` ((3)-(5), (17), (29),
     (34)): written out in one closure because each Python call, attribute look-up and NumPy scalar
-    costs about as much as a line of the arithmetic, and the step is ~100 lines of it. So it gives
-    the same bits as the per-chain form; test/test_segment_model.py holds it to that. The
+    costs about as much as a line of the arithmetic, and the step is ~100 lines of it. It leaves
+    out only operations that cannot change a bit (terms of (29) with an exact-zero θ_a, a clamp
+    that never acts), so it gives the same bits as the per-chain form;
+    test/test_segment_model.py holds it to that. The
     parameters are closure constants; the state stays in the two `StrainMemory` objects (peek,
     reset and the tests read it there). tan(-α) = -tan(α) (an odd libm tan; the bit-for-bit test
     checks it) and π/2 + (-α) = π/2 - α exactly, so chain 2 reuses chain 1's tangent.
@@ -501,10 +503,16 @@ def _fused_step(p, memory1, memory2, table):
         memory1._steps = steps
         memory1.total = total
         memory2.total = total2
+        # s̃_a (28) clamped to sa_max; StrainMemory.step also clamps at 0, which never acts: the
+        # total is 0.0 exactly for an empty contact and a sum of n stretches ≥ 1 otherwise
         s1 = sample_length * total
-        s1 = memory1.s_a = 0.0 if s1 < 0.0 else (sa_max if s1 > sa_max else s1)
+        if s1 > sa_max:
+            s1 = sa_max
         s2 = sample_length * total2
-        s2 = memory2.s_a = 0.0 if s2 < 0.0 else (sa_max if s2 > sa_max else s2)
+        if s2 > sa_max:
+            s2 = sa_max
+        memory1.s_a = s1
+        memory2.s_a = s2
         # --- torques: `SegmentModel.torques` and `previous_torques`, the same expressions
         q1 = r1 * inv_span
         q2 = r2 * inv_span
