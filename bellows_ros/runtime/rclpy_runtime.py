@@ -22,7 +22,7 @@ fails with ImportError where rclpy or the message packages are absent.
 
 Public rclpy API only, but for `WaitLoop` (what `run` spins a node with, for speed): rclpy has no
 public wait set, so it uses rclpy's own (`rclpy.impl.implementation_singleton`, as rclpy's
-executors do), and `init` maps rclpy's argument errors, which are classes of that module.
+executors do).
 
 The nodes' messages travel as serialized CDR: publishers and subscriptions are rclpy's own (same
 types, type hashes, QoS and graph entries as any rclpy node), but a message is encoded and decoded
@@ -101,13 +101,13 @@ def init(args=None):
         # close() could publish its final counts. SIGINT is then Python's KeyboardInterrupt, raised
         # when the executor's wait returns (spin wakes at least every _MAX_WAIT_S for that).
         rclpy.init(args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
-    except _rclpy.UnknownROSArgsError as exc:
-        # rclpy's message is the list of unknown arguments, as text.
-        unknown = str(exc).strip('[]').split(',')[0].strip().strip("'")
-        raise ParameterError(f"--ros-args: unknown argument '{unknown}'") from None
-    except (_rclpy.RCLError, _rclpy.RCLInvalidROSArgsError) as exc:
+    except RuntimeError as exc:  # rclpy's argument errors are RuntimeErrors (public behaviour)
+        text = str(exc)
+        if text.startswith('['):  # UnknownROSArgsError: the list of unknown arguments, as text
+            unknown = text.strip('[]').split(',')[0].strip().strip("'")
+            raise ParameterError(f"--ros-args: unknown argument '{unknown}'") from None
         # rcl appends the C source locations of the error (', at /path/file.c:123'): drop them.
-        message = ' '.join(str(exc).split()).split(', at /')[0]
+        message = ' '.join(text.split()).split(', at /')[0]
         raise ParameterError(message.removeprefix('failed to initialize rcl: ')) from None
 
 
