@@ -281,8 +281,8 @@ NODE = textwrap.dedent("""
     from bellows_ros.runtime import Node, run
 
     class Probe(Node):
-        def __init__(self, runtime):
-            super().__init__('diag_probe', runtime)
+        def __init__(self, **kwargs):
+            super().__init__('diag_probe', **kwargs)
             self.diagnostics = d.Updater(self, period=0.2)
             self.diagnostics.setHardwareID('none')
             self.diagnostics.add('fine', self.fine)
