@@ -44,7 +44,7 @@ CHUNK_ROWS = 20_000
 # Most rows `read_record` hands a fit: a longer record is read in chunks and block-averaged down to
 # at most this many rows (identify, diagnose). Up to this many lines after the header the record
 # is the file's rows themselves, as `read_table` reads them.
-FIT_ROWS = 500_000
+FIT_ROWS = 100_000
 # A time step this many times a chunk's median step starts a new block of `read_record` (records
 # joined end to end, a gap): no block averages across it.
 BLOCK_GAP_STEPS = 10.0

@@ -21,7 +21,8 @@ from bellows_ros import params as param_files
 from bellows_ros.config.actuator import load_actuator, params_to_flat
 from bellows_ros.data import check_moves, check_range, CsvOutput, read_chunks, read_record
 from bellows_ros.errors import BellowsError, DataError, ParameterError
-from bellows_ros.identify.actuator import fit_actuator, parameter_count, STRUCTURE_LAG
+from bellows_ros.identify.actuator import (fit_actuator, LaggedCorrelation, parameter_count,
+                                           STRUCTURE_LAG, volume_error)
 from bellows_ros.models.actuator import evaluate_array
 from bellows_ros.models.actuator_plant import ActuatorPlant, effect_parameters
 
@@ -109,6 +110,16 @@ def _not_sealed(data, evidence):
         '`bellows diagnose actuator` on it to find what it shows')
 
 
+def _raw_structure(path, fit, rate):
+    """`leftover_structure` of the fitted model's volume error over every raw row of `path`."""
+    structure = LaggedCorrelation(rate)
+    for chunk in read_chunks(path, 'actuator'):
+        run = chunk['run'] if 'run' in chunk else None
+        structure.add(volume_error(fit.params, fit.amounts, chunk['x_c'], chunk['x_s'],
+                                   chunk['p'], run))
+    return structure.result()
+
+
 def _check_fit(path, data):
     """Read the fitted file back with the actuator loader; a refusal explains the record."""
     try:
@@ -135,6 +146,8 @@ def identify(args):
     except ParameterError as exc:  # the fitted numbers describe no device (a gas law with no root)
         raise _not_sealed(args.data, f'the fitted parameters are impossible: {exc}') from None
     correlation, bound = fit.structure
+    if record.factor > 1:  # block means hide the noise: the raw rows' error, chunk by chunk
+        correlation, bound = _raw_structure(args.data, fit, rate * record.factor)
     if correlation > bound:
         raise _not_sealed(args.data, f'the volume error stays correlated over {STRUCTURE_LAG:g} '
                           f's: {correlation:.2f}, where noise stays below {bound:.3f}')
