@@ -319,3 +319,30 @@ def test_identify_and_diagnose_peak_memory_does_not_grow_with_the_record(tmp_pat
     # record's length is left only in what one chunk holds (data.CHUNK_ROWS).
     for command in ('identify', 'diagnose'):
         assert peaks[command, 600_000] - peaks[command, 100_000] < 30e6, peaks
+
+
+@pytest.mark.slow
+def test_identify_segment_on_many_chunks_and_on_block_means(tmp_path, monkeypatch, capsys):
+    """Chunked: the same parameter file as whole. Block means of 2 rows: a fit as good."""
+    from bellows_ros.config.segment import load_segment_params, load_segment_plant_params
+    from bellows_ros.models.segment_experiments import quasi_static_record
+    from bellows_ros.models.segment_plant import FULL_MODEL
+    record = quasi_static_record(load_segment_params(), load_segment_plant_params(), FULL_MODEL,
+                                 None, seed=4, duration=8.0, dt=1e-2)
+    source = write_csv(tmp_path / 'in.csv', record, ('t', 'psi', 'p1', 'p2', 'tau_ext',
+                                                     'psi_dot'))
+
+    def identify(name):
+        output = tmp_path / name
+        assert main(['identify', 'segment', source, '--output', str(output), '--quiet']) == 0
+        text = capsys.readouterr().out
+        return float(text.split('paper A (29) with strain memory')[1].split()[0]), text
+    whole, _ = identify('whole.yaml')
+    monkeypatch.setattr(data, 'CHUNK_ROWS', 97)
+    identify('chunked.yaml')
+    assert (tmp_path / 'chunked.yaml').read_bytes() == (tmp_path / 'whole.yaml').read_bytes()
+    monkeypatch.setattr(data, 'FIT_ROWS', 400)
+    means, text = identify('means.yaml')
+    assert 'record of 800 rows fitted as 400 block means of 2 rows' in text
+    # held out: the last 30 % of the time either way; block means carry half the noise power
+    assert means == pytest.approx(whole, rel=0.25)
