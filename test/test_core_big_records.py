@@ -312,7 +312,9 @@ def test_identify_and_diagnose_peak_memory_does_not_grow_with_the_record(tmp_pat
                          str(tmp_path / f'report{rows}')]):
             run = subprocess.run([sys.executable, '-c', FIT_PEAK, '5000'] + command,
                                  capture_output=True, text=True, timeout=1200, env=environment)
-            assert run.returncode == 0, run.stderr
+            # The tiled record's joins may be refused as a leak by the raw rows' lagged
+            # correlation (bound 5/sqrt(rows)): that comes after both passes, all the work done.
+            assert run.returncode == 0 or 'identification refused' in run.stderr, run.stderr
             peaks[command[0], rows] = int(run.stdout.split()[-1]) * 1024
     # Whole-record reading held ~50 bytes a row and more per row in the fits (0.5 GB for
     # 10 M rows of six columns before any work); read in chunks into 5000 block means, the
