@@ -324,27 +324,51 @@ def test_identify_and_diagnose_peak_memory_does_not_grow_with_the_record(tmp_pat
 
 
 @pytest.mark.slow
-def test_identify_segment_on_many_chunks_and_on_block_means(tmp_path, monkeypatch, capsys):
-    """Chunked: the same parameter file as whole. Block means of 2 rows: a fit as good."""
+def test_identify_segment_on_many_chunks_gives_the_same_file(tmp_path, monkeypatch, capsys):
+    """Up to data.FIT_ROWS rows, however many chunks: the very same parameter file."""
     from bellows_ros.config.segment import load_segment_params, load_segment_plant_params
     from bellows_ros.models.segment_experiments import quasi_static_record
     from bellows_ros.models.segment_plant import FULL_MODEL
     record = quasi_static_record(load_segment_params(), load_segment_plant_params(), FULL_MODEL,
                                  None, seed=4, duration=8.0, dt=1e-2)
-    source = write_csv(tmp_path / 'in.csv', record, ('t', 'psi', 'p1', 'p2', 'tau_ext',
-                                                     'psi_dot'))
+    source = write_csv(tmp_path / 'in.csv', record, SEGMENT_COLUMNS)
+    assert main(['identify', 'segment', source, '--output', str(tmp_path / 'whole.yaml'),
+                 '--quiet']) == 0
+    monkeypatch.setattr(data, 'CHUNK_ROWS', 97)
+    assert main(['identify', 'segment', source, '--output', str(tmp_path / 'chunked.yaml'),
+                 '--quiet']) == 0
+    assert (tmp_path / 'chunked.yaml').read_bytes() == (tmp_path / 'whole.yaml').read_bytes()
 
-    def identify(name):
-        output = tmp_path / name
-        assert main(['identify', 'segment', source, '--output', str(output), '--quiet']) == 0
+
+SEGMENT_COLUMNS = ('t', 'psi', 'p1', 'p2', 'tau_ext', 'psi_dot')
+
+
+@pytest.mark.slow
+def test_identify_segment_on_block_means_predicts_as_well(tmp_path, monkeypatch, capsys):
+    """
+    60 s at 100 Hz, fitted whole and as block means of 2 rows: held-out RMSE within 5 %.
+
+    Measured by hand 2026-11-26: 0.4753 N·m whole, 0.4730 N·m on block means (~8 min each on
+    a loaded 2-core machine).
+    """
+    from bellows_ros.config.segment import load_segment_params, load_segment_plant_params
+    from bellows_ros.models.segment_experiments import quasi_static_record
+    record = quasi_static_record(load_segment_params(), load_segment_plant_params(), {},
+                                 seed=4, duration=60.0, dt=1e-2)
+    source = str(tmp_path / 'in.csv')
+    np.savetxt(source, np.column_stack([record[name] for name in SEGMENT_COLUMNS]),
+               delimiter=',', header=','.join(SEGMENT_COLUMNS), comments='', fmt='%.10g')
+    monkeypatch.setattr(data, 'CHUNK_ROWS', 1000)
+
+    def heldout(name):
+        assert main(['identify', 'segment', source, '--output', str(tmp_path / name),
+                     '--quiet']) == 0
         text = capsys.readouterr().out
         return float(text.split('paper A (29) with strain memory')[1].split()[0]), text
-    whole, _ = identify('whole.yaml')
-    monkeypatch.setattr(data, 'CHUNK_ROWS', 97)
-    identify('chunked.yaml')
-    assert (tmp_path / 'chunked.yaml').read_bytes() == (tmp_path / 'whole.yaml').read_bytes()
-    monkeypatch.setattr(data, 'FIT_ROWS', 400)
-    means, text = identify('means.yaml')
-    assert 'record of 800 rows fitted as 400 block means of 2 rows' in text
-    # held out: the last 30 % of the time either way; block means carry half the noise power
-    assert means == pytest.approx(whole, rel=0.25)
+    whole, _ = heldout('whole.yaml')
+    monkeypatch.setattr(data, 'FIT_ROWS', 3000)
+    means, text = heldout('means.yaml')
+    assert 'record of 6000 rows fitted as 3000 block means of 2 rows' in text
+    # held out either way: the last 30 % of the time, against the measured torque of the rows
+    # fitted (for block means that torque carries half the noise power)
+    assert means == pytest.approx(whole, rel=0.05)
