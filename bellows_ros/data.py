@@ -23,6 +23,7 @@ A directory is read as a rosbag2 recording (see `bellows_ros.bag`). Both readers
 `bellows_ros.table.Table`; this module imports the bag reader, never the other way round.
 """
 import csv
+from dataclasses import dataclass, field
 import io
 import itertools
 import math
@@ -40,6 +41,13 @@ BOM = b'\xef\xbb\xbf'  # the UTF-8 byte-order mark spreadsheets write
 # Rows per chunk of a streamed record (`read_chunks`): about 30 MB while a chunk is run and
 # written (its numbers, then their text), whatever the record's length.
 CHUNK_ROWS = 20_000
+# Most rows `read_record` hands a fit: a longer record is read in chunks and block-averaged down to
+# at most this many rows (identify, diagnose). Up to this many lines after the header the record
+# is the file's rows themselves, as `read_table` reads them.
+FIT_ROWS = 100_000
+# A time step this many times a chunk's median step starts a new block of `read_record` (records
+# joined end to end, a gap): no block averages across it.
+BLOCK_GAP_STEPS = 10.0
 
 # Pressure columns of each system: absolute, in Pa.
 PRESSURES = {'segment': ('p1', 'p2'), 'actuator': ('p',)}
@@ -187,19 +195,25 @@ def check_range(table, name, low, high, unit=''):
                         table.line(i), name)
 
 
-def check_moves(table, name, why):
+def check_moves(table, name, why, stats=None):
     """
     Column `name` must move beyond its own noise, or the record cannot show `why`.
 
     The noise is read from the data: sample-to-sample differences of white noise of deviation s
     have deviation s·√2, and a still signal's range is then within a few s. A range under ten
-    times that is taken as a column that never moves.
+    times that is taken as a column that never moves. `stats` (`Record.stats`, raw rows of a
+    block-averaged record) replaces the table's own column: averaging would hide the noise.
     """
-    column = table[name]
-    if len(column) < 3:
-        return
-    noise = float(np.std(np.diff(column))) / math.sqrt(2.0)
-    spread = float(np.ptp(column))
+    if stats is not None and name in stats:
+        if stats[name].diffs < 2:
+            return
+        noise, spread = stats[name].noise, stats[name].spread
+    else:
+        column = table[name]
+        if len(column) < 3:
+            return
+        noise = float(np.std(np.diff(column))) / math.sqrt(2.0)
+        spread = float(np.ptp(column))
     if spread <= 10.0 * noise:
         raise DataError(table.path, f'never moves (range {spread:.3g}, within 10x its own noise '
                         f'{noise:.2g}): {why}', column=name)
@@ -244,6 +258,146 @@ def read_chunks(path, system, required=None, rows=None):
     if not any_rows:
         raise DataError(path, 'no data rows after the header' if header.strip() else
                         'empty file: expected a header row', line=2 if header.strip() else 1)
+
+
+@dataclass
+class ColumnStats:
+    """Range and sample-to-sample differences of one column over every raw row, chunk by chunk."""
+
+    low: float = math.inf
+    high: float = -math.inf
+    diffs: int = 0
+    total: float = 0.0     # sum of the differences
+    squares: float = 0.0   # sum of their squares
+    last: float = None
+
+    def add(self, column):
+        """Take the next rows of the column (the difference across the chunk boundary too)."""
+        steps = np.diff(column if self.last is None else np.r_[self.last, column])
+        self.low, self.high = min(self.low, float(column.min())), max(self.high,
+                                                                      float(column.max()))
+        self.diffs += len(steps)
+        self.total += float(steps.sum())
+        self.squares += float(np.dot(steps, steps))
+        self.last = float(column[-1])
+
+    @property
+    def spread(self):
+        return self.high - self.low
+
+    @property
+    def noise(self):
+        """np.std(np.diff(column)) / √2 of the whole column, as `check_moves` takes it."""
+        mean = self.total / self.diffs
+        return math.sqrt(max(self.squares / self.diffs - mean * mean, 0.0) / 2.0)
+
+
+@dataclass
+class Record:
+    """
+    What `read_record` gives: the table to fit, and what the raw rows said.
+
+    `table`: the file's rows (`factor` 1) or block means of `factor` consecutive rows (fewer at a
+    gap, a change of `run`, and the record's end), each block's line the line of its first row;
+    `rows`: data rows of the file; `stats`: `ColumnStats` of every numeric column over the raw
+    rows; `chunks`: what `per_chunk` returned for each raw chunk.
+    """
+
+    table: Table
+    rows: int
+    factor: int
+    stats: dict = field(default_factory=dict)
+    chunks: list = field(default_factory=list)
+
+
+def count_lines(path):
+    """Lines after the header of a file (blank ones too), read in blocks: bounded memory."""
+    lines, tail = 0, b'\n'
+    with open(path, 'rb') as stream:
+        for block in iter(lambda: stream.read(1 << 24), b''):
+            lines += block.count(b'\n')
+            tail = block[-1:]
+    return max(0, lines + (tail != b'\n') - 1)
+
+
+def read_record(path, system, required=None, per_chunk=None, max_rows=None):
+    """
+    Read a `system` file of any length for a fit, in bounded memory: returns a `Record`.
+
+    A file of at most `max_rows` (FIT_ROWS) lines after the header gives its rows, the numbers
+    `read_table` gives. A longer one is read in chunks (`read_chunks`: every check of each chunk,
+    time increasing across them, errors naming the file's line, a progress bar) and each block of
+    `factor` = ceil(lines / max_rows) consecutive rows is replaced by its mean: an anti-alias
+    filter and decimator in one (plain subsampling would alias the noise), which also divides
+    white noise's variance by `factor`. A block never spans a time step over BLOCK_GAP_STEPS
+    median steps nor a change of `run` (separately sealed fills). Whatever the noise, read it off
+    the raw rows (`Record.stats`, `per_chunk`: called on each raw chunk), never the block means.
+    A rosbag2 directory is read whole (`read_table`).
+    """
+    max_rows = max_rows or FIT_ROWS
+    if Path(path).is_dir():
+        table = read_table(path, system, required)
+        return _whole(table, per_chunk)
+    try:
+        lines = count_lines(path)
+    except OSError as exc:
+        raise DataError(path, f'cannot read file ({exc.strerror})') from None
+    factor = max(1, math.ceil(lines / max_rows))
+    stats, chunks, rows = {}, [], 0
+    parts, pending = [], None
+    for table in read_chunks(path, system, required):
+        rows += len(table)
+        for name, column in table.values.items():
+            stats.setdefault(name, ColumnStats()).add(column)
+        if per_chunk is not None:
+            chunks.append(per_chunk(table))
+        if factor == 1:
+            parts.append((table.values, list(table.lines), {}))
+            continue
+        values, lines_of = dict(table.values), np.asarray(table.lines)
+        if pending is not None:
+            values = {name: np.r_[pending[0][name], values[name]] for name in values}
+            lines_of = np.r_[pending[1], lines_of]
+        starts = _block_starts(values, factor)
+        done = starts[-1] if len(values['t']) - starts[-1] < factor else len(values['t'])
+        pending = ({name: column[done:] for name, column in values.items()}, lines_of[done:])
+        starts = starts[starts < done]
+        if len(starts):
+            parts.append(_block_means(values, lines_of, starts, done))
+    if pending is not None and len(pending[1]):
+        parts.append(_block_means(pending[0], pending[1], np.array([0]), len(pending[1])))
+    names = list(parts[0][0])
+    values = {name: np.concatenate([part[0][name] for part in parts]) for name in names}
+    row_lines = [line for part in parts for line in part[1]]
+    return Record(Table(str(path), names, values, {}, row_lines), rows, factor, stats, chunks)
+
+
+def _whole(table, per_chunk):
+    stats = {}
+    for name, column in table.values.items():
+        stats.setdefault(name, ColumnStats()).add(column)
+    return Record(table, len(table), 1, stats, [per_chunk(table)] if per_chunk else [])
+
+
+def _block_starts(values, factor):
+    """First row of each block of `factor` rows, a new block at a gap or a change of `run`."""
+    t = values['t']
+    steps = np.diff(t)
+    breaks = np.flatnonzero(steps > BLOCK_GAP_STEPS * np.median(steps)) + 1 if len(t) > 2 \
+        else np.array([], int)
+    if 'run' in values:
+        breaks = np.union1d(breaks, np.flatnonzero(np.diff(values['run']) != 0) + 1)
+    edges = np.r_[0, breaks, len(t)].astype(int)
+    return np.concatenate([np.arange(a, b, factor) for a, b in zip(edges[:-1], edges[1:])
+                           if b > a])
+
+
+def _block_means(values, lines, starts, end):
+    """Means of the rows from each of `starts` to the next (the last to `end`), and first lines."""
+    counts = np.diff(np.r_[starts, end])
+    means = {name: np.add.reduceat(column[:end], starts) / counts
+             for name, column in values.items()}
+    return means, [int(line) for line in lines[starts]], {}
 
 
 def _check_chunk(table, system, required, last):

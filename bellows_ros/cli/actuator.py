@@ -19,9 +19,10 @@ import numpy as np
 
 from bellows_ros import params as param_files
 from bellows_ros.config.actuator import load_actuator, params_to_flat
-from bellows_ros.data import check_moves, check_range, CsvOutput, read_chunks, read_table
+from bellows_ros.data import check_moves, check_range, CsvOutput, read_chunks, read_record
 from bellows_ros.errors import BellowsError, DataError, ParameterError
-from bellows_ros.identify.actuator import fit_actuator, parameter_count, STRUCTURE_LAG
+from bellows_ros.identify.actuator import (fit_actuator, LaggedCorrelation, parameter_count,
+                                           STRUCTURE_LAG, volume_error)
 from bellows_ros.models.actuator import evaluate_array
 from bellows_ros.models.actuator_plant import ActuatorPlant, effect_parameters
 
@@ -85,18 +86,20 @@ def _run_plant(plant, t, x_c, x_s, last=None):
 ROWS_PER_PARAMETER = 10
 
 
-def _check_identifiable(table, params, run):
+def _check_identifiable(record, params, run):
     """Refuse a record that cannot determine the parameters: too short, or inputs that stay put."""
+    table, stats = record.table, record.stats
     runs = 1 if run is None else len(np.unique(run))
     needed = ROWS_PER_PARAMETER * parameter_count(params, runs)
-    if len(table) < needed:
-        raise DataError(table.path, f'only {len(table)} rows: identification fits '
+    if record.rows < needed:
+        raise DataError(table.path, f'only {record.rows} rows: identification fits '
                         f'{parameter_count(params, runs)} numbers and needs at least {needed} '
                         f'rows ({ROWS_PER_PARAMETER} per number)')
     check_moves(table, 'x_c', 'the air-chamber compression must vary to separate the tube '
-                'volume from the gas amount')
-    check_moves(table, 'x_s', 'the spring compression must vary to fit its force')
-    check_moves(table, 'p', 'the pressure must vary with the compressions in a sealed volume')
+                'volume from the gas amount', stats)
+    check_moves(table, 'x_s', 'the spring compression must vary to fit its force', stats)
+    check_moves(table, 'p', 'the pressure must vary with the compressions in a sealed volume',
+                stats)
 
 
 def _not_sealed(data, evidence):
@@ -105,6 +108,16 @@ def _not_sealed(data, evidence):
         f'{data}: identification refused: the record does not behave as one sealed, isothermal '
         f'gas volume ({evidence}; an air leak, heat exchange, a lagging sensor, backlash?); run '
         '`bellows diagnose actuator` on it to find what it shows')
+
+
+def _raw_structure(path, fit, rate):
+    """`leftover_structure` of the fitted model's volume error over every raw row of `path`."""
+    structure = LaggedCorrelation(rate)
+    for chunk in read_chunks(path, 'actuator'):
+        run = chunk['run'] if 'run' in chunk else None
+        structure.add(volume_error(fit.params, fit.amounts, chunk['x_c'], chunk['x_s'],
+                                   chunk['p'], run))
+    return structure.result()
 
 
 def _check_fit(path, data):
@@ -120,10 +133,12 @@ def identify(args):
     """Fit V_tube, P0 (p_ref), E_V, F_MTS and E_F to DATA; write them as a ROS 2 parameter file."""
     config = load_actuator(args.params)
     params = config.model
-    table = read_table(args.data, 'actuator')
-    _check_compressions(table, params)
+    # A record of any length: its raw chunks checked, block means fitted (data.read_record).
+    record = read_record(args.data, 'actuator',
+                         per_chunk=lambda chunk: _check_compressions(chunk, params))
+    table = record.table
     run = table['run'] if 'run' in table else None
-    _check_identifiable(table, params, run)
+    _check_identifiable(record, params, run)
     rate = 1.0 / float(np.median(np.diff(table['t'])))
     try:
         fit = fit_actuator(params, table['x_c'], table['x_s'], table['p'], table['f'], run=run,
@@ -131,6 +146,8 @@ def identify(args):
     except ParameterError as exc:  # the fitted numbers describe no device (a gas law with no root)
         raise _not_sealed(args.data, f'the fitted parameters are impossible: {exc}') from None
     correlation, bound = fit.structure
+    if record.factor > 1:  # block means hide the noise: the raw rows' error, chunk by chunk
+        correlation, bound = _raw_structure(args.data, fit, rate * record.factor)
     if correlation > bound:
         raise _not_sealed(args.data, f'the volume error stays correlated over {STRUCTURE_LAG:g} '
                           f's: {correlation:.2f}, where noise stays below {bound:.3f}')
@@ -145,6 +162,9 @@ def identify(args):
     rms, low, high = fit.volume_error_ml
     print(f'volume error: {low:+.2f} mL to {high:+.2f} mL (rms {rms:.3f} mL) '
           f'over {fit.rows} samples')
+    if record.factor > 1:
+        print(f'record of {record.rows} rows fitted as {len(table)} block means of '
+              f'{record.factor} rows (over data.FIT_ROWS)')
     rms, low, high = fit.force_error_n
     print(f'force error: {low:+.2f} N to {high:+.2f} N (rms {rms:.3f} N)')
     print(f'V_tube = {fitted.v_tube * 1e6:.2f} mL, '

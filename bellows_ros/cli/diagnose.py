@@ -36,20 +36,45 @@ def add_arguments(parser):
 
 
 def run(args):
-    from bellows_ros.data import read_table
-    from bellows_ros.doctor.diagnosis import diagnose
     from bellows_ros.doctor.report import summary_line
     from bellows_ros.outputs import check_report_directory
     check_report_directory(args.report, inputs=(args.data, args.params))  # before any work
     started = time.perf_counter()
     params = load_params(args.system, args.params)
-    table = read_table(args.data, args.system)
+    table, extra = read_for_doctor(args.data, args.system, params.model)
     read = time.perf_counter() - started
-    result = diagnose(args.system, table, params, progress=not args.quiet)
+    from bellows_ros.doctor.diagnosis import diagnose
+    result = diagnose(args.system, table, params, progress=not args.quiet, **extra)
     result.timings = {name: seconds + read for name, seconds in result.timings.items()}
     write_report(result, args.report)
     print(summary_line(result, args.report))
     return 0
+
+
+def read_for_doctor(path, system, model):
+    """
+    Read a record of any length for the doctor: (table, extra arguments of `diagnose`).
+
+    `data.read_record`: a record of up to data.FIT_ROWS rows whole, a longer one as block means,
+    its raw chunks checked (`checks.RawChecks`) and their noise floors taken
+    (`diagnosis.raw_noise`; the median over the chunks), since averaging hides the noise.
+    """
+    import numpy as np
+
+    from bellows_ros.data import read_record
+    from bellows_ros.doctor.checks import RawChecks
+    from bellows_ros.doctor.diagnosis import raw_noise
+    check = RawChecks(system)
+
+    def per_chunk(table):
+        check(table)
+        return raw_noise(system, table, model)
+    record = read_record(path, system, per_chunk=per_chunk)
+    if record.factor == 1:
+        return record.table, {}
+    floors = {name: float(np.median([chunk[name] for chunk in record.chunks]))
+              for name in record.chunks[0]}
+    return record.table, {'raw_noise': floors, 'factor': record.factor}
 
 
 def load_params(system, params_path):

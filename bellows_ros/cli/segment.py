@@ -37,11 +37,23 @@ INPUT_REQUIRED = ('t', 'psi', 'p1', 'p2')  # a simulation input needs no measure
 
 
 def _read(path, params, required=None):
-    """Read a segment file (data.read_table) and check 0 ≤ p ≤ p_max on both chains."""
-    table = data.read_table(path, 'segment', required)
-    for name in ('p1', 'p2'):
-        data.check_range(table, name, 0.0, params.p_max, 'Pa')
-    return table
+    """
+    Read a segment file for a fit (data.read_record) and check 0 ≤ p ≤ p_max on both chains.
+
+    Each raw chunk is checked, so an error names the file's own line. Returns a `data.Record`.
+    """
+    def check(table):
+        for name in ('p1', 'p2'):
+            data.check_range(table, name, 0.0, params.p_max, 'Pa')
+    return data.read_record(path, 'segment', required, per_chunk=check)
+
+
+def reduction_summary(record):
+    """One line: what a fit of a `data.Record` ran on, or '' if on every row of the file."""
+    if record.factor == 1:
+        return ''
+    return (f'record of {record.rows} rows fitted as {len(record.table)} block means of '
+            f'{record.factor} rows (over data.FIT_ROWS = {data.FIT_ROWS} rows)')
 
 
 def simulate(input_path, output_path, params_path, effects):
@@ -137,12 +149,13 @@ def identify(args):
     """Fit paper A's model to DATA, write the parameters, print held-out errors of both models."""
     config = load_segment(args.params)
     params = config.model
-    table = _read(args.data, params)
-    if len(table) < 50:
-        raise DataError(table.path, f'only {len(table)} rows: identification needs at least 50')
+    record = _read(args.data, params)
+    table = record.table
+    if record.rows < 50:
+        raise DataError(table.path, f'only {record.rows} rows: identification needs at least 50')
     # The membrane's torque changes with the angle at a held pressure: only the angle must move.
     data.check_moves(table, 'psi', 'the angle must move to show the restoring and friction '
-                     'torques')
+                     'torques', record.stats)
     fit = fit_segment(params, table.values, config.identify.input_cutoff, seed=args.seed,
                       progress=not args.quiet)
     header = (f'bellows identify segment {args.data}\n'
@@ -160,6 +173,8 @@ def identify(args):
           f'c_psi0_p = {fit.params.restoring_c_psi0_p:.4g} rad '
           f'({fit.evaluations} evaluations)')
     print(_filter_summary(fit, config.identify.input_cutoff))
+    if record.factor > 1:
+        print(reduction_summary(record))
     print(f'held-out error on the last {fit.heldout_rows} of '
           f'{fit.train_rows + fit.heldout_rows} rows '
           f'(against the raw measured tau_ext):')

@@ -103,8 +103,12 @@ def as_table(data, system, source='<arrays>'):
     return table
 
 
-def checked_record(table, system):
-    """Check a `system` table (`as_table`) and return it as an evenly sampled `Record`."""
+def checked_record(table, system, factor=1):
+    """
+    Check a `system` table (`as_table`) and return it as an evenly sampled `Record`.
+
+    `factor` > 1: the table's rows are block means of that many raw rows (`data.read_record`).
+    """
     path = table.path
     if len(table) < MIN_SAMPLES:
         raise DataError(path, f'only {len(table)} samples; the doctor needs at least '
@@ -124,6 +128,21 @@ def checked_record(table, system):
                               f'{t[worst]:.6g} s (sampling interval {dt:.3g} s); split the record '
                               'at the gap',
                         table.line(worst + 1), 't')
+    check_ranges(table, system)
+    resampled = bool(np.std(steps) > MAX_JITTER * dt)
+    if resampled:
+        # Stamped samples from a bag arrive with jitter; the filters of the causes need a fixed
+        # step.
+        grid = t[0] + dt * np.arange(int(duration / dt) + 1)
+        columns = {name: np.interp(grid, t, column) for name, column in columns.items()}
+        columns['t'] = grid
+    record = Record(system, str(path), dt, columns, factor, resampled=resampled)
+    _check_excitation(record)
+    return record
+
+
+def check_ranges(table, system):
+    """Every pressure, compression and angle within what a device of `system` can show."""
     if system == 'actuator':
         check_range(table, 'p', 1e3, 2e6, 'Pa')
         for name in ('x_c', 'x_s'):
@@ -132,16 +151,35 @@ def checked_record(table, system):
         for name in ('p1', 'p2'):
             check_range(table, name, 1e3, 2e6, 'Pa')
         check_range(table, 'psi', -np.pi, np.pi, 'rad')
-    resampled = bool(np.std(steps) > MAX_JITTER * dt)
-    if resampled:
-        # Stamped samples from a bag arrive with jitter; the filters of the causes need a fixed
-        # step.
-        grid = t[0] + dt * np.arange(int(duration / dt) + 1)
-        columns = {name: np.interp(grid, t, column) for name, column in columns.items()}
-        columns['t'] = grid
-    record = Record(system, str(path), dt, columns, resampled=resampled)
-    _check_excitation(record)
-    return record
+
+
+class RawChecks:
+    """
+    The checks of `checked_record` that block means would hide, on each raw chunk of a record.
+
+    For a record read as block means (`data.read_record`): call it on every raw chunk, in order.
+    Ranges (`check_ranges`) and gaps: a step over MAX_GAP of the chunk's median step (the step
+    from the previous chunk's last row included).
+    """
+
+    def __init__(self, system):
+        self.system, self.last = system, None
+
+    def __call__(self, table):
+        t = np.asarray(table['t'], float)
+        before = 0 if self.last is None else 1
+        steps = np.diff(t if self.last is None else np.r_[self.last, t])
+        if len(steps) > 1:
+            dt = float(np.median(steps))
+            worst = int(np.argmax(steps))
+            if steps[worst] > MAX_GAP * dt:
+                after = t[worst - before] if worst - before >= 0 else self.last
+                raise DataError(table.path, f'gap of {steps[worst]:.3g} s in the time column '
+                                            f'after t = {after:.6g} s (sampling interval '
+                                            f'{dt:.3g} s); split the record at the gap',
+                                table.line(worst + 1 - before), 't')
+        self.last = float(t[-1])
+        check_ranges(table, self.system)
 
 
 def _check_excitation(record):

@@ -155,7 +155,27 @@ def decimation_factor(record, rate):
     return max(1, by_rate, by_size)
 
 
-def diagnose(system, data, config, progress=False, causes=None, source='<arrays>'):
+def raw_noise(system, table, params):
+    """
+    Return the white-noise floor(s) the doctor compares residuals with, on raw rows `table`.
+
+    {column: sigma} of the actuator's outputs, {'y': sigma} of the segment's Y (30). For a long
+    record read as block means (`data.read_record`): its raw chunks' floors, of which `diagnose`
+    takes the median (`raw_noise` argument), as block means would hide the noise.
+    """
+    module = system_module(system)
+    if system == 'actuator':
+        return module.noise_floors(table)
+    from bellows_ros.identify.segment import target
+    from bellows_ros.models.derivatives import rates
+    columns = {name: np.asarray(table[name], float) for name in table.values}
+    if 'psi_dot' not in columns:
+        columns['psi_dot'] = rates(columns['t'], columns['psi'])
+    return {'y': scoring.noise_floor(target(params, columns))}
+
+
+def diagnose(system, data, config, progress=False, causes=None, source='<arrays>',
+             raw_noise=None, factor=1):
     """
     Diagnose one record of `system` ('segment' or 'actuator'). Returns a `Diagnosis`.
 
@@ -165,19 +185,21 @@ def diagnose(system, data, config, progress=False, causes=None, source='<arrays>
     nominal model the doctor extends. `source` names
     in-memory data in error messages (a table carries its own). `causes` restricts the candidates
     (default: the whole vocabulary of the system; `()` fits and scores the baseline only, the
-    benchmark's reference).
+    benchmark's reference). `factor` > 1: the rows of `data` are block means of that many raw rows
+    (`data.read_record`), and `raw_noise` gives the raw rows' noise floors as `raw_noise` does
+    (the floors of the averaged rows follow, divided by √factor).
     """
     started = time.perf_counter()
     module = system_module(system)
     params = config.model
-    full = checks.checked_record(checks.as_table(data, system, source), system)
+    full = checks.checked_record(checks.as_table(data, system, source), system, factor)
     if system == 'segment':
         module.add_columns(full, params, config.identify.input_cutoff)
     record = full.decimated(decimation_factor(full, module.FIT_RATE))
     extra = {}
     outputs = getattr(module, 'OUTPUTS', None)
     if outputs:
-        floors = module.noise_floors(full)
+        floors = module.noise_floors(full) if raw_noise is None else dict(raw_noise)
         scales = {name: floors[name] / np.sqrt(record.factor) for name, *_ in outputs}
         extra['scales'] = scales
         y = module.measured(record, scales)
@@ -185,7 +207,8 @@ def diagnose(system, data, config, progress=False, causes=None, source='<arrays>
         reasons = checks.identifiability(record)
         reasons.update(module.identifiability(record, params, scales))
     else:
-        noise = scoring.noise_floor(module.measured(full))
+        noise = (scoring.noise_floor(module.measured(full)) if raw_noise is None
+                 else raw_noise['y'])
         y = module.measured(record)
         reasons = checks.identifiability(record, params.p0)
     timings = {'load': time.perf_counter() - started}   # checks (the caller reads the data)
@@ -193,7 +216,7 @@ def diagnose(system, data, config, progress=False, causes=None, source='<arrays>
     if system == 'segment':
         # Algorithm 1 over the record does not depend on any fitted parameter: run it once, at
         # the record's full rate (see `segment_causes.ContactLengths`).
-        extra['contact'] = module.ContactLengths(params, full, record.factor)
+        extra['contact'] = module.ContactLengths(params, full, record.factor // full.factor)
         extra['noise'] = noise / np.sqrt(record.factor)
 
     def score(switched_on, warm=None):

@@ -75,6 +75,7 @@ class ActuatorFit:
     force_error_n: tuple
     rows: int
     structure: tuple = (0.0, 1.0)
+    amounts: dict = None   # {run number (0 without a `run` column): gas amount, Pa·m³}
 
 
 # A sealed, isothermal gas leaves a volume error that is sensor noise: uncorrelated from sample to
@@ -97,6 +98,52 @@ def leftover_structure(error, rate):
         return 0.0, 1.0
     correlation = float(np.corrcoef(error[:-lag], error[lag:])[0, 1])
     return correlation, STRUCTURE_DEVIATIONS / np.sqrt(len(error) - lag)
+
+
+class LaggedCorrelation:
+    """
+    `leftover_structure`'s correlation, taken chunk by chunk over a record of any length.
+
+    `add` the error's next rows in order; the last `lag` rows are carried to the next chunk, so
+    the pairs (e_i, e_i+lag) are those of the whole record. `result` gives (correlation, bound).
+    """
+
+    def __init__(self, rate):
+        self.lag = max(1, int(round(STRUCTURE_LAG * rate)))
+        self.tail = np.empty(0)
+        self.sums = np.zeros(6)  # pairs, Σa, Σb, Σa², Σb², Σab
+        self.rows = 0
+
+    def add(self, error):
+        """Take the next rows of the error."""
+        joined = np.r_[self.tail, np.asarray(error, float)]
+        self.rows += len(error)
+        if len(joined) > self.lag:
+            a, b = joined[:-self.lag], joined[self.lag:]
+            self.sums += [len(a), a.sum(), b.sum(), a @ a, b @ b, a @ b]
+        self.tail = joined[-self.lag:]
+
+    def result(self):
+        """(correlation, bound) as `leftover_structure` gives them for the whole error."""
+        n, sa, sb, saa, sbb, sab = self.sums
+        if self.rows < 2 * self.lag + 2:
+            return 0.0, 1.0
+        var_a, var_b = saa - sa * sa / n, sbb - sb * sb / n
+        if not (var_a > 0.0 and var_b > 0.0):
+            return 0.0, 1.0
+        correlation = (sab - sa * sb / n) / np.sqrt(var_a * var_b)
+        return float(correlation), STRUCTURE_DEVIATIONS / np.sqrt(n)
+
+
+def volume_error(params, amounts, x_c, x_s, p, run=None):
+    """Model minus gas-law volume, mL, with the gas amount of each run (`ActuatorFit.amounts`)."""
+    if run is None:
+        amount = np.full(len(p), amounts[0])
+    else:
+        runs = np.array(sorted(amounts))
+        amount = np.array([amounts[r] for r in runs])[
+            np.searchsorted(runs, np.asarray(run).astype(int))]
+    return (total_volume(params, x_c, x_s, p) - amount / p) * 1e6
 
 
 def parameter_count(params, runs=1, wall_bulging=True):
@@ -231,8 +278,11 @@ def fit_actuator(params, x_c, x_s, p, f, run=None, wall_bulging=True, force_erro
     gas = p_ref_of_amount(fitted, amount) if run is not None else None
     _, force_model, _ = evaluate_array(fitted, x_c, x_s, gas)
     force_error_n = force_model - f
+    labels = np.zeros(len(p), int) if run is None else np.asarray(run).astype(int)
+    first = np.unique(labels, return_index=True)
+    amounts = {int(r): float(amount[i]) for r, i in zip(*first)}
     return ActuatorFit(fitted, _summary(volume_error), _summary(force_error_n), len(p),
-                       leftover_structure(volume_error, rate))
+                       leftover_structure(volume_error, rate), amounts)
 
 
 def _summary(error):
