@@ -173,6 +173,10 @@ class SimActuatorNode(Node):
                       x_c_min_seen=f'{self.x_c_seen[0]:.6f}',
                       x_c_max_seen=f'{self.x_c_seen[1]:.6f}',
                       end_stop_hits=str(self.end_stop_hits), t_plant=f'{self.plant.t:.3f}')
+        # The effect strengths the plant steps with (taken at its last step: 0 = off).
+        effects = self.plant.effects
+        values.update({f'effect.{effect}.{key}': format(effects.get(effect, {}).get(key, 0.0), 'g')
+                       for effect, key in STRENGTHS.items()})
         stat.update(values)
         return diagnostics.loop_summary(stat, rate, new_misses)
 
