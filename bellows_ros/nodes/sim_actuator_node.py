@@ -57,6 +57,14 @@ from bellows_ros.runtime import Node, realtime, run
 from bellows_ros.runtime.parameters import Spec
 
 
+def _strength_spec(effect, key):
+    # The physical range of the YAML's value (config/ranges.py), from 0 = off.
+    rule = RANGES[f'actuator.effects.{effect}.{key}']
+    return Spec(f'effect.{effect}.{key}', math.nan,
+                f'strength of the {effect} effect ({key}, {rule.unit}); 0 = off, nan = as effects '
+                'and actuator_params say', low=0.0, high=rule.high, read_only=False)
+
+
 PARAMETERS = (
     Spec('port', '/tmp/bellows_actuator', "the pty symlink to create (the driver's "
          'actuator.port)', check=lambda port: '' if port else 'must not be empty'),
@@ -72,19 +80,9 @@ PARAMETERS = (
     Spec('spring.period', 4.0, 'period of the imposed spring motion, s', low=0.01, high=3600.0),
     Spec('clock_rate', 100.0, '/clock messages per second when use_sim_time is on', low=1.0,
          high=1000.0),
+    # One live strength per effect (`actuator_plant.STRENGTHS`): `ros2 param set` switches it.
+    *(_strength_spec(effect, key) for effect, key in STRENGTHS.items()),
 )
-
-
-def _strength_spec(effect, key):
-    # The physical range of the YAML's value (config/ranges.py), from 0 = off.
-    rule = RANGES[f'actuator.effects.{effect}.{key}']
-    return Spec(f'effect.{effect}.{key}', math.nan,
-                f'strength of the {effect} effect, {rule.unit}; 0 = off, nan = as effects and '
-                'actuator_params say; live', low=0.0, high=rule.high, read_only=False)
-
-
-# One live strength per effect (`actuator_plant.STRENGTHS`): `ros2 param set` switches it.
-EFFECT_STRENGTHS = tuple(_strength_spec(effect, key) for effect, key in STRENGTHS.items())
 
 
 class SimActuatorNode(Node):
@@ -92,7 +90,6 @@ class SimActuatorNode(Node):
     def __init__(self, **kwargs):
         super().__init__('sim_actuator_node', **kwargs)
         given = self.declare_specs(PARAMETERS)
-        strengths = self.declare_specs(EFFECT_STRENGTHS)
         port, actuator_params = given['port'], given['actuator_params'] or None
         hardware_params = given['hardware_params'] or None
         effects, seed = [e for e in given['effects'] if e], given['seed']
@@ -103,7 +100,7 @@ class SimActuatorNode(Node):
         params, plant = load_actuator(actuator_params, hardware_params)
         chosen = effect_parameters(plant, effects)
         self.start_strengths = strengths_of(chosen)  # what nan stands for
-        chosen = with_strengths(chosen, self._strengths(strengths))
+        chosen = with_strengths(chosen, self._strengths(given))
         effects = list(chosen)
         self.plant = ActuatorPlant(params, plant, effects=chosen, seed=seed,
                                    x_c0=None if math.isnan(x_c0) else x_c0)
