@@ -20,7 +20,8 @@ above ambient) is sealed: the gas amount its /diagnostics report holds still. `r
 `effect.air_leak.conductance` switches the leak on; the gas amount then falls in the reports
 that show the plant stepping with it. A conductance
 outside its physical range is refused with the Spec's words and changes nothing; 0 switches the
-leak off again and the gas amount holds where the leak left it.
+leak off again and the gas amount holds where the leak left it. The same for a running
+sim_arm_node's pressure friction: refused out of range, else taken by the running plants.
 """
 import os
 import random
@@ -99,6 +100,47 @@ def test_a_leak_set_mid_run_drains_the_gas_and_a_bad_one_is_refused(
         assert spin_until(lambda: len(gas('0')) >= 3, 15), (reports[-3:], logs(tmp_path))
         held = gas('0')[1:]  # the first may straddle the change
         assert held[0] == held[1] < falling[-1], (held, falling)
+        assert sim.poll() is None, logs(tmp_path)
+    finally:
+        stop_all([sim])
+        dds_node.shutdown()
+
+
+def test_a_segment_effect_set_mid_run_is_taken_and_a_bad_one_is_refused(
+        runtime, tmp_path, monkeypatch):
+    """sim_arm_node: the strength reaches the running plants (their /diagnostics say so)."""
+    domain = str(random.randint(100, 180))
+    monkeypatch.setenv('ROS_DOMAIN_ID', domain)
+    env = node_env(runtime, ROS_DOMAIN_ID=domain)
+    arm, friction = 'sim_arm_node', 'effect.pressure_friction.c_fp'
+    given = [('can.channel', f'239.74.172.{random.randint(2, 250)}'), ('n_segments', 2),
+             ('realtime_priority', 0), ('effects', '[contact_hysteresis]')]
+    sim = launch(arm, sum((override(arm, k, v) for k, v in given), []), env, tmp_path)
+    dds_node.init([])
+    reports = []
+    try:
+        probe = dds_node.Node('live_segment_effect_probe')
+        probe.create_subscription(
+            msg.DiagnosticArray, '/diagnostics',
+            lambda a: reports.extend({kv.key: kv.value for kv in s.values} for s in a.status
+                                     if s.name == f'{arm}: plant'), 50)
+
+        def reported(value):
+            return bool(reports) and reports[-1].get(friction) == value
+
+        def spin_until(condition, seconds):
+            end = time.monotonic() + seconds
+            while not condition() and time.monotonic() < end:
+                dds_node.spin_once(probe, timeout_sec=0.05)
+            return condition()
+
+        assert spin_until(lambda: reported('0'), 40), (reports[-1:], logs(tmp_path))
+        answer = ros2_param(env, 'set', f'/{arm}', friction, '20000.0')
+        assert 'Setting parameter failed' in answer and '0..10000' in answer, answer
+        answer = ros2_param(env, 'set', f'/{arm}', friction, '2.5')
+        assert 'Set parameter successful' in answer, (answer, logs(tmp_path))
+        assert spin_until(lambda: reported('2.5'), 15), (reports[-1:], logs(tmp_path))
+        assert ros2_param(env, 'get', f'/{arm}', friction).strip() == 'Double value is: 2.5'
         assert sim.poll() is None, logs(tmp_path)
     finally:
         stop_all([sim])

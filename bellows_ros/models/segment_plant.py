@@ -235,12 +235,16 @@ class SegmentPlant:
         self.physics, self.model = new.physics, new.model
         self.hysteresis, self.lag = new.hysteresis, new.lag
 
-    def strengths(self):
-        """Return {effect: strength} of the effects set (`STRENGTHS`, 0 = off)."""
-        effects = {name: dict(values) for name, values in self._pending.effects}
-        physics = self._pending.physics
+    def strengths(self, in_use=False):
+        """
+        Return {effect: strength} (`STRENGTHS`, 0 = off) of the effects set.
+
+        in_use: of those the plant stepped with last (a change not taken yet left out).
+        """
+        chosen = self._effects_now if in_use else self._pending
+        effects, physics = dict(chosen.effects), chosen.physics
         in_use = {'pressure_friction': physics.friction_c_fp,
-                  'natural_curvature': physics.restoring_c_psi0_p, 'sensor_lag': self._pending.lag}
+                  'natural_curvature': physics.restoring_c_psi0_p, 'sensor_lag': chosen.lag}
         return {name: in_use[name] if name in effects else 0.0 for name in STRENGTHS}
 
     def set_strengths(self, strengths):
