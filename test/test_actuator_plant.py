@@ -18,11 +18,11 @@ import pytest
 
 from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.errors import ParameterError
-from bellows_ros.models.actuator import evaluate
+from bellows_ros.models.actuator import evaluate, gas_amount
 from bellows_ros.models.actuator_experiments import actuator_record
 from bellows_ros.models.actuator_geometry import P_ATM
 from bellows_ros.models.actuator_plant import (ACTUATOR_EFFECTS, ActuatorPlant, effect_parameters,
-                                               model_params)
+                                               model_params, STRENGTHS)
 
 PLANT = load_actuator_plant_params()
 
@@ -92,6 +92,62 @@ def test_air_leak_decays_pressure_towards_ambient(x_c0):
     assert np.sign(last - P_ATM) == np.sign(p_start - P_ATM)      # but does not cross it
     assert abs(np.mean([s.p for s in reference[-500:]]) - sealed.pressure) < 5.0
     assert (plant.gas < PARAMS.p_ref) == (p_start > P_ATM)        # gas left, or came in
+
+
+def test_a_leak_switched_on_mid_run_takes_over_at_the_next_step_with_continuous_state():
+    plant = ActuatorPlant(PARAMS, PLANT, seed=1, x_c0=0.040)
+    sealed = ActuatorPlant(PARAMS, PLANT, seed=1, x_c0=0.040)
+    run(plant, 0.2, x_s=0.0)
+    run(sealed, 0.2, x_s=0.0)
+    gas, x_c, p = plant.gas, plant.x_nut, plant.pressure
+    assert plant.pressure > P_ATM + 1e4 and plant.strengths()['air_leak'] == 0.0
+    plant.set_strengths({'air_leak': 2e-9})
+    # Nothing changes until the plant steps: the swap happens in the stepping thread.
+    assert (plant.gas, plant.x_nut, plant.pressure, plant.effects) == (gas, x_c, p, {})
+    assert plant.strengths()['air_leak'] == 2e-9
+    plant.step(DT, 0.0, x_s_imposed=0.0)
+    sealed.step(DT, 0.0, x_s_imposed=0.0)
+    # One step of the leak: the gas falls by dN = dt P c (P - P_atm), from where it was.
+    expected_drop = DT * p * 2e-9 * (p - P_ATM)
+    assert plant.effects == {'air_leak': {'conductance': 2e-9}}
+    assert 0.0 < (sealed.gas - plant.gas) and plant.x_nut == sealed.x_nut
+    drop = (gas - plant.gas) * _amount_per_p_ref(plant)  # p_ref is proportional to the amount
+    assert drop == pytest.approx(expected_drop, rel=1e-6)
+    run(plant, 2.0, x_s=0.0)
+    assert plant.pressure < p - 0.3 * (p - P_ATM)            # the leak drains it
+    # Off again (strength 0): the gas amount stays where the leak left it.
+    plant.set_strengths({'air_leak': 0.0})
+    plant.step(DT, 0.0, x_s_imposed=0.0)
+    held = plant.gas
+    run(plant, 0.5, x_s=0.0)
+    assert plant.gas == held and plant.effects == {}
+
+
+def _amount_per_p_ref(plant):
+    """Gas amount N (Pa·m³) per Pa of p_ref at the plant's present volumes."""
+    return gas_amount(plant.params, 2.0) - gas_amount(plant.params, 1.0)
+
+
+@pytest.mark.parametrize('effect', sorted(STRENGTHS))
+def test_every_strength_switches_its_effect_on_and_off_while_running(effect):
+    defaults = effect_parameters(PLANT, [effect])[effect]
+    plant = ActuatorPlant(PARAMS, PLANT, seed=3, x_c0=0.030)
+    run(plant, 0.05, x_s=0.001)
+    plant.set_strengths({effect: defaults[STRENGTHS[effect]]})
+    run(plant, 0.05, x_s=0.001)
+    assert plant.effects == {effect: defaults}          # its other parameters from the YAML
+    plant.set_strengths({effect: 0.0})
+    run(plant, 0.05, x_s=0.001)
+    assert plant.effects == {} and plant.temperature == plant._t_amb
+
+
+def test_a_strength_the_plant_cannot_use_is_refused_and_nothing_changes():
+    plant = ActuatorPlant(PARAMS, PLANT, {'air_leak': {'conductance': 1e-10}}, seed=1)
+    for bad in ({'air_leak': -1.0}, {'air_leak': float('inf')}, {'draught': 1.0}):
+        with pytest.raises(ParameterError, match='air_leak|draught'):
+            plant.set_strengths(bad)
+    plant.step(DT, 0.0)
+    assert plant.effects == {'air_leak': {'conductance': 1e-10}}
 
 
 def test_heat_exchange_overshoots_on_fast_compression_then_relaxes():

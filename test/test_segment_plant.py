@@ -23,7 +23,7 @@ from bellows_ros.errors import ParameterError
 from bellows_ros.models.segment import SegmentModel
 from bellows_ros.models.segment_experiments import fig10_record, quasi_static_record, run_plant
 from bellows_ros.models.segment_plant import (FULL_MODEL, NO_NOISE, plant_physics, SEGMENT_EFFECTS,
-                                              SegmentPlant)
+                                              SegmentPlant, STRENGTHS)
 
 PLANT = load_segment_plant_params()
 
@@ -89,6 +89,53 @@ def test_effect_parameters_override_the_yaml(params):
     assert physics.friction_c_fp == 2.5 and physics.restoring_k_sp == -3.0
     assert physics.restoring_c_psi0_p == params.restoring_c_psi0_p
     assert plant_physics(params, {}).restoring_c_psi0_p == 0.0
+
+
+def test_a_strength_set_mid_run_takes_over_at_the_next_step_on_the_same_strain_memory(params):
+    # Imposed angle and pressures that load and unload the membranes: the strain memories then
+    # hold a history (hysteresis) that a reset would lose.
+    n, switch, dt = 4000, 2000, 1e-3
+    t = np.arange(1, n + 1) * dt
+    psi = 1.0 * np.sin(2 * np.pi * 0.5 * t)
+    cmd1 = np.where(t > 0.3, 4.5e5, params.p0)
+    cmd2 = np.where(t > 1.2, 2.5e5, params.p0)
+    plant = SegmentPlant(params, PLANT, ['contact_hysteresis', 'natural_curvature'], NO_NOISE)
+    assert plant.strengths() == {'pressure_friction': 0.0, 'sensor_lag': 0.0,
+                                 'natural_curvature': params.restoring_c_psi0_p}
+    drive, states = [], []
+    for i in range(n):
+        if i == switch:
+            plant.set_strengths({'pressure_friction': 2.5, 'natural_curvature': 0.0})
+            assert 'pressure_friction' not in plant.effects  # not before the next step
+        plant.step(dt, cmd1[i], cmd2[i], psi_imposed=psi[i])
+        drive.append(plant.tau_drive)
+        states.append((plant.psi, plant.psi_dot, plant.p1, plant.p2))  # what the model saw
+    assert plant.effects == {'contact_hysteresis': {}, 'pressure_friction': {'c_fp': 2.5}}
+    assert plant.strengths()['pressure_friction'] == 2.5
+    # The memories do not depend on friction or natural curvature: a model of each physics run
+    # from the start gives the plant's torque before and after the switch, bit for bit.
+    before = SegmentModel(plant_physics(params, {'natural_curvature': {}}))
+    after = SegmentModel(plant_physics(params, {'pressure_friction': {'c_fp': 2.5}}))
+    both = np.array([(before.step(*state).tau_drive, after.step(*state).tau_drive)
+                     for state in states])
+    np.testing.assert_array_equal(drive, np.where(np.arange(n) < switch, both[:, 0], both[:, 1]))
+    assert np.max(np.abs(both[switch:, 0] - both[switch:, 1])) > 0.1  # the switch mattered
+
+
+@pytest.mark.parametrize('effect', sorted(STRENGTHS))
+def test_each_strength_switches_its_effect_on_and_off_while_running(params, effect):
+    plant = SegmentPlant(params, PLANT, noise=NO_NOISE)
+    plant.step(1e-3, 3e5, params.p0, psi_imposed=0.1)
+    plant.set_strengths({effect: 0.01})
+    plant.step(1e-3, 3e5, params.p0, psi_imposed=0.1)
+    assert plant.effects == {effect: {STRENGTHS[effect]: 0.01}}
+    plant.set_strengths({effect: 0.0})
+    plant.step(1e-3, 3e5, params.p0, psi_imposed=0.1)
+    assert plant.effects == {} and plant.strengths() == dict.fromkeys(STRENGTHS, 0.0)
+    with pytest.raises(ParameterError, match='contact_hysteresis'):
+        plant.set_strengths({'contact_hysteresis': 1.0})
+    with pytest.raises(ParameterError, match='tau'):
+        plant.set_strengths({'sensor_lag': -1.0})
 
 
 def test_pressures_follow_commands_through_the_valve_lag(params):

@@ -38,6 +38,10 @@ What the simulated hardware and the tests run. Underneath is paper B's model (`a
       with the YAML's `actuator.buckling` parameters and the stiffness loss times `scale`; without
       it the force is paper B's (7)-(12) alone, the doctor's force baseline.
 
+Each effect's strength (`STRENGTHS`, 0 = off) can change while the plant runs
+(`set_strengths`): the new effects take over at the start of the next step, in the stepping
+thread, as one immutable object; the state (gas amount, plate, motor, sensor) carries on.
+
 With no effect the plant is exactly `actuator.evaluate(without_buckling(without_bulging(params)),
 ...)` plus sensor noise; `model_params(params, effect_parameters(plant, effects))` returns the
 parameters the model needs for the same physics. Its own parameters (drive, sensors, effect
@@ -57,6 +61,11 @@ from bellows_ros.models.actuator_geometry import area, P_ATM
 
 ACTUATOR_EFFECTS = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash',
                     'buckling')
+# The parameter of each effect that says how strong it is, 0 = off (`ActuatorPlant.set_strengths`):
+# a heat-exchange time constant of 0 is instant exchange, the isothermal gas of the baseline.
+STRENGTHS = {'air_leak': 'conductance', 'heat_exchange': 'time_constant',
+             'wall_bulging': 'scale', 'sensor_lag': 'time_constant', 'backlash': 'width',
+             'buckling': 'scale'}
 NOISE_KEYS = ('pressure_noise', 'pressure_quantum', 'force_noise', 'force_quantum')
 
 
@@ -88,6 +97,20 @@ class ActuatorPlantParams:
     def effect_defaults(self):
         """{effect name: {parameter: value}} from the YAML."""
         return {name: dict(items) for name, items in self.effects}
+
+
+@dataclass(frozen=True)
+class _Effects:
+    """The plant's effects immutable: swapped whole (`ActuatorPlant.set_strengths`)."""
+
+    chosen: tuple   # ((effect, ((parameter, value), ...)), ...)
+    params: object  # ActuatorParams with E_V and buckling as the effects say (`model_params`)
+    leak: float
+    heat_tau: object  # s, None = off
+    gamma: float
+    t_amb: float
+    lag_tau: float
+    half_play: float
 
 
 class ActuatorSample(NamedTuple):
@@ -145,6 +168,30 @@ def effect_parameters(plant, effects):
     return chosen
 
 
+def strengths_of(chosen):
+    """Return {effect: strength} (`STRENGTHS`, 0 = off) of effects as `effect_parameters` gives."""
+    return {name: chosen.get(name, {}).get(key, 0.0) for name, key in STRENGTHS.items()}
+
+
+def with_strengths(chosen, strengths):
+    """
+    Return effects `chosen` ({name: {parameter: value}}) with new strengths {effect: value}.
+
+    0 switches an effect off; another value switches it on (its other parameters from the YAML,
+    filled in by `effect_parameters`) or changes its strength.
+    """
+    chosen = {name: dict(values) for name, values in chosen.items()}
+    for name, value in strengths.items():
+        if name not in STRENGTHS:
+            raise ParameterError(f"unknown actuator effect '{name}' (known: "
+                                 f"{', '.join(ACTUATOR_EFFECTS)})")
+        if value == 0.0:
+            chosen.pop(name, None)
+        else:
+            chosen[name] = {**chosen.get(name, {}), STRENGTHS[name]: float(value)}
+    return chosen
+
+
 def model_params(params, chosen=None):
     """
     Return parameters for which `actuator.evaluate` has the plant's static physics.
@@ -184,9 +231,10 @@ class ActuatorPlant:
 
     def __init__(self, params, plant, effects=None, noise=None, seed=None, x_c0=None, x_s0=0.0,
                  gas=None):
-        self.effects = effect_parameters(plant, effects)
-        self.params = model_params(params, self.effects)
+        self._raw_params = params
         self.plant = plant
+        self._effects_now = self._pending = self._effects_of(effect_parameters(plant, effects))
+        self._apply_effects(self._effects_now)
         drive = plant.drive
         self.counts_per_rev = int(drive.counts_per_rev)
         self.x_c_min, self.x_c_max = params.chamber.x_min, params.chamber.x_max
@@ -195,15 +243,6 @@ class ActuatorPlant:
         self._metres_per_rad = drive.lead / (2.0 * math.pi * drive.gear_ratio)
         self._noise = self._noise_settings(plant, noise)
         self._random = random.Random(seed)
-        # Effect switches and parameters, read once.
-        e = self.effects
-        self._leak = e.get('air_leak', {}).get('conductance', 0.0)
-        heat = e.get('heat_exchange')
-        self._heat_tau = heat['time_constant'] if heat else None
-        self._gamma = heat['gamma'] if heat else 1.4
-        self._t_amb = heat['t_ambient'] if heat else 293.15
-        self._lag_tau = e.get('sensor_lag', {}).get('time_constant', 0.0)
-        self._half_play = 0.5 * e.get('backlash', {}).get('width', 0.0)
         # State.
         x_c = params.x_c_ref if x_c0 is None else float(x_c0)
         if not self.x_c_min <= x_c <= self.x_c_max:
@@ -219,12 +258,63 @@ class ActuatorPlant:
         self._gas = gas_amount(self.params,
                                params.p_ref if gas is None else float(gas))  # N = P V at T_amb
         self._temperature = self._t_amb
-        self._exp_cache = (None, 0.0, 0.0, 0.0)
         p, force, k = forward(self.params, self._x_c, self._x_s, self._gas)
         self._p, self._f, self._k = p, force, k
         self._p_sensor = p
         self._volume = (total_volume(self.params, self._x_c, self._x_s, p) if self._heat_tau
                         else None)
+
+    def _effects_of(self, chosen):
+        """Return the immutable `_Effects` of validated effect parameters (`effect_parameters`)."""
+        heat = chosen.get('heat_exchange')
+        return _Effects(
+            chosen=tuple((name, tuple(values.items())) for name, values in chosen.items()),
+            params=model_params(self._raw_params, chosen),
+            leak=chosen.get('air_leak', {}).get('conductance', 0.0),
+            heat_tau=heat['time_constant'] if heat else None,
+            gamma=heat['gamma'] if heat else 1.4,
+            t_amb=heat['t_ambient'] if heat else 293.15,
+            lag_tau=chosen.get('sensor_lag', {}).get('time_constant', 0.0),
+            half_play=0.5 * chosen.get('backlash', {}).get('width', 0.0))
+
+    def _apply_effects(self, new):
+        """Take `new` (`_Effects`), in the stepping thread; heat exchange off = gas at ambient."""
+        self._effects_now = new
+        self.effects = {name: dict(values) for name, values in new.chosen}
+        self.params = new.params
+        self._leak, self._heat_tau, self._lag_tau = new.leak, new.heat_tau, new.lag_tau
+        self._gamma, self._t_amb, self._half_play = new.gamma, new.t_amb, new.half_play
+        self._exp_cache = (None, 0.0, 0.0, 0.0)
+        if hasattr(self, '_gas'):  # a change while running: the state carries on
+            if not self._heat_tau:
+                self._temperature = self._t_amb
+            self._volume = (total_volume(self.params, self._x_c, self._x_s, self._p)
+                            if self._heat_tau else None)
+
+    def strengths(self):
+        """Return {effect: strength} of the effects set (`STRENGTHS`, 0 = off)."""
+        return strengths_of({name: dict(values) for name, values in self._pending.chosen})
+
+    def set_strengths(self, strengths):
+        """
+        Set effect strengths {effect: value} (`STRENGTHS`; 0 = off); taken at the next step.
+
+        An effect switched on takes its other parameters from the YAML (`actuator.effects`). May be
+        called from another thread than `step`: the new effects are built here and swapped in as
+        one object at the start of the next step, never half-way. A value the plant cannot use
+        raises ParameterError naming it, and nothing changes.
+        """
+        self._pending = self.effects_for(strengths)
+
+    def effects_for(self, strengths):
+        """Return the effects set now with new strengths, checked (ParameterError), not taken."""
+        chosen = {name: dict(values) for name, values in self._pending.chosen}
+        return self._effects_of(effect_parameters(self.plant, with_strengths(chosen, strengths)))
+
+    def _take_pending(self):
+        pending = self._pending  # one read: a newer set_strengths waits for the next step
+        if pending is not self._effects_now:
+            self._apply_effects(pending)
 
     @staticmethod
     def _noise_settings(plant, noise):
@@ -282,6 +372,7 @@ class ActuatorPlant:
         """
         if not dt > 0.0:
             raise ParameterError(f'time step must be > 0, got {dt}')
+        self._take_pending()
         duty = -1.0 if duty < -1.0 else 1.0 if duty > 1.0 else float(duty)
         self._step_drive(dt, duty)
         return self._finish_step(dt, x_s_imposed, f_load)
@@ -295,6 +386,7 @@ class ActuatorPlant:
         """
         if not dt > 0.0:
             raise ParameterError(f'time step must be > 0, got {dt}')
+        self._take_pending()
         self._update_exp(dt)
         x_nut = min(max(float(x_nut), self.x_c_min), self.x_c_max)
         new_theta = x_nut / self._metres_per_rad

@@ -267,6 +267,11 @@ def external_torque(p, psi, psi_dot, psi_ddot, tau_drive):
 # --- the 1 kHz evaluator
 # ---------------------------------------------------------------------------
 
+# The parameters of the strain memories and of λ1's table (`strain_memory`, `stretch_table`).
+MEMORY_FIELDS = ('p0', 'p_max', 'geometry_l0', 'geometry_s0', 'geometry_sa_max',
+                 'geometry_n_lambda', 'ogden_mu', 'ogden_gamma')
+
+
 class SegmentModel:
     """
     Stateful driving-torque model of one segment: one `step` per sample, both chains.
@@ -299,6 +304,25 @@ class SegmentModel:
     def reset(self):
         self.memory1.reset()
         self.memory2.reset()
+
+    def carried_on(self, params):
+        """
+        Return a model of new torque parameters `params` stepping on from this one's memories.
+
+        For a change while running (the simulated segment's live effects): the strain memories
+        (Algorithm 1) and λ1's table are shared, not copied, so the new model takes over exactly
+        where this one stands; only one of the two may be stepped from then on. The memories'
+        own parameters (p0, p_max, geometry, Ogden) must not change (ParameterError naming one).
+        """
+        for name in MEMORY_FIELDS:
+            if getattr(params, name) != getattr(self.params, name):
+                raise ParameterError(f"segment model: parameter '{name}' cannot change while "
+                                     'the strain memories carry on')
+        model = object.__new__(SegmentModel)
+        model.__setstate__(dict(self.__getstate__(), params=params))
+        model._pressure = (params.p0, 1.0 / (params.p_max - params.p0))
+        model._theta_a = tuple(float(v) for v in params.actuator_theta)
+        return model
 
     def __getstate__(self):
         # copy.deepcopy (the pressure allocation's trial steps) and pickle: the closures are

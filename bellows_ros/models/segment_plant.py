@@ -29,6 +29,9 @@ on one piece of missing physics (the doctor's segment vocabulary, `SEGMENT_EFFEC
   (N·m/rad).
 - `sensor_lag`: first-order lag of the measured pressures. Parameter `tau` (s).
 The full paper-A physics is the first three together. Unset effect parameters take the YAML values.
+The strengths (`STRENGTHS`, 0 = off) can change while the plant runs (`set_strengths`): taken at
+the start of the next step, in the stepping thread, as one immutable object; the state (angle,
+pressures, strain memories) carries on.
 
 Pressures follow the commands through a first-order valve/chamber lag (`segment.plant.valve_tau`).
 With an imposed angle (test bench) the force-torque sensor reads
@@ -59,6 +62,10 @@ EFFECT_PARAMETERS = {
                           'k_sp': 'restoring_k_sp'},
     'sensor_lag': {'tau': 'sensor_lag_tau'},  # a field of SegmentPlantParams, not of the model
 }
+# The parameter of each effect that says how strong it is, 0 = off (`SegmentPlant.set_strengths`):
+# c_f,p (5) N·m, c_Ψ0,p (4) rad (the pressure-driven natural angle; k_s,p from the YAML), lag s.
+# `contact_hysteresis` is a choice of torque model, (29) or (34), with no strength.
+STRENGTHS = {'pressure_friction': 'c_fp', 'natural_curvature': 'c_psi0_p', 'sensor_lag': 'tau'}
 NOISE_KEYS = ('p', 'psi', 'psi_dot', 'tau')
 NO_NOISE = dict.fromkeys(NOISE_KEYS, 0.0)
 # Longest step of the free-motion integration, s (a numerical setting, not physics: see `step`).
@@ -114,6 +121,17 @@ def check_plant_params(plant, source='parameters'):
                  'damping'):  # negative: energy from nowhere
         if getattr(plant, name) < 0:
             fail(name, 'must be >= 0')
+
+
+@dataclass(frozen=True)
+class _SegmentEffects:
+    """The plant's effects, immutable: swapped whole (`SegmentPlant.set_strengths`)."""
+
+    effects: tuple     # ((effect, ((parameter, value), ...)), ...)
+    physics: object    # SegmentParams of the true physics (`plant_physics`)
+    model: object      # SegmentModel of `physics`, on the plant's strain memories
+    hysteresis: bool
+    lag: float         # s, 0 = off
 
 
 SegmentSample = namedtuple('SegmentSample', 't psi psi_dot p1 p2 tau_ext')
@@ -182,13 +200,11 @@ class SegmentPlant:
     """
 
     def __init__(self, params, plant, effects=None, noise=None, seed=None, psi0=0.0):
-        self.effects = check_effects(effects)
         self.params = params
         self.plant = plant
-        self.physics = plant_physics(params, self.effects)
-        self.hysteresis = 'contact_hysteresis' in self.effects
-        self.lag = (self.effects['sensor_lag'].get('tau', plant.sensor_lag_tau)
-                    if 'sensor_lag' in self.effects else 0.0)
+        self._effects_now = self._pending = self._effects_of(check_effects(effects),
+                                                             SegmentModel)
+        self._apply_effects(self._effects_now)
         sigma = {'p': plant.noise_p, 'psi': plant.noise_psi, 'psi_dot': plant.noise_psi_dot,
                  'tau': plant.noise_tau}
         for key, value in (noise or {}).items():
@@ -201,8 +217,59 @@ class SegmentPlant:
         self.sigma = np.array([sigma['psi'], sigma['psi_dot'], sigma['p'], sigma['p'],
                                sigma['tau']])
         self.rng = np.random.default_rng(seed)
-        self.model = SegmentModel(self.physics)
         self.reset(psi0)
+
+    def _effects_of(self, effects, model_of):
+        """Return the immutable `_SegmentEffects` of validated `effects`; `model_of(physics)`."""
+        physics = plant_physics(self.params, effects)
+        return _SegmentEffects(
+            effects=tuple((name, tuple(values.items())) for name, values in effects.items()),
+            physics=physics, model=model_of(physics),
+            hysteresis='contact_hysteresis' in effects,
+            lag=(effects['sensor_lag'].get('tau', self.plant.sensor_lag_tau)
+                 if 'sensor_lag' in effects else 0.0))
+
+    def _apply_effects(self, new):
+        self._effects_now = new
+        self.effects = {name: dict(values) for name, values in new.effects}
+        self.physics, self.model = new.physics, new.model
+        self.hysteresis, self.lag = new.hysteresis, new.lag
+
+    def strengths(self, in_use=False):
+        """
+        Return {effect: strength} (`STRENGTHS`, 0 = off) of the effects set.
+
+        in_use: of those the plant stepped with last (a change not taken yet left out).
+        """
+        chosen = self._effects_now if in_use else self._pending
+        effects, physics = dict(chosen.effects), chosen.physics
+        in_use = {'pressure_friction': physics.friction_c_fp,
+                  'natural_curvature': physics.restoring_c_psi0_p, 'sensor_lag': chosen.lag}
+        return {name: in_use[name] if name in effects else 0.0 for name in STRENGTHS}
+
+    def set_strengths(self, strengths):
+        """
+        Set effect strengths {effect: value} (`STRENGTHS`; 0 = off); taken at the next step.
+
+        An effect switched on takes its other parameters from the YAML. May be called from another
+        thread than `step`: the new effects, their model carrying on the strain memories
+        (`SegmentModel.carried_on`), are built here and swapped in as one object at the start of
+        the next step. A value the plant cannot use raises ParameterError, and nothing changes.
+        """
+        self._pending = self.effects_for(strengths)
+
+    def effects_for(self, strengths):
+        """Return the effects set now with new strengths, checked (ParameterError), not taken."""
+        effects = {name: dict(values) for name, values in self._pending.effects}
+        for name, value in strengths.items():
+            if name not in STRENGTHS:
+                raise ParameterError(f"segment effect '{name}' has no strength (known: "
+                                     f"{', '.join(STRENGTHS)})")
+            if value == 0.0:
+                effects.pop(name, None)
+            else:
+                effects[name] = {**effects.get(name, {}), STRENGTHS[name]: float(value)}
+        return self._effects_of(check_effects(effects), self._pending.model.carried_on)
 
     def reset(self, psi0=0.0):
         """Vented chambers, segment at rest at Ψ = psi0, empty strain memories."""
@@ -251,6 +318,9 @@ class SegmentPlant:
         in equal sub-steps of at most MAX_STEP, because the explicit update of the stiff, damped
         end stop is stable only for steps well under 7 ms. An imposed angle is reached in one step.
         """
+        pending = self._pending  # one read: a newer set_strengths waits for the next step
+        if pending is not self._effects_now:
+            self._apply_effects(pending)
         substeps = 1 if psi_imposed is not None else max(1, math.ceil(dt / MAX_STEP - 1e-9))
         for _ in range(substeps):
             self._advance(dt / substeps, p_cmd1, p_cmd2, psi_imposed, tau_load)

@@ -27,6 +27,11 @@ Node parameters:
       lead screw, encoder; the board's end-stop margin).
   effects (string array): plant effects to switch on (air_leak, heat_exchange, wall_bulging,
       sensor_lag, backlash, buckling); [''] = none.
+  effect.<effect>.<parameter> (live): the strength of each effect (`STRENGTHS`: air_leak
+      conductance m³/(s·Pa), heat_exchange time_constant s, wall_bulging scale, sensor_lag
+      time_constant s, backlash width m, buckling scale), 0 = off, nan = as `effects` and
+      actuator_params say; a change (`ros2 param set`) takes effect at the next plant step, and
+      can switch an effect on or off while the plant runs (a leak appears mid-run).
   seed (int): sensor noise seed.
   x_c0 (m): initial chamber compression (design point when NaN).
   spring.amplitude (m), spring.period (s): the spring is moved sinusoidally between 0 and
@@ -42,11 +47,22 @@ import math
 
 from bellows_ros.config.actuator import load_actuator
 from bellows_ros.config.hardware import actuator_board_config
+from bellows_ros.config.ranges import RANGES
+from bellows_ros.errors import ParameterError
 from bellows_ros.hardware.sim_actuator_board import SimActuatorBoard
-from bellows_ros.models.actuator_plant import ACTUATOR_EFFECTS, ActuatorPlant
+from bellows_ros.models.actuator_plant import (ACTUATOR_EFFECTS, ActuatorPlant, effect_parameters,
+                                               STRENGTHS, strengths_of, with_strengths)
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime, run
 from bellows_ros.runtime.parameters import Spec
+
+
+def _strength_spec(effect, key):
+    # The physical range of the YAML's value (config/ranges.py), from 0 = off.
+    rule = RANGES[f'actuator.effects.{effect}.{key}']
+    return Spec(f'effect.{effect}.{key}', math.nan,
+                f'strength of the {effect} effect ({key}, {rule.unit}); 0 = off, nan = as effects '
+                'and actuator_params say', low=0.0, high=rule.high, read_only=False)
 
 
 PARAMETERS = (
@@ -64,6 +80,8 @@ PARAMETERS = (
     Spec('spring.period', 4.0, 'period of the imposed spring motion, s', low=0.01, high=3600.0),
     Spec('clock_rate', 100.0, '/clock messages per second when use_sim_time is on', low=1.0,
          high=1000.0),
+    # One live strength per effect (`actuator_plant.STRENGTHS`): `ros2 param set` switches it.
+    *(_strength_spec(effect, key) for effect, key in STRENGTHS.items()),
 )
 
 
@@ -80,7 +98,11 @@ class SimActuatorNode(Node):
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
         params, plant = load_actuator(actuator_params, hardware_params)
-        self.plant = ActuatorPlant(params, plant, effects=effects, seed=seed,
+        chosen = effect_parameters(plant, effects)
+        self.start_strengths = strengths_of(chosen)  # what nan stands for
+        chosen = with_strengths(chosen, self._strengths(given))
+        effects = list(chosen)
+        self.plant = ActuatorPlant(params, plant, effects=chosen, seed=seed,
                                    x_c0=None if math.isnan(x_c0) else x_c0)
         self.sim_time = self.get_parameter('use_sim_time').value
         if self.sim_time:
@@ -98,6 +120,31 @@ class SimActuatorNode(Node):
         self.diagnostics.add('plant', self.diagnose_plant)
         self.get_logger().info(f'simulated actuator board on {self.board.port}, effects: '
                                f"{', '.join(effects) or 'none'}")
+
+    def _strengths(self, values):
+        """Return {effect: strength} of `effect.*` parameter values; nan = the start value."""
+        strengths = {}
+        for effect, key in STRENGTHS.items():
+            value = values.get(f'effect.{effect}.{key}')
+            if value is not None:
+                strengths[effect] = self.start_strengths[effect] if math.isnan(value) else value
+        return strengths
+
+    def parameter_problem(self, changes):
+        """Say why the plant cannot take new strengths ('' when it can), e.g. no buckling YAML."""
+        try:
+            self.plant.effects_for(self._strengths(changes))
+        except ParameterError as error:
+            return str(error)
+        return ''
+
+    def on_parameters(self, changed):
+        """Hand new effect strengths to the plant: the board's loop takes them at its next step."""
+        strengths = self._strengths(changed)
+        if strengths:
+            self.plant.set_strengths(strengths)
+            on = ', '.join(f'{e} {v:g}' for e, v in self.plant.strengths().items() if v)
+            self.get_logger().info(f"effects from the next step: {on or 'none'}")
 
     def step(self, dt, duty):
         """Step the plant once (called by the board's 1 kHz loop)."""
@@ -123,6 +170,10 @@ class SimActuatorNode(Node):
                       x_c_min_seen=f'{self.x_c_seen[0]:.6f}',
                       x_c_max_seen=f'{self.x_c_seen[1]:.6f}',
                       end_stop_hits=str(self.end_stop_hits), t_plant=f'{self.plant.t:.3f}')
+        # The effect strengths the plant steps with (taken at its last step: 0 = off).
+        effects = self.plant.effects
+        values.update({f'effect.{effect}.{key}': format(effects.get(effect, {}).get(key, 0.0), 'g')
+                       for effect, key in STRENGTHS.items()})
         stat.update(values)
         return diagnostics.loop_summary(stat, rate, new_misses)
 

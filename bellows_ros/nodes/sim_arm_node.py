@@ -26,6 +26,10 @@ Node parameters:
   effects (string array): contact_hysteresis, pressure_friction, natural_curvature, sensor_lag
       ([''] = the baseline plant), seed (int),
   load_torque (N·m): constant external torque on every segment (0 = free).
+  effect.<effect>.<parameter> (live): the strength of each effect on every segment
+      (`segment_plant.STRENGTHS`: pressure_friction c_fp N·m, natural_curvature c_psi0_p rad,
+      sensor_lag tau s), 0 = off, nan = as `effects` and segment_params say; a change
+      (`ros2 param set`) takes effect at the next plant step, the strain memories carry on.
   clock_rate (Hz): /clock publication rate when use_sim_time is on (the node is then the clock).
   realtime_priority (int): SCHED_FIFO priority for the node's threads, 1-99; 0 = normal
       scheduling (runtime/realtime.py).
@@ -33,15 +37,33 @@ Node parameters:
       negative = off (runtime/realtime.py).
 """
 
+import math
+
+from bellows_ros.config.ranges import RANGES
 from bellows_ros.config.segment import load_segment
-from bellows_ros.errors import BellowsError
+from bellows_ros.errors import BellowsError, ParameterError
 from bellows_ros.hardware.arm_bus import open_can
 from bellows_ros.hardware.can_protocol import dbc_segments
 from bellows_ros.hardware.sim_arm_bus import SimArmBus
-from bellows_ros.models.segment_plant import SEGMENT_EFFECTS, SegmentPlant
+from bellows_ros.models.segment_plant import SEGMENT_EFFECTS, SegmentPlant, STRENGTHS
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime, run
 from bellows_ros.runtime.parameters import Spec
+
+# Where each strength's physical range is (config/ranges.py); a natural angle bends either way,
+# friction and a lag are >= 0.
+_RANGE_OF = {'c_fp': ('segment.friction.c_fp', 0.0), 'c_psi0_p': ('segment.restoring.c_psi0_p',
+                                                                  None),
+             'tau': ('segment.plant.sensor_lag_tau', 0.0)}
+
+
+def _strength_spec(effect, key):
+    name, low = _RANGE_OF[key]
+    rule = RANGES[name]
+    return Spec(f'effect.{effect}.{key}', math.nan,
+                f'strength of the {effect} effect on every segment ({key}, {rule.unit}); 0 = off, '
+                'nan = as effects and segment_params say', low=rule.low if low is None else low,
+                high=rule.high, read_only=False)
 
 
 PARAMETERS = (
@@ -57,6 +79,8 @@ PARAMETERS = (
          high=100.0),
     Spec('clock_rate', 100.0, '/clock messages per second when use_sim_time is on', low=1.0,
          high=1000.0),
+    # One live strength per effect that has one (`segment_plant.STRENGTHS`).
+    *(_strength_spec(effect, key) for effect, key in STRENGTHS.items()),
 )
 
 
@@ -74,6 +98,12 @@ class SimArmNode(Node):
         params, plant, _ = load_segment(segment_params)
         self.plants = [SegmentPlant(params, plant, effects=effects, seed=seed + i)
                        for i in range(n_segments)]
+        self.start_strengths = self.plants[0].strengths()  # what nan stands for
+        given_strengths = {effect: value for effect, value in self._strengths(given).items()
+                           if value != self.start_strengths[effect]}
+        if given_strengths:
+            for segment in self.plants:
+                segment.set_strengths(given_strengths)  # from the first step
         self.sim_time = self.get_parameter('use_sim_time').value
         if self.sim_time:
             self.clock_pub = self.create_publisher(self.msg.Clock, '/clock', 10)
@@ -94,6 +124,32 @@ class SimArmNode(Node):
         self.get_logger().info(f'simulated arm ({n_segments} segments) on {self.link}, effects: '
                                f"{', '.join(effects) or 'none'}")
 
+    def _strengths(self, values):
+        """Return {effect: strength} of `effect.*` parameter values; nan = the start value."""
+        strengths = {}
+        for effect, key in STRENGTHS.items():
+            value = values.get(f'effect.{effect}.{key}')
+            if value is not None:
+                strengths[effect] = self.start_strengths[effect] if math.isnan(value) else value
+        return strengths
+
+    def parameter_problem(self, changes):
+        """Say why the plants cannot take new strengths ('' when they can)."""
+        try:
+            self.plants[0].effects_for(self._strengths(changes))
+        except ParameterError as error:
+            return str(error)
+        return ''
+
+    def on_parameters(self, changed):
+        """Hand new strengths to every segment plant: the bus loop takes them at its next step."""
+        strengths = self._strengths(changed)
+        if strengths:
+            for plant in self.plants:
+                plant.set_strengths(strengths)
+            on = ', '.join(f'{e} {v:g}' for e, v in self.plants[0].strengths().items() if v)
+            self.get_logger().info(f"effect strengths from the next step: {on or 'none'}")
+
     def step(self, dt, setpoints):
         """One step of every segment plant with the valves' set-points (SimArmBus's 1 kHz loop)."""
         measured = []
@@ -113,6 +169,10 @@ class SimArmNode(Node):
         values.update(self.sim.counters())
         for i, plant in enumerate(self.plants):
             values[f'segment_{i + 1}.psi'] = f'{plant.psi:.4f}'
+        # The strengths the plants step with (taken at their last step: 0 = off).
+        in_use = self.plants[0].strengths(in_use=True)
+        values.update({f'effect.{effect}.{key}': format(in_use[effect], 'g')
+                       for effect, key in STRENGTHS.items()})
         stat.update(values)
         return diagnostics.loop_summary(stat, rate, new_misses)
 
