@@ -2,7 +2,7 @@
 # The whole bellows graph on simulated hardware, plus a short scripted scenario.
 #
 #   scripts/launch_sim.sh [--no-scenario] [--duration S] [--output DIR] [--params FILE]
-#                         [--namespace NS] [-- extra --ros-args for every node]
+#                         [--namespace NS] [--record BAG] [-- extra --ros-args for every node]
 #
 # Starts sim_arm_node (CAN over udp_multicast) and sim_actuator_node (serial on a pty), then
 # driver_node, model_node, stiffness_controller_node and arm_controller_node, all in the background
@@ -10,7 +10,9 @@
 # tracking an angle sweep): it prints a summary and writes DIR/scenario.png and .csv, and the
 # graph is stopped. With --no-scenario the graph runs until Ctrl-C. With --namespace NS every node
 # runs in /NS (its topics under /NS/...), so graphs in different namespaces run side by side,
-# each with its own pty and CAN group. Every process is stopped on
+# each with its own pty and CAN group. With --record BAG, `bellows record` writes the devices'
+# samples (/joint_states, /bellows/chambers, /bellows/wrench) to the rosbag2 directory BAG while
+# the graph runs (root namespace only; docs/workflow.md). Every process is stopped on
 # exit, Ctrl-C or error (trap). Works from a checkout, a pip install and a colcon install (the
 # executables are found as `ros2 run` finds them). DDS discovery stays on this host.
 set -euo pipefail
@@ -26,6 +28,7 @@ output="$here/out/scenario"
 duration=40.0
 scenario=1
 namespace=''
+record=''
 extra=()
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -35,7 +38,8 @@ while [ $# -gt 0 ]; do
     --params) params="$2"; shift ;;
     --) shift; extra=("$@"); break ;;
     --namespace) namespace="$2"; shift ;;
-    -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
+    --record) record="$2"; shift ;;
+    -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
     *) echo "launch_sim.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
   shift
@@ -48,6 +52,10 @@ case "$duration" in
 esac
 [ -f "$params" ] || { echo "launch_sim.sh: --params '$params': no such file" >&2; exit 2; }
 namespace=${namespace#/}
+if [ -n "$record" ]; then
+  [ -z "$namespace" ] || { echo "launch_sim.sh: --record records the root namespace; drop --namespace" >&2; exit 2; }
+  [ ! -e "$record" ] || { echo "launch_sim.sh: --record '$record': already exists (a bag is a new directory)" >&2; exit 2; }
+fi
 if [ -n "$namespace" ] && ! [[ "$namespace" =~ ^[A-Za-z][A-Za-z0-9_]*(/[A-Za-z][A-Za-z0-9_]*)*$ ]]; then
   echo "launch_sim.sh: --namespace '$namespace': expected a ROS name such as arm_a" >&2; exit 2
 fi
@@ -104,6 +112,12 @@ start driver_node
 start model_node
 start stiffness_controller_node
 start arm_controller_node
+if [ -n "$record" ]; then
+  "$bin/bellows" record --output "$record" --topics /joint_states /bellows/chambers \
+    /bellows/wrench >"$node_logs/record.log" 2>&1 &
+  pids+=($!)
+  echo "launch_sim: bellows record -> $record (pid $!)" >&2
+fi
 sleep 3
 nodes_alive launch_sim
 
