@@ -48,9 +48,9 @@ from test_doctor_bag import write_actuator_bag
 from bellows_ros.cli import main
 from bellows_ros.config.actuator import load_actuator, load_actuator_params
 from bellows_ros.data import read_table, write_csv
+from bellows_ros.identify.measured_stiffness import measured_stiffness
 from bellows_ros.models.actuator import stiffness
 from bellows_ros.models.actuator_plant import ActuatorPlant
-from bellows_ros.identify.measured_stiffness import measured_stiffness
 from bellows_ros.models.stiffness_map import compression_for_stiffness
 
 DEVICE_YAML = """\
@@ -173,7 +173,7 @@ def test_record_identify_diagnose_extend_track(runtime, tmp_path, monkeypatch):
 
 
 def held_chamber_record(x_c, duration=9.0, dt=1e-3):
-    """A record of the plant (with its sensor noise): chamber held at x_c, spring 0-20 mm."""
+    """Simulate a record (plant with sensor noise): chamber held at x_c, spring 0-20 mm."""
     config = load_actuator()
     plant = ActuatorPlant(config.model, config.plant, seed=3, x_c0=x_c)
     rows = {name: [] for name in ('t', 'x_c', 'x_s', 'p', 'f')}
