@@ -97,15 +97,16 @@ def run_scenario(env, out, device, controller_params, k_low, k_high, step_time, 
            + override('sim_actuator_node', 'spring.amplitude', SPRING)
            + override('sim_actuator_node', 'spring.period', PERIOD)
            + override('sim_actuator_node', 'realtime_priority', 60))
-    controller = (override('stiffness_controller_node', 'actuator_params', controller_params)
-                  + override('stiffness_controller_node', 'realtime_priority', 50))
-    scenario = (override('scenario_node', 'actuator_params', controller_params)
-                + override('scenario_node', 'stiffness_low', k_low)
+    controller = override('stiffness_controller_node', 'realtime_priority', 50)
+    scenario = (override('scenario_node', 'stiffness_low', k_low)
                 + override('scenario_node', 'stiffness_high', k_high)
                 + override('scenario_node', 'step_time', step_time)
                 + override('scenario_node', 'duration', duration)
                 + override('scenario_node', 'trajectory_start', 24 * 3600.0)
                 + override('scenario_node', 'output_dir', out))
+    if controller_params:  # rcl refuses `name:=` (an empty value): the default is left alone
+        controller += override('stiffness_controller_node', 'actuator_params', controller_params)
+        scenario += override('scenario_node', 'actuator_params', controller_params)
     processes = [launch('sim_actuator_node', sim, env, out),
                  launch('stiffness_controller_node', controller, env, out)]
     bag = out / 'bag'
