@@ -34,6 +34,8 @@ elif [ -f "$shared_ros/install.sh" ]; then
 else
   echo "bellows test: no ROS 2 here; the rclpy tier is skipped (each test says why)" >&2
 fi
+# A crash in native code (a DDS library, NumPy) prints the Python stacks of every thread.
+export PYTHONFAULTHANDLER=1
 # The ros2 command line runs `python3` from PATH: the venv's, which has its dependencies.
 export PATH="$venv/bin:$PATH"
 exec "$venv/bin/python" -m pytest "$@"

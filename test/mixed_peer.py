@@ -89,18 +89,18 @@ def signature(message):
 class Peer(Node):
     """Publishes its side's values, checks the other side's."""
 
-    def __init__(self, runtime):
+    def __init__(self, **kwargs):
         self.side = sys.argv[1]
-        super().__init__(f'mixed_{self.side}', runtime)
+        super().__init__(f'mixed_{self.side}', **kwargs)
         other = next(side for side in SIDES if side != self.side)
         self.received, self.complete = {}, False
-        self.publishers = []
+        self.outgoing = []
         for topic, ros_type in TOPICS.items():
             kind = getattr(self.msg, ros_type.rsplit('/', 1)[1])
             expected = signature(build(self.msg, ros_type, other))
             self.create_subscription(kind, topic, self.on_message(topic, expected), 10)
-            self.publishers.append((self.create_publisher(kind, topic, 10),
-                                    build(self.msg, ros_type, self.side)))
+            self.outgoing.append((self.create_publisher(kind, topic, 10),
+                                  build(self.msg, ros_type, self.side)))
         self.create_timer(0.1, self.publish)
 
     def on_message(self, topic, expected):
@@ -114,7 +114,7 @@ class Peer(Node):
         return callback
 
     def publish(self):
-        for publisher, message in self.publishers:
+        for publisher, message in self.outgoing:
             publisher.publish(message)
 
 

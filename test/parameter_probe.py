@@ -35,9 +35,9 @@ class Probe(Node):
 
     done = True
 
-    def __init__(self, runtime):
+    def __init__(self, **kwargs):
         spec = json.loads(os.environ['PROBE_SPEC'])
-        super().__init__(spec.get('node', 'probe'), runtime)
+        super().__init__(spec.get('node', 'probe'), **kwargs)
         self.values = {name: self.declare_parameter(name, default).value
                        for name, default in spec['parameters'].items()}
         self.topics = {topic: self.create_publisher(self.msg.Float64, topic, 10).topic_name

@@ -52,7 +52,9 @@ def test_a_null_device_and_a_buckling_device():
 @pytest.mark.slow  # one device per cause and a null device: 7 diagnoses, a few minutes
 def test_one_device_per_cause_names_it_or_says_why_in_numbers():
     """
-    The CI subset: one drawn device per cause. The 90 % naming target is the full bench's (20
+    The CI subset: one drawn device per cause; no false names, and every miss says why.
+
+    The 90 % naming target is the full bench's (20
     devices per cause, docs/bench_log.md): on one device a rate is 0 or 1. What holds for every
     device is the contract: no false names, and a due cause that is not named comes with a reason
     in numbers (or `unexplained`).

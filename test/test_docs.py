@@ -227,3 +227,58 @@ def test_the_parameter_table_check_catches_a_drift():
     assert tables['model_node']['latency_budget']['default'] == '0.002'
     assert tables['arm_controller_node']['pid.kp']['live'] == 'yes'
     assert tables['driver_node']['arm.channel']['live'] == 'no'
+
+
+# --- the diagnostics table of docs/interfaces.md ------------------------------------------------
+def documented_statuses():
+    """{node: {concern}} of the status table under '## Diagnostics'."""
+    text = INTERFACES.read_text()
+    text = text[text.index('## Diagnostics'):text.index('## Node parameters')]
+    found = {}
+    for node, concern in re.findall(r'^\| `(\w+): ([^`]+)` \|', text, re.MULTILINE):
+        found.setdefault(node, set()).add(concern)
+    return found
+
+
+def coded_statuses(source):
+    """
+    Return the concerns a node module reports, from its source (ast).
+
+    The first argument of `self.diagnostics.add('name', ...)`, the `name=` of a TimeStampStatus
+    it builds, and `<...>` for a DiagnosticTaskGroup (whose names are known only at run time).
+    """
+    names = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute):
+            func = node.func
+            if (func.attr == 'add' and isinstance(func.value, ast.Attribute)
+                    and func.value.attr == 'diagnostics' and node.args
+                    and isinstance(node.args[0], ast.Constant)):
+                names.add(node.args[0].value)
+            elif func.attr == 'TimeStampStatus':
+                names.update(k.value.value for k in node.keywords if k.arg == 'name')
+        elif isinstance(node, ast.ClassDef) and any(
+                getattr(base, 'attr', None) == 'DiagnosticTaskGroup' for base in node.bases):
+            names.add('<...>')
+    return names
+
+
+def test_the_diagnostics_table_is_the_code():
+    """Each node's documented statuses are those its module adds to its Updater, no more."""
+    documented = documented_statuses()
+    coded = {}
+    for module in NODE_MODULES:
+        names = coded_statuses((ROOT / 'bellows_ros' / 'nodes' / f'{module}.py').read_text())
+        if names:
+            coded[module] = names
+    documented = {node: {'<...>' if '<' in name else name for name in names}
+                  for node, names in documented.items()}
+    assert documented == coded
+    assert set(coded) == set(NODE_MODULES) - {'scenario_node'}  # every long-running node
+
+
+def test_the_diagnostics_check_sees_a_status():
+    source = ("self.diagnostics.add('plant', f)\n"
+              "x = d.TimeStampStatus(now, name='latency')\n"
+              'class G(d.DiagnosticTaskGroup):\n    pass\n')
+    assert coded_statuses(source) == {'plant', 'latency', '<...>'}

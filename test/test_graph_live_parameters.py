@@ -28,7 +28,8 @@ import pytest
 from runtimes import launch, logs, node_env, ros2_cli, stop_all
 
 from bellows_ros.runtime import dds_node
-from bellows_ros.runtime.messages import msg
+from bellows_ros.runtime.messages import message_class, msg
+from bellows_ros.runtime.parameter_services import from_message
 
 pytestmark = pytest.mark.slow  # three nodes and ~20 ros2 CLI calls per runtime
 
@@ -84,22 +85,9 @@ def graph(runtime, tmp_path, monkeypatch):
 
 def test_live_parameters_set_refuse_and_take_effect(graph):
     env, log_dir = graph
-    for node, name, value, shown in LIVE:
-        answer = ros2_param(env, 'set', f'/{node}', name, value)
-        assert 'Set parameter successful' in answer, (node, name, answer, logs(log_dir))
-        assert ros2_param(env, 'get', f'/{node}', name).strip() == shown
-    for node, name, value, reasons in REFUSED:
-        before = ros2_param(env, 'get', f'/{node}', name)
-        answer = ros2_param(env, 'set', f'/{node}', name, value)
-        assert 'Setting parameter failed' in answer, (node, name, answer)
-        assert any(reason in answer for reason in reasons), (node, name, answer)
-        assert ros2_param(env, 'get', f'/{node}', name) == before  # nothing changed
-    described = ros2_param(env, 'describe', '/arm_controller_node', 'pid.kp', 'segments')
-    assert 'Min value: 0.0' in described and 'Max value: 10000.0' in described, described
-    assert described.count('Read only: true') == 1, described  # segments only
-
-    # The change reached the running controller: its /diagnostics name the new feedforward.
-    seen = {}
+    # A probe listens from the start: /diagnostics, and /parameter_events, where every change
+    # taken is announced (a refused one is not).
+    seen, changed = {}, []
     dds_node.init([])
     try:
         probe = dds_node.Node('live_parameter_probe')
@@ -108,9 +96,31 @@ def test_live_parameters_set_refuse_and_take_effect(graph):
             lambda a: seen.update({kv.key: kv.value for s in a.status
                                    if s.name.startswith('arm_controller_node')
                                    for kv in s.values}), 50)
+        probe.create_subscription(
+            message_class('rcl_interfaces/msg/ParameterEvent'), '/parameter_events',
+            lambda e: changed.extend((e.node.lstrip('/'), p.name, str(from_message(p.value)))
+                                     for p in e.changed_parameters), 1000)
+        for node, name, value, shown in LIVE:
+            answer = ros2_param(env, 'set', f'/{node}', name, value)
+            assert 'Set parameter successful' in answer, (node, name, answer, logs(log_dir))
+            assert ros2_param(env, 'get', f'/{node}', name).strip() == shown
+        for node, name, value, reasons in REFUSED:
+            before = ros2_param(env, 'get', f'/{node}', name)
+            answer = ros2_param(env, 'set', f'/{node}', name, value)
+            assert 'Setting parameter failed' in answer, (node, name, answer)
+            assert any(reason in answer for reason in reasons), (node, name, answer)
+            assert ros2_param(env, 'get', f'/{node}', name) == before  # nothing changed
+        described = ros2_param(env, 'describe', '/arm_controller_node', 'pid.kp', 'segments')
+        assert 'Min value: 0.0' in described and 'Max value: 10000.0' in described, described
+        assert described.count('Read only: true') == 1, described  # segments only
+
+        # The change reached the running controller: its /diagnostics name the new feedforward.
         deadline = time.monotonic() + 15
-        while 'feedforward' not in seen and time.monotonic() < deadline:
+        while (seen.get('feedforward') != 'previous' or len(changed) < len(LIVE)) \
+                and time.monotonic() < deadline:
             dds_node.spin_once(probe, timeout_sec=0.1)
     finally:
         dds_node.shutdown()
     assert seen.get('feedforward') == 'previous', seen
+    assert sorted(changed) == sorted((node, name, value) for node, name, value, _ in LIVE), \
+        changed

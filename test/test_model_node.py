@@ -33,6 +33,7 @@ from bellows_ros.config.segment import load_segment_params
 from bellows_ros.interfaces import SAMPLE_DEPTH
 from bellows_ros.models.derivatives import rate
 from bellows_ros.models.segment import external_torque, SegmentModel
+from bellows_ros.nodes import diagnostics
 from bellows_ros.nodes.model_node import ModelNode
 from bellows_ros.runtime import dds_node
 
@@ -47,7 +48,7 @@ def feeder(monkeypatch, tmp_path):
     params_file.write_text(yaml.safe_dump({'/**': {'ros__parameters': DYNAMICS}}))
     dds_node.init(['--ros-args', '-p', f'model_node:params_file:={params_file}',
                    '-p', 'model_node:segments:=[1, 2]'])
-    yield ModelNode(dds_node), dds_node.Node('feeder'), params_file
+    yield ModelNode.on(dds_node)(), dds_node.Node('feeder'), params_file
     dds_node.shutdown()
 
 
@@ -86,10 +87,10 @@ def test_the_topics_carry_the_models_torques_sample_by_sample(feeder):
             half.header.stamp.sec, half.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
         joints.publish(state)
         chambers.publish(chamber)
-        dds_node.spin_once(node._node, timeout_sec=0.0)   # the node serves as it would spinning
+        dds_node.spin_once(node, timeout_sec=0.0)   # the node serves as it would spinning
     end = time.monotonic() + 10.0
     while min(len(v) for v in received.values()) < len(stream) and time.monotonic() < end:
-        dds_node.spin_once(node._node, timeout_sec=0.01)
+        dds_node.spin_once(node, timeout_sec=0.01)
         dds_node.spin_once(peer, timeout_sec=0.01)
     assert [len(v) for v in received.values()] == [len(stream)] * 2
     assert node.counts['evaluated'] == len(stream)
@@ -116,3 +117,20 @@ def test_the_topics_carry_the_models_torques_sample_by_sample(feeder):
     # The motion made Ψ̈ and N matter: τ_ext is not merely −τ_drive.
     assert max(abs(e.effort[0] + d.effort[0]) for d, e in
                zip(*received.values())) > 1e-3
+
+    # /diagnostics: the evaluation OK, then STALE once the samples stop; the latency status ERROR
+    # (the stream's stamps are of 2023, the node clock is now: far later than latency_budget).
+    def report():
+        return {s.name: s for s in node.diagnostics.force_update()}
+    first = report()
+    evaluation, latency = first['driving torque'], first['latency']
+    assert (evaluation.level, evaluation.hardware_id) == (diagnostics.OK, 'none')
+    assert evaluation.message.startswith('evaluating') and evaluation.get('evaluated') == '200'
+    assert evaluation.get('rejected') == '0' and evaluation.get('unmatched_dropped') == '0'
+    assert (latency.level, latency.message) == (diagnostics.ERROR,
+                                                'Timestamps too far in past seen.')
+    silent = report()
+    assert silent['driving torque'].level == diagnostics.STALE
+    assert silent['driving torque'].message.startswith('no samples since the last report')
+    assert (silent['latency'].level, silent['latency'].message) == (
+        diagnostics.WARN, 'No data since last update.')

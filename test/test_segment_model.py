@@ -23,11 +23,14 @@ import math
 import numpy as np
 import pytest
 
+from bellows_ros.bench.devices import draw_segment
 from bellows_ros.bench.segment import previous_step
+from bellows_ros.config.ranges import MAX_PRESSURE, RANGES
 from bellows_ros.config.segment import load_segment_params, load_segment_plant_params
 from bellows_ros.errors import ParameterError
 from bellows_ros.identify.segment import calibrate_fig10, fig10_torques
-from bellows_ros.models.contact import contact_angle
+from bellows_ros.models.contact import contact_angle, StrainMemory
+from bellows_ros.models.limits import AMBIENT_RANGE
 from bellows_ros.models.segment import (actuator_regressor, contact_lengths, external_torque,
                                         friction_regressor, OUTPUTS, previous_regressor,
                                         relative_pressure, restoring_regressor, scaled_pressure,
@@ -312,3 +315,125 @@ def test_external_torque_is_the_equation_of_motion(params):
     # quasi-static defaults: τ_ext = -τ_drive whatever the motion
     np.testing.assert_array_equal(external_torque(params, psi, psi_dot, psi_ddot, tau_drive),
                                   -tau_drive)
+
+
+# --- the tabulated, fused step against the Newton-solve model before it (#22 point 4) ----------
+
+def _device_from_ranges(params, rng):
+    """
+    Return a segment drawn across config/ranges.py, not around the default device (seeded).
+
+    p0 in the ambient range, p_max log-uniform to 1.1 MPa, l0, s0, sa_max log-uniform over
+    1 mm..1 m, n_lambda log-uniform over 1..1e5, μ log-uniform over 1..1e7 N/m, γ uniform over
+    (2, 30], and the torque constants of `_random_params`.
+    """
+    def log_uniform(rule, size=None):
+        return np.exp(rng.uniform(np.log(rule.low), np.log(rule.high), size))
+    p0 = rng.uniform(*AMBIENT_RANGE)
+    return _random_params(params, rng).replace(
+        p0=p0, p_max=float(np.exp(rng.uniform(np.log(1.2 * p0), np.log(MAX_PRESSURE)))),
+        geometry_l0=float(log_uniform(RANGES['segment.geometry.l0'])),
+        geometry_s0=float(log_uniform(RANGES['segment.geometry.s0'])),
+        geometry_sa_max=float(log_uniform(RANGES['segment.geometry.sa_max'])),
+        geometry_n_lambda=int(round(float(log_uniform(RANGES['segment.geometry.n_lambda'])))),
+        ogden_mu=tuple(log_uniform(RANGES['segment.ogden.mu'], 2).tolist()),
+        ogden_gamma=tuple(rng.uniform(2.0 + 1e-7, RANGES['segment.ogden.gamma'].high, 2).tolist()))
+
+
+def _drawn_devices(params):
+    """Devices of `bench.devices.draw_segment` (around the default) and drawn across the ranges."""
+    around = [draw_segment(seed).physics for seed in (1, 2, 3)]
+    rng = np.random.default_rng(2226)
+    return around + [_device_from_ranges(params, rng) for _ in range(5)]
+
+
+def _states(params, rng, n=2500):
+    """
+    Return (Ψ, Ψ̇, p1, p2) rows: a slow sweep (the memories fill and release) then random jumps.
+
+    Angles up to ±π, pressures from 0 to 2 p_max abs (what the model node accepts).
+    """
+    t = np.arange(n) * 1e-3
+    sweep = (np.pi * np.sin(2 * np.pi * 0.5 * t), np.pi * np.cos(2 * np.pi * 0.5 * t),
+             params.p_max * (1.0 + np.sin(2 * np.pi * 0.7 * t)),
+             params.p_max * (1.0 - np.sin(2 * np.pi * 0.3 * t)))
+    jumps = (rng.uniform(-np.pi, np.pi, n), rng.uniform(-3.0, 3.0, n),
+             rng.uniform(0.0, 2.0 * params.p_max, n), rng.uniform(0.0, 2.0 * params.p_max, n))
+    return [np.concatenate([a, b]) for a, b in zip(sweep, jumps)]
+
+
+def test_table_model_equals_the_newton_model_on_drawn_devices(params):
+    """
+    The 1 kHz step (tabulated λ1, fused chains) gives the Newton-solve model's outputs, 1e-9.
+
+    `SegmentModel(p, exact=True)` is the step before the table: per chain, `free_strain` at every
+    sample. The tolerance: the table's λ1 is within STRETCH_TABLE_ERROR = 1e-13 (relative) of the
+    solver's (test_segment_ogden.py), and the solver's own error is ~1e-15; a (25) and the stored
+    profile inherit that relative error, s̃_a (28) sums it, and Appendix B's iteration contracts
+    instead of amplifying it. So s̃_a may differ by ~1e-13 sa_max and the torques by ~1e-13 of
+    their terms' size (chain by chain: the chains' terms cancel where p1 = p2); 1e-9 leaves four
+    orders for conditioning (found when written: 1.5e-15 sa_max). A flip of n = ceil(a Nλ) would
+    fail it (one profile sample, ~l0/Nλ): with |Δa| ≲ 1e-13 its chance is ~Nλ·1e-13 per sample.
+    """
+    rng = np.random.default_rng(2227)
+    for device in _drawn_devices(params):
+        psi, psi_dot, p1, p2 = _states(device, rng)
+        fast, newton = SegmentModel(device), SegmentModel(device, exact=True)
+        rows = list(zip(psi.tolist(), psi_dot.tolist(), p1.tolist(), p2.tolist()))
+        new = np.array([fast.step(*row) for row in rows])
+        old = np.array([newton.step(*row) for row in rows])
+        sa_tol = 1e-9 * device.geometry_sa_max
+        assert np.all(np.abs(new[:, :2] - old[:, :2]) <= sa_tol), device
+        # the size of the terms chain by chain too: the mirrored chains cancel where p1 = p2
+        ambient = np.full_like(p1, device.p0)
+        sizes = [_reference(device, psi, psi_dot, *chains)[1] for chains in (
+            (p1, p2, old[:, 0], old[:, 1]), (p1, ambient, old[:, 0], 0 * p1),
+            (ambient, p2, 0 * p2, old[:, 1]))]
+        for k, name in enumerate(OUTPUTS[2:], start=2):
+            size = sum(each[name] for each in sizes)
+            assert np.all(np.abs(new[:, k] - old[:, k]) <= 1e-9 * size), (name, device)
+
+
+def test_fused_step_is_the_per_chain_step_bit_for_bit(params, monkeypatch):
+    """
+    The instance's fused `step` = the class's per-chain `SegmentModel.step`, exactly.
+
+    Same table, so the same bits: through fill, release, emptying, a `reset()` in between (the
+    fused step keeps the profile lists, reset clears them in place) and the periodic exact
+    re-summing (every 97 steps here instead of 65536); devices with the calibrated θ_a (two
+    columns, the fused step's short form of (29)) and with all eight.
+    """
+    monkeypatch.setattr(StrainMemory, 'RESUM_EVERY', 97)
+    rng = np.random.default_rng(2228)
+    devices = _drawn_devices(params)[::2]
+    # both forms of τ_a (29) in the fused step: θ_a with only the p·[1, s] columns, and all eight
+    assert {any(device.actuator_theta[2:]) for device in devices} == {False, True}
+    for device in devices:
+        psi, psi_dot, p1, p2 = _states(device, rng, n=1000)
+        fused, per_chain = SegmentModel(device), SegmentModel(device)
+        for k, row in enumerate(zip(psi.tolist(), psi_dot.tolist(), p1.tolist(), p2.tolist())):
+            if k == 1500:
+                fused.reset()
+                per_chain.reset()
+            assert fused.step(*row) == SegmentModel.step(per_chain, *row), (k, device)
+            assert fused.memory2.total == per_chain.memory2.total
+        assert fused.memory1.profile == per_chain.memory1.profile
+
+
+@pytest.mark.parametrize('how', ['deepcopy', 'pickle'])
+def test_a_copied_model_steps_its_own_memories(params, how):
+    """A copy (deepcopy, pickle) steps its own strain memories, not the original's."""
+    import copy
+    import pickle
+    model = SegmentModel(params)
+    for k in range(300):
+        model.step(0.5 * k / 299, 0.0, 4e5, 2e5)
+    before = (model.memory1.n, model.memory1.total, list(model.memory1.profile))
+    twin = copy.deepcopy(model) if how == 'deepcopy' else pickle.loads(pickle.dumps(model))
+    moved = [twin.step(-0.8, 0.0, 6e5, params.p0) for _ in range(200)]
+    assert (model.memory1.n, model.memory1.total, list(model.memory1.profile)) == before
+    assert twin.memory1.n != before[0]
+    again = SegmentModel(params)
+    for k in range(300):
+        again.step(0.5 * k / 299, 0.0, 4e5, 2e5)
+    assert [again.step(-0.8, 0.0, 6e5, params.p0) for _ in range(200)] == moved

@@ -24,9 +24,12 @@ import math
 
 from hypothesis import given, settings
 from hypothesis import strategies as st
+import numpy as np
 import pytest
 
-from bellows_ros.models.ogden import energy, free_strain, stress, stress_slope
+from bellows_ros.config.ranges import RANGES
+from bellows_ros.models.ogden import (energy, free_strain, stress, stress_slope,
+                                      STRETCH_TABLE_ERROR, STRETCH_TABLE_SPACING, StretchTable)
 
 
 def reference_strain(load, mu, gamma):
@@ -147,3 +150,68 @@ def test_free_strain_solves_the_reference_stress():
         assert stress(lam, mu, gamma) == pytest.approx(load, rel=1e-12)
         checked += 1
     assert checked > 1000
+
+
+# --- the tabulated λ1 (`StretchTable`) against the solver ----------------------------------------
+
+def _table_materials(rng, count):
+    """Return the corners of config/ranges.py's Ogden box (γ just above 2), then drawn ones."""
+    mu_range, gamma_range = RANGES['segment.ogden.mu'], RANGES['segment.ogden.gamma']
+    low_gamma = gamma_range.low + 1e-7  # γ > 2 (Appendix B): the range's low end is excluded
+    corners = [((m1, m2), (g1, g2)) for m1 in (mu_range.low, mu_range.high)
+               for m2 in (mu_range.low, mu_range.high)
+               for g1 in (low_gamma, gamma_range.high) for g2 in (low_gamma, gamma_range.high)]
+    drawn = [(tuple(np.exp(rng.uniform(np.log(mu_range.low), np.log(mu_range.high), 2))),
+              tuple(rng.uniform(low_gamma, gamma_range.high, 2))) for _ in range(count)]
+    return corners + drawn
+
+
+def test_stretch_table_error_bound_over_the_parameter_ranges():
+    """
+    `StretchTable` gives `free_strain`'s λ1 to STRETCH_TABLE_ERROR (relative) on the whole box.
+
+    Materials: the 16 corners of config/ranges.py's μ (1..1e7 N/m) and γ (2..30) ranges and 40
+    drawn inside (log-uniform μ, uniform γ, seeded); loads log-uniform from 1e-9 N/m to the
+    largest load a segment of the ranges meets (2 × 1.1 MPa times R ≤ 1 + 2 tan(π/8) m), plus the
+    grid nodes, cell midpoints (where a Hermite error peaks) and loads past the table (the solver
+    then answers). `free_strain` itself is good to ~1e-15 (the tests above). Largest error found
+    when written: ~5e-15 at spacing 0.005 (~3e-13 at 0.01).
+    """
+    rng = np.random.default_rng(2211)
+    load_max = 2.0 * RANGES['segment.p_max'].high * (1.0 + 2.0 * math.tan(math.pi / 8.0))
+    worst = 0.0
+    for mu, gamma in _table_materials(rng, 40):
+        table = StretchTable(mu, gamma, load_max)
+        scale = mu[0] + mu[1]
+        cells = rng.integers(0, table.count, 200)
+        loads = np.concatenate([
+            np.exp(rng.uniform(np.log(1e-9), np.log(load_max), 800)),
+            scale * np.expm1(cells * STRETCH_TABLE_SPACING),  # nodes
+            scale * np.expm1((cells + 0.5) * STRETCH_TABLE_SPACING),  # midpoints
+            load_max * np.array([1.0, 1.5, 1e3])])
+        for load in loads.tolist():
+            exact = free_strain(load, mu[0], mu[1], gamma[0], gamma[1])
+            worst = max(worst, abs(table(load) - exact) / exact)
+    assert worst <= STRETCH_TABLE_ERROR
+
+
+def test_stretch_table_has_the_solvers_edge_cases():
+    """λ1 = 1 for loads ≤ 0 (vented or sucked chain), NaN for NaN, the solver beyond the grid."""
+    mu, gamma = (4000.0, 400.0), (2.5, 6.0)
+    table = StretchTable(mu, gamma, 1e5)
+    for load in (0.0, -1.0, -1e300, -math.inf):
+        assert table(load) == 1.0 == free_strain(load, *mu, *gamma)
+    assert math.isnan(table(math.nan))
+    for load in (1e5 * 1.01, 1e9):  # past the table: the Newton solve itself
+        assert table(load) == free_strain(load, *mu, *gamma)
+    assert isinstance(table(2.6e4), float)  # plain floats, not NumPy scalars (speed)
+
+
+def test_a_coarser_table_would_miss_the_bound():
+    """The test above can fail: at 8× the spacing (error ∝ h⁶) the default material misses it."""
+    mu, gamma = (4000.0, 400.0), (2.5, 6.0)
+    coarse = StretchTable(mu, gamma, 2e5, spacing=8.0 * STRETCH_TABLE_SPACING)
+    loads = 4400.0 * np.expm1((np.arange(coarse.count) + 0.5) * 8.0 * STRETCH_TABLE_SPACING)
+    worst = max(abs(coarse(v) - free_strain(v, *mu, *gamma)) / free_strain(v, *mu, *gamma)
+                for v in loads.tolist())
+    assert worst > STRETCH_TABLE_ERROR

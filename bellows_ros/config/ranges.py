@@ -207,5 +207,5 @@ def check_ranges(flat, source):
 
 
 def load(name, params_path=None):
-    """`params.load(name, params_path)`, every value checked against its range in its own file."""
+    """Load a parameter file as `params.load` does, every value checked against its range."""
     return param_files.load(name, params_path, check=check_ranges)

@@ -47,7 +47,8 @@ class StrainMemory:
     State of Algorithm 1 for one bellows chain: the sampled strain profile λ_s on the rib.
 
     Parameters: l0, s0 (m), sa_max (m, rib size: s̃_a is clamped to [0, sa_max]), n_lambda (samples
-    of the profile over ā ∈ [0, 1]), Ogden mu (N/m) and gamma (two terms each, γ_k > 2).
+    of the profile over ā ∈ [0, 1]), Ogden mu (N/m) and gamma (two terms each, γ_k > 2), and the
+    material's `ogden.StretchTable` for λ1 of (22) (None: the Newton solve `free_strain`).
 
     The contact always covers a prefix of the profile (samples beyond n are released), so the state
     is the prefix length `n`, the stored values, and their running sum `total` (kept instead of
@@ -57,30 +58,39 @@ class StrainMemory:
 
     RESUM_EVERY = 65536
 
-    def __init__(self, l0, s0, sa_max, n_lambda, mu, gamma):
+    def __init__(self, l0, s0, sa_max, n_lambda, mu, gamma, table=None):
         self.l0, self.s0, self.sa_max = float(l0), float(s0), float(sa_max)
         self.n_lambda = int(n_lambda)
         self.length0 = l0 * HALF_PI  # undeformed length of the bellows section, l0 π/2 (23)
         self.sample_length = self.length0 / self.n_lambda  # (l0 π/2)/Nλ of (28)
         (self.mu1, self.mu2), (self.gamma1, self.gamma2) = mu, gamma
+        # λ1 of (22): the material's `StretchTable` (to its tested bound, no solve), or None for
+        # the Newton solve `free_strain` warm-started from the last λ1 (to ~1e-15).
+        self.table = table
+        self.profile = [0.0] * self.n_lambda
         self.reset()
 
     def reset(self):
-        """Reset to the initial state of Algorithm 1: a = 0, empty profile."""
-        self.profile = [0.0] * self.n_lambda
+        """Reset to the initial state of Algorithm 1: empty profile (a = 0, n = 0), λ1 = 1."""
+        # in place: `models.segment._fused_step` keeps a reference to this list
+        self.profile[:] = [0.0] * self.n_lambda
         self.n = 0
         self.total = 0.0
         self.lam1 = 1.0
-        self.a = 0.0
-        self.s_a = 0.0
+        self.s_a = 0.0  # always the clamped sample_length·total (28): step 1 reads it
         self._steps = 0
+
+    def _stretch(self, load):
+        if self.table is not None:
+            return self.table(load)
+        return free_strain(load, self.mu1, self.mu2, self.gamma1, self.gamma2, self.lam1)
 
     def _touchdown(self, p_rel, alpha):
         """Run steps 1-4 of Algorithm 1 from the stored state: (λ1, a, n), nothing changed."""
-        s_a = self.sample_length * self.total
-        s_a = 0.0 if s_a < 0.0 else (self.sa_max if s_a > self.sa_max else s_a)
-        radius = self.l0 + (self.s0 + s_a) * math.tan(alpha)
-        lam1 = free_strain(p_rel * radius, self.mu1, self.mu2, self.gamma1, self.gamma2, self.lam1)
+        # The fused two-chain step of `bellows_ros.models.segment` repeats these lines (and those
+        # of `step`) with the same operations in the same order, so both give the same bits.
+        radius = self.l0 + (self.s0 + self.s_a) * math.tan(alpha)
+        lam1 = self._stretch(p_rel * radius)
         a = 1.0 - radius * (HALF_PI + alpha) / (lam1 * self.length0)
         a = 0.0 if a < 0.0 else (a if a < 1.0 else 1.0 - 1e-12)
         return lam1, a, math.ceil(a * self.n_lambda)
@@ -103,16 +113,14 @@ class StrainMemory:
                 self.total = 0.0
             else:
                 self.total -= math.fsum(profile[n:old])
-            for k in range(n, old):
-                profile[k] = 0.0
+            profile[n:old] = [0.0] * (old - n)
         elif n > old:
-            for k in range(old, n):
-                profile[k] = lam1
+            profile[old:n] = [lam1] * (n - old)
             self.total += (n - old) * lam1
         if n > 0:  # the transition point carries the free strain (26)
             self.total += lam1 - profile[n - 1]
             profile[n - 1] = lam1
-        self.n, self.lam1, self.a = n, lam1, a
+        self.n, self.lam1 = n, lam1
         self._steps += 1
         if self._steps >= self.RESUM_EVERY:
             self._steps = 0

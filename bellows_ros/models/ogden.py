@@ -91,3 +91,77 @@ def free_strain(load, mu1, mu2, gamma1, gamma2, guess=1.0):
             return math.exp(new)
         u = new
     return math.exp(u)
+
+
+# Grid step of `StretchTable` in x = ln(1 + load/(μ1 + μ2)). The quintic Hermite error falls as
+# h⁶. Over materials drawn across config/ranges.py, 0.005 gave at most ~5e-15 relative error in λ1
+# (0.01 gave up to ~3e-13, where a stiff small-μ term with γ ≈ 17 takes over sharply), so
+# `STRETCH_TABLE_ERROR` holds with margin. At most ~2900 cells (x ≤ 14.5 for the largest load and
+# the smallest μ).
+STRETCH_TABLE_SPACING = 0.005
+# Bound on |λ_table - λ1| / λ1 over the documented ranges, held by
+# test/test_segment_ogden.py::test_stretch_table_error_bound_over_the_parameter_ranges.
+STRETCH_TABLE_ERROR = 1e-13
+
+
+class StretchTable:
+    """
+    λ1(load) of the free membrane (22) tabulated for one material: `free_strain` without a solve.
+
+    For the 1 kHz strain memory (Algorithm 1), where the Newton solve of `free_strain` was most of
+    the cost. λ1 is a smooth function of x = ln(1 + load/S), S = μ1 + μ2 (N/m): linear in x for
+    small loads (λ1 - 1 ≈ load / 2Σμ_kγ_k) and again for large ones (λ1^(γ-1) ≈ load/μ). It is
+    stored on a uniform grid in x from 0 to x(`load_max`) as quintic Hermite cells (value, first
+    and second derivative at both ends, exact: the node values come from `free_strain` and the
+    derivatives from T' and T'' of (15b), B2), so one lookup is a log1p, an index and a degree-5
+    polynomial. Relative error of λ1 ≤ `STRETCH_TABLE_ERROR` over the ranges of config/ranges.py
+    (tested). Loads above `load_max` (N/m) or NaN go to `free_strain`; loads ≤ 0 give λ1 = 1 like
+    it. The cells are plain floats (NumPy scalars would make the lookup several times dearer).
+    """
+
+    def __init__(self, mu, gamma, load_max, spacing=STRETCH_TABLE_SPACING):
+        import numpy as np  # only to build the table; the lookup is plain Python
+        (mu1, mu2), (gamma1, gamma2) = mu, gamma
+        self.material = (float(mu1), float(mu2), float(gamma1), float(gamma2))
+        scale = mu1 + mu2
+        self.load_max = float(load_max)
+        self.inv_scale, self.inv_spacing = 1.0 / scale, 1.0 / spacing
+        self.count = int(math.ceil(math.log1p(max(load_max, 0.0) / scale) / spacing)) + 1
+        x = np.arange(self.count + 1) * spacing
+        load = scale * np.expm1(x)
+        lam = np.array([1.0] + [free_strain(v, *self.material) for v in load[1:].tolist()])
+        # u = ln λ1 solves T(u) = load(x) = S (e^x - 1): u' = (load + S)/T_u, u'' = (load + S -
+        # T_uu u'²)/T_u, with T_u, T_uu the u-derivatives of (15b); then λ' = λ u',
+        # λ'' = λ (u'' + u'²). In units of the cell (t = 0..1): times h and h².
+        u = np.log(lam)
+        t_u = t_uu = 0.0
+        for m, g in ((mu1, gamma1), (mu2, gamma2)):
+            a, b = g - 1.0, -g - 1.0
+            t_u = t_u + m * (a * np.exp(a * u) - b * np.exp(b * u))
+            t_uu = t_uu + m * (a * a * np.exp(a * u) - b * b * np.exp(b * u))
+        du = (load + scale) / t_u
+        ddu = (load + scale - t_uu * du * du) / t_u
+        d = lam * du * spacing
+        s = lam * (ddu + du * du) * spacing * spacing
+        y0, y1, d0, d1, s0, s1 = lam[:-1], lam[1:], d[:-1], d[1:], s[:-1], s[1:]
+        dy = y1 - y0
+        # quintic Hermite on t ∈ [0, 1]: p = y0 + d0 t + s0/2 t² + c3 t³ + c4 t⁴ + c5 t⁵
+        c3 = 10.0 * dy - 6.0 * d0 - 4.0 * d1 - 1.5 * s0 + 0.5 * s1
+        c4 = -15.0 * dy + 8.0 * d0 + 7.0 * d1 + 1.5 * s0 - s1
+        c5 = 6.0 * dy - 3.0 * d0 - 3.0 * d1 - 0.5 * s0 + 0.5 * s1
+        # each cell starts with its own x/h as a float: x - x0 is a float subtraction (a float
+        # minus the int index is dearer in CPython), and floor() is a cheaper int than int()
+        self.cells = [tuple(row) for row in np.column_stack(
+            [np.arange(self.count, dtype=float), y0, d0, 0.5 * s0, c3, c4, c5]).tolist()]
+
+    def __call__(self, load):
+        """Return λ1 ≥ 1 for `load` = p_rel·R (N/m); as `free_strain`, to STRETCH_TABLE_ERROR."""
+        # `bellows_ros.models.segment` inlines these lines in the fused step: keep them alike.
+        if load > 0.0:
+            x = math.log1p(load * self.inv_scale) * self.inv_spacing
+            if x < self.count:  # (before floor(): x may be inf)
+                x0, c0, c1, c2, c3, c4, c5 = self.cells[math.floor(x)]
+                t = x - x0
+                return c0 + t * (c1 + t * (c2 + t * (c3 + t * (c4 + t * c5))))
+            return free_strain(load, *self.material)
+        return 1.0 if load == load else load

@@ -39,8 +39,9 @@ from typing import NamedTuple
 import numpy as np
 
 from bellows_ros.errors import ParameterError
-from bellows_ros.models.contact import ALPHA_PER_PSI, contact_angle, StrainMemory
+from bellows_ros.models.contact import ALPHA_PER_PSI, contact_angle, HALF_PI, StrainMemory
 from bellows_ros.models.limits import AMBIENT_RANGE, MAX_LENGTH, MAX_PROFILE_SAMPLES
+from bellows_ros.models.ogden import free_strain, StretchTable
 
 SIGNS = (1.0, -1.0)  # σ_j of chains 1 and 2 ([choice], docs/equations.md)
 
@@ -143,10 +144,29 @@ def check_params(p, source='parameters'):
             fail(name, 'must be >= 0')
 
 
-def strain_memory(p):
-    """Return a fresh Algorithm-1 state for one chain of a segment with parameters `p`."""
+def stretch_table(p):
+    """
+    Return the `ogden.StretchTable` of λ1 (22) for the membrane of a segment with parameters `p`.
+
+    It covers the loads p_rel·R (N/m) of pressures up to 2 p_max abs (the model node refuses
+    more) at angles up to a half turn (|α| ≤ π/8 by (13)): R ≤ l0 + (s0 + sa_max) tan(π/8) (20).
+    Larger loads still get λ1, from the Newton solve.
+    """
+    radius = p.geometry_l0 + (p.geometry_s0 + p.geometry_sa_max) * math.tan(math.pi / 8.0)
+    return StretchTable(p.ogden_mu, p.ogden_gamma, (2.0 * p.p_max - p.p0) * radius)
+
+
+def strain_memory(p, table=None):
+    """
+    Return a fresh Algorithm-1 state for one chain of a segment with parameters `p`.
+
+    `table`: the `stretch_table(p)` to share between chains (built here when None), or False for
+    the Newton solve of (22) at every step (the exact reference, ~1e-15).
+    """
+    if table is None:
+        table = stretch_table(p)
     return StrainMemory(p.geometry_l0, p.geometry_s0, p.geometry_sa_max, p.geometry_n_lambda,
-                        p.ogden_mu, p.ogden_gamma)
+                        p.ogden_mu, p.ogden_gamma, table or None)
 
 
 # --- regressors (NumPy, one row per sample)
@@ -210,8 +230,9 @@ def previous_regressor(psi, ps1, ps2):
 def contact_lengths(p, psi, pressure1, pressure2):
     """s̃_a of both chains over a record (Algorithm 1 carried along the rows), m; two arrays."""
     out = []
+    table = stretch_table(p)
     for sign, pressure in zip(SIGNS, (pressure1, pressure2)):
-        memory = strain_memory(p)
+        memory = strain_memory(p, table)
         step = memory.step
         p_rel = relative_pressure(p, pressure).tolist()
         alpha = [contact_angle(x, sign) for x in np.asarray(psi, float).tolist()]
@@ -254,21 +275,45 @@ class SegmentModel:
     (sa1, sa2, tau_a, tau_s, tau_f, tau_drive, tau_prev) in m and N·m. It validates nothing: the
     caller (the model node, `simulate`) checks finiteness and ranges first — a per-call check would
     cost a noticeable part of the 20 µs budget. Everything that depends only on the parameters is
-    precomputed here. `reset()` returns the strain memories to Algorithm 1's initial state.
+    precomputed here, λ1 of (22) included (`stretch_table`, shared by both chains). `reset()`
+    returns the strain memories to Algorithm 1's initial state.
+
+    Each instance's `step` is the fused two-chain closure of `_fused_step` (the 1 kHz path); the
+    class's `step`, `SegmentModel.step(model, ...)`, is the same update written per chain
+    (`StrainMemory.step` + `torques`), equal to it bit for bit (tested). `exact=True` keeps the
+    per-chain form with the Newton solve of (22) at every step: the implementation before the
+    table, which the tests hold the table's results to.
     """
 
-    def __init__(self, params):
+    def __init__(self, params, exact=False):
         p = self.params = params
-        self.memory1, self.memory2 = strain_memory(p), strain_memory(p)
-        # Bound once: attribute look-ups are a measurable part of the step.
-        self._contact = (self.memory1.step, self.memory2.step)
+        self.table = None if exact else stretch_table(p)
+        self.memory1 = strain_memory(p, self.table or False)
+        self.memory2 = strain_memory(p, self.table or False)
         self._pressure = (p.p0, 1.0 / (p.p_max - p.p0))
         self._theta_a = tuple(float(v) for v in p.actuator_theta)
         self._previous = previous_torques(p)
+        if not exact:
+            self.step = _fused_step(p, self.memory1, self.memory2, self.table)
 
     def reset(self):
         self.memory1.reset()
         self.memory2.reset()
+
+    def __getstate__(self):
+        # copy.deepcopy (the pressure allocation's trial steps) and pickle: the closures are
+        # rebuilt on the copy's own memories (a closure copied by reference would step the
+        # original's)
+        state = dict(self.__dict__)
+        state.pop('step', None)
+        state.pop('_previous', None)
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self._previous = previous_torques(self.params)
+        if self.table is not None:
+            self.step = _fused_step(self.params, self.memory1, self.memory2, self.table)
 
     def step(self, psi, psi_dot, p1, p2):
         """
@@ -280,9 +325,8 @@ class SegmentModel:
         """
         p0 = self._pressure[0]
         alpha = ALPHA_PER_PSI * psi
-        step1, step2 = self._contact
-        s1 = step1(p1 - p0, alpha)
-        s2 = step2(p2 - p0, -alpha)
+        s1 = self.memory1.step(p1 - p0, alpha)
+        s2 = self.memory2.step(p2 - p0, -alpha)
         return _output(_SegmentOutput, (s1, s2) + self.torques(psi, psi_dot, p1, p2, s1, s2))
 
     def peek(self, psi, psi_dot, p1, p2):
@@ -305,11 +349,14 @@ class SegmentModel:
         q2 = (p2 - p0) * inv_span
         # actuator torque (29): chain 2 sees Ψ_2 = -Ψ and acts with σ_2 = -1
         t0, t1, t2, t3, t4, t5, t6, t7 = self._theta_a
+        # (the chains' common terms once: `_fused_step` repeats these lines)
         psi_sq = psi * psi
-        tau_a = (q1 * (t0 + s1 * (t1 + t2 * s1 + t3 * q1 + t4 * psi + t5 * psi_sq)
-                       + t6 * q1 * psi + t7 * psi_sq)
-                 - q2 * (t0 + s2 * (t1 + t2 * s2 + t3 * q2 - t4 * psi + t5 * psi_sq)
-                         - t6 * q2 * psi + t7 * psi_sq))
+        even_s = t1 + t5 * psi_sq
+        odd_s = t4 * psi
+        even = t0 + t7 * psi_sq
+        odd = t6 * psi
+        tau_a = (q1 * (even + s1 * (even_s + odd_s + t2 * s1 + t3 * q1) + odd * q1)
+                 - q2 * (even + s2 * (even_s - odd_s + t2 * s2 + t3 * q2) - odd * q2))
         tau_s, tau_f, tau_prev = self._previous(psi, psi_dot, q1, q2)
         return tau_a, tau_s, tau_f, tau_a + tau_s + tau_f, tau_prev
 
@@ -341,6 +388,152 @@ def previous_torques(p):
                     - q2 * (u0 + q2 * (u1 + u3 * q2) - u2 * psi))
         return tau_s, tau_f, tau_prev
     return terms
+
+
+def _fused_step(p, memory1, memory2, table):
+    """
+    Return the 1 kHz `step(psi, psi_dot, p1, p2)` of a `SegmentModel`: both chains in one call.
+
+    The same operations in the same order as `StrainMemory.step` (with `StretchTable.__call__`
+    for λ1 of (22)) on `memory1` and `memory2`, then `SegmentModel.torques` ((3)-(5), (17), (29),
+    (34)): written out in one closure because each Python call, attribute look-up and NumPy scalar
+    costs about as much as a line of the arithmetic, and the step is ~100 lines of it. It leaves
+    out only operations that cannot change a bit (terms of (29) with an exact-zero θ_a, a clamp
+    that never acts), so it gives the same bits as the per-chain form;
+    test/test_segment_model.py holds it to that. The
+    parameters are closure constants; the state stays in the two `StrainMemory` objects (peek,
+    reset and the tests read it there). tan(-α) = -tan(α) (an odd libm tan; the bit-for-bit test
+    checks it) and π/2 + (-α) = π/2 - α exactly, so chain 2 reuses chain 1's tangent.
+    """
+    tan, tanh, log1p, ceil, floor, fsum = (math.tan, math.tanh, math.log1p, math.ceil,
+                                           math.floor, math.fsum)
+    l0, s0, sa_max = memory1.l0, memory1.s0, memory1.sa_max
+    length0, sample_length = memory1.length0, memory1.sample_length
+    # float: a float times an int takes CPython's slow path (the same product, exactly)
+    n_lambda = float(memory1.n_lambda)
+    half_pi, alpha_per_psi, output, output_type = HALF_PI, ALPHA_PER_PSI, _output, _SegmentOutput
+    profile1, profile2 = memory1.profile, memory2.profile  # for good: reset() clears in place
+    resum_every = memory1.RESUM_EVERY
+    cells, inv_scale, inv_spacing = table.cells, table.inv_scale, table.inv_spacing
+    count = float(table.count)  # compared with a float: the same answer, CPython's fast path
+    material = table.material
+    # plain floats: a NumPy scalar among them would make every operation several times dearer
+    p0, inv_span = float(p.p0), 1.0 / float(p.p_max - p.p0)
+    t0, t1, t2, t3, t4, t5, t6, t7 = (float(v) for v in p.actuator_theta)
+    # θ_a with only the p·[1, s] columns (29) in use (the Fig. 10 calibration of config's default
+    # frees only those): the other six terms are exact zeros, and dropping them leaves the same
+    # value (x·0 = ±0 added to a non-zero sum changes nothing for finite inputs)
+    linear_actuator = t2 == t3 == t4 == t5 == t6 == t7 == 0.0 and t1 != 0.0 and t0 != 0.0
+    k_s, k_sp, c_psi0, c_psi0_p, c_f, c_fp, c_vel = (float(v) for v in (
+        p.restoring_k_s, p.restoring_k_sp, p.restoring_c_psi0, p.restoring_c_psi0_p,
+        p.friction_c_f, p.friction_c_fp, p.friction_c_vel))
+    u0, u1, u2, u3 = (float(v) for v in p.previous_theta)
+
+    def step(psi, psi_dot, p1, p2):
+        alpha = alpha_per_psi * psi
+        tan_a = tan(alpha)
+        r1 = p1 - p0
+        r2 = p2 - p0
+        # --- chain 1: Algorithm 1 steps 1-4 (20)-(25) ...
+        radius = l0 + (s0 + memory1.s_a) * tan_a
+        load = r1 * radius
+        if load > 0.0:  # λ1 of (22), `StretchTable.__call__`
+            x = log1p(load * inv_scale) * inv_spacing
+            if x < count:
+                x0, c0, c1, c2, c3, c4, c5 = cells[floor(x)]
+                t = x - x0
+                lam1 = c0 + t * (c1 + t * (c2 + t * (c3 + t * (c4 + t * c5))))
+            else:
+                lam1 = free_strain(load, *material)
+        else:
+            lam1 = 1.0 if load == load else load
+        a = 1.0 - radius * (half_pi + alpha) / (lam1 * length0)
+        a = 0.0 if a < 0.0 else (a if a < 1.0 else 1.0 - 1e-12)
+        n = ceil(a * n_lambda)
+        # ... step 5 (26) and s̃_a (28)
+        old = memory1.n
+        total = memory1.total
+        if n < old:
+            total = 0.0 if n == 0 else total - fsum(profile1[n:old])
+            profile1[n:old] = [0.0] * (old - n)
+        elif n > old:
+            profile1[old:n] = [lam1] * (n - old)
+            total += (n - old) * lam1
+        if n > 0:
+            total += lam1 - profile1[n - 1]
+            profile1[n - 1] = lam1
+        memory1.n = n
+        memory1.lam1 = lam1
+        # --- chain 2 (σ_2 = -1: α_2 = -α), the same lines
+        radius = l0 - (s0 + memory2.s_a) * tan_a
+        load = r2 * radius
+        if load > 0.0:
+            x = log1p(load * inv_scale) * inv_spacing
+            if x < count:
+                x0, c0, c1, c2, c3, c4, c5 = cells[floor(x)]
+                t = x - x0
+                lam2 = c0 + t * (c1 + t * (c2 + t * (c3 + t * (c4 + t * c5))))
+            else:
+                lam2 = free_strain(load, *material)
+        else:
+            lam2 = 1.0 if load == load else load
+        a = 1.0 - radius * (half_pi - alpha) / (lam2 * length0)
+        a = 0.0 if a < 0.0 else (a if a < 1.0 else 1.0 - 1e-12)
+        n = ceil(a * n_lambda)
+        old = memory2.n
+        total2 = memory2.total
+        if n < old:
+            total2 = 0.0 if n == 0 else total2 - fsum(profile2[n:old])
+            profile2[n:old] = [0.0] * (old - n)
+        elif n > old:
+            profile2[old:n] = [lam2] * (n - old)
+            total2 += (n - old) * lam2
+        if n > 0:
+            total2 += lam2 - profile2[n - 1]
+            profile2[n - 1] = lam2
+        memory2.n = n
+        memory2.lam1 = lam2
+        # the running sums re-summed exactly every RESUM_EVERY steps (`StrainMemory.step`); the
+        # chains step together, so memory1's count serves both (memory2's is not kept here)
+        steps = memory1._steps + 1
+        if steps >= resum_every:
+            steps = 0
+            total = fsum(profile1[:memory1.n])
+            total2 = fsum(profile2[:n])
+        memory1._steps = steps
+        memory1.total = total
+        memory2.total = total2
+        # s̃_a (28) clamped to sa_max; StrainMemory.step also clamps at 0, which never acts: the
+        # total is 0.0 exactly for an empty contact and a sum of n stretches ≥ 1 otherwise
+        s1 = sample_length * total
+        if s1 > sa_max:
+            s1 = sa_max
+        s2 = sample_length * total2
+        if s2 > sa_max:
+            s2 = sa_max
+        memory1.s_a = s1
+        memory2.s_a = s2
+        # --- torques: `SegmentModel.torques` and `previous_torques`, the same expressions
+        q1 = r1 * inv_span
+        q2 = r2 * inv_span
+        if linear_actuator:
+            tau_a = q1 * (t0 + s1 * t1) - q2 * (t0 + s2 * t1)
+        else:
+            psi_sq = psi * psi
+            even_s = t1 + t5 * psi_sq
+            odd_s = t4 * psi
+            even = t0 + t7 * psi_sq
+            odd = t6 * psi
+            tau_a = (q1 * (even + s1 * (even_s + odd_s + t2 * s1 + t3 * q1) + odd * q1)
+                     - q2 * (even + s2 * (even_s - odd_s + t2 * s2 + t3 * q2) - odd * q2))
+        bend1 = psi - c_psi0_p * tanh(c_psi0 * q1)
+        bend2 = psi + c_psi0_p * tanh(c_psi0 * q2)
+        tau_s = bend1 * (k_s + k_sp * q1) + bend2 * (k_s + k_sp * q2)
+        tau_f = tanh(c_vel * psi_dot) * (c_f + c_fp * (q1 + q2))
+        tau_prev = (tau_f + tau_s + q1 * (u0 + q1 * (u1 + u3 * q1) + u2 * psi)
+                    - q2 * (u0 + q2 * (u1 + u3 * q2) - u2 * psi))
+        return output(output_type, (s1, s2, tau_a, tau_s, tau_f, tau_a + tau_s + tau_f, tau_prev))
+    return step
 
 
 # tuple.__new__ on the tuple of values: a NamedTuple without the keyword-argument call of its

@@ -155,8 +155,8 @@ class SegmentLoop:
 
 class ArmControllerNode(Node):
 
-    def __init__(self, runtime):
-        super().__init__(interfaces.ARM_CONTROLLER_NODE, runtime)
+    def __init__(self, **kwargs):
+        super().__init__(interfaces.ARM_CONTROLLER_NODE, **kwargs)
         given = self.declare_specs(PARAMETERS)
         segments, feedforward = given['segments'], given['feedforward']
         trajectory, self.delay = given['trajectory'], given['trajectory_delay']
@@ -189,13 +189,14 @@ class ArmControllerNode(Node):
         self._p_limit = 2.0 * params.p_max
 
         self.command_pub = self.publisher(interfaces.PRESSURE_COMMAND)
-        self.diag_pub = self.publisher(interfaces.DIAGNOSTICS)
         self.state_pub = self.publisher(interfaces.TRAJECTORY_STATE)
         self.subscription(interfaces.JOINT_STATES, self.on_joint_states)
         self.subscription(interfaces.CHAMBERS, self.on_chambers)
         self.subscription(interfaces.PSI_SETPOINT, self.on_setpoint)
         self.subscription(interfaces.JOINT_TRAJECTORY, self.on_trajectory)
-        self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
+        self.diagnostics = diagnostics.Updater(self)
+        self.diagnostics.setHardwareID('none')  # software: the driver reports the devices
+        self.diagnostics.add(ArmControllerTask(self))
         self.get_logger().info(
             f"tracking {', '.join(loop.name for loop in self.loops)}, feedforward {feedforward}"
             + (f', trajectory {trajectory}' if trajectory else ''))
@@ -359,37 +360,60 @@ class ArmControllerNode(Node):
         state.header.stamp = stamp
         self.state_pub.publish(state)
 
-    def publish_diagnostics(self):
-        values, rate, _ = self.report.values()
-        values.update({k: str(v) for k, v in self.counts.items()})
-        values['unmatched_dropped'] = str(self.pairs.dropped)
-        if self.ages:  # how late the samples reach the controller (latency and backlog)
-            ages = np.array(self.ages)
+
+class ArmControllerTask(diagnostics.DiagnosticTaskGroup):
+    """
+    One status per segment loop ("arm_controller_node: segment_<i>"): tracking and timing.
+
+    The node's shared numbers (rate, sample age, counters) are taken once per report and repeated
+    in each segment's status, so that each reads on its own.
+    """
+
+    def __init__(self, node):
+        super().__init__('segments')
+        self.node = node
+        self.reported_rejected = 0
+
+    def statuses(self):
+        node = self.node
+        values, rate, _ = node.report.values()
+        values.update({k: str(v) for k, v in node.counts.items()})
+        values['unmatched_dropped'] = str(node.pairs.dropped)
+        if node.ages:  # how late the samples reach the controller (latency and backlog)
+            ages = np.array(node.ages)
             p50, p99 = np.percentile(ages, [50, 99])
             values.update(sample_age_p50_us=f'{p50 * 1e6:.0f}',
                           sample_age_p99_us=f'{p99 * 1e6:.0f}',
                           sample_age_max_us=f'{ages.max() * 1e6:.0f}')
-            self.ages.clear()
-        values['feedforward'] = self.feedforward
-        statuses = []
-        stale = rate == 0.0
-        now = self.last_stamp * 1e-9 if self.last_stamp is not None else -math.inf
-        for loop in self.loops:
-            mine = dict(values)
+            node.ages.clear()
+        values['feedforward'] = node.feedforward
+        now = node.last_stamp * 1e-9 if node.last_stamp is not None else -math.inf
+        rejected = node.counts['rejected_samples'] - self.reported_rejected
+        self.reported_rejected = node.counts['rejected_samples']
+        out = []
+        for loop in node.loops:
+            stat = diagnostics.DiagnosticStatusWrapper(name=loop.name)
+            stat.update(values)
             rms = math.sqrt(loop.squares / loop.count) if loop.count else math.nan
-            mine.update(error_rms=f'{rms:.5f}', error_max=f'{loop.largest:.5f}',
-                        setpoint=f'{loop.setpoint[0]:.5f}', saturated=str(loop.saturated),
-                        source=loop.source(now))
+            stat.update({'error_rms': f'{rms:.5f}', 'error_max': f'{loop.largest:.5f}',
+                         'setpoint': f'{loop.setpoint[0]:.5f}', 'saturated': str(loop.saturated),
+                         'source': loop.source(now)})
             if loop.path is not None:  # progress: how long until the trajectory's end
-                mine['trajectory_remaining_s'] = f'{max(0.0, loop.path.end - now):.3f}'
+                stat.add('trajectory_remaining_s', f'{max(0.0, loop.path.end - now):.3f}')
+            if rate == 0.0:
+                stat.summary(diagnostics.STALE, 'no samples since the last report (no driver '
+                             'publishing /joint_states?): not controlling')
+            else:
+                stat.summary(diagnostics.OK, f'tracking {stat.get("source")}, error RMS '
+                             f'{rms:.4f} rad')
+                if loop.saturated:
+                    stat.mergeSummary(diagnostics.WARN, f'pressure saturated in {loop.saturated}'
+                                      ' commands')
+                if rejected:
+                    stat.mergeSummary(diagnostics.WARN, f'{rejected} samples rejected')
             loop.squares, loop.count, loop.largest, loop.saturated = 0.0, 0, 0.0, 0
-            level = diagnostics.WARN if stale or mine['saturated'] != '0' else diagnostics.OK
-            message = ('no samples (stale)' if stale else
-                       'saturated' if level != diagnostics.OK else 'OK')
-            statuses.append(diagnostics.status(self, f'arm_controller_node: {loop.name}', mine,
-                                               level,
-                                               message))
-        diagnostics.publish(self, self.diag_pub, statuses)
+            out.append(stat)
+        return out
 
 
 def main(args=None):

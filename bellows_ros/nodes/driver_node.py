@@ -81,10 +81,14 @@ class SampleClock:
     def __init__(self, period):
         self.period = period
         self.stats = LoopStats()
+        # The sample rate against the device's own (diagnostic_updater's check and keys).
+        self.frequency = diagnostics.FrequencyStatus(1.0 / period, 1.0 / period, tolerance=0.1,
+                                                     window_size=5, name='sample rate')
         self._last_time = None
         self._last_index = None
 
     def tick(self, index, arrival, compute):
+        self.frequency.tick()
         if self._last_time is not None:
             gap = index - self._last_index
             if gap > 1:
@@ -166,8 +170,8 @@ PARAMETERS = (
 
 class DriverNode(Node):
 
-    def __init__(self, runtime):
-        super().__init__('driver_node', runtime)
+    def __init__(self, **kwargs):
+        super().__init__('driver_node', **kwargs)
         self.given = self.declare_specs(PARAMETERS)
         self.use_arm = self.given['arm.enabled']
         self.use_actuator = self.given['actuator.enabled']
@@ -180,7 +184,6 @@ class DriverNode(Node):
         self.state_pub = self.publisher(interfaces.JOINT_STATES)
         self.chamber_pub = self.publisher(interfaces.CHAMBERS)
         self.wrench_pub = self.publisher(interfaces.WRENCH)
-        self.diag_pub = self.publisher(interfaces.DIAGNOSTICS)
         self._publish_lock = threading.Lock()  # both reader threads publish
         self.arm = self.actuator = None
         self.reports = {}
@@ -196,7 +199,10 @@ class DriverNode(Node):
         self.subscription(interfaces.ESTOP, self.on_estop)
         self.create_service(self.srv.Trigger, '~/vent', self.on_vent)
         self.create_service(self.srv.Trigger, '~/release', self.on_release)
-        self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
+        self.stopped = False          # the devices closed: the last report says so
+        self.diagnostics = diagnostics.Updater(self)
+        self.diagnostics.setHardwareID('none')  # the devices' tasks name their port or bus
+        self.diagnostics.add('lifecycle', self.diagnose_lifecycle)
         if self.given['autostart']:
             # A device that does not answer is then a start error (one line, exit status 2).
             if self.lifecycle.trigger('configure') != SUCCESS:
@@ -309,6 +315,7 @@ class DriverNode(Node):
         self.actuator_clock = SampleClock(1e-3)
         self.actuator_stamps = DeviceClock()
         self.reports['actuator'] = diagnostics.LoopReport(self.actuator_clock.stats)
+        self.diagnostics.add('actuator', lambda stat: self.diagnose_device('actuator', stat))
         self.actuator = actuator_board.ActuatorBoard(config, on_sample=self.on_actuator_sample)
         self.actuator_port = config.port
         # A write to the board's serial port can block for up to its write timeout (a board, or
@@ -325,6 +332,7 @@ class DriverNode(Node):
                             for i in range(config.n_segments) for j in (1, 2)]
         self.arm_clock = SampleClock(1e-3)
         self.reports['arm'] = diagnostics.LoopReport(self.arm_clock.stats)
+        self.diagnostics.add('arm', lambda stat: self.diagnose_device('arm', stat))
         self._last_arm = None
         self._psi_dot = [0.0] * config.n_segments
         self.setpoints = dict.fromkeys(self.chain_names, config.pressure_min)  # vented
@@ -377,14 +385,19 @@ class DriverNode(Node):
         for _, device in devices:
             device.close()
         if devices and self.reports:
-            self.publish_diagnostics(final=True)  # the closing counts: nothing published after
+            self.stopped = True  # the closing counts, STALE: nothing is published after
+            self.diagnostics.force_update()
+            self.stopped = False
             # Samples still being repaired (a packet lost under load) must reach the readers
             # before the participant goes; bounded, so a reader that died cannot hold it up.
             end = time.monotonic() + 1.0
-            for publisher in (self.state_pub, self.chamber_pub, self.wrench_pub, self.diag_pub):
+            for publisher in (self.state_pub, self.chamber_pub, self.wrench_pub,
+                              self.diagnostics.publisher):
                 left = max(0.0, end - time.monotonic())
                 publisher.wait_for_all_acked(self.runtime.Duration(seconds=left))
         self.actuator = self.arm = None
+        for name in self.reports:
+            self.diagnostics.removeByName(name)
         self.reports = {}
 
     # --- samples -> topics (called from the drivers' reader threads) ----------------------------
@@ -490,36 +503,63 @@ class DriverNode(Node):
         self.estop_held = bool(msg.data)
 
     # --- diagnostics -----------------------------------------------------------------------------
-    def publish_diagnostics(self, final=False):
-        statuses = []
-        for name, device, link in (('actuator', self.actuator, getattr(self, 'actuator_port', '')),
-                                   ('arm', self.arm, getattr(self, 'arm_link', ''))):
-            if device is None:
-                continue
-            values, _, new_misses = self.reports[name].values()
-            values.update(device.counters())
-            values['published'] = str(self.published[name])
-            values['stale'] = str(device.stale)
-            values['lifecycle'] = self.lifecycle.state
-            values['vented'] = str(device.latched)
-            values['estop_held'] = str(self.estop_held)
-            values['refused_unconfigured'] = str(self.refused)
-            level, message = diagnostics.OK, 'OK'
-            if final:
-                level, message = diagnostics.STALE, 'driver stopped'
-            elif device.stale:
-                level, message = diagnostics.ERROR, 'no data (link down or device stopped)'
-            elif self.estop_held:
-                level, message = diagnostics.WARN, 'vented by the emergency stop'
+    def diagnose_device(self, name, stat):
+        """One device: its link (hardware_id), sample rate and timing, counters, safety state."""
+        device = self.actuator if name == 'actuator' else self.arm
+        if device is None:  # closed between two reports
+            stat.summary(diagnostics.STALE, 'device closed')
+            return stat
+        link = self.actuator_port if name == 'actuator' else self.arm_link
+        clock = self.actuator_clock if name == 'actuator' else self.arm_clock
+        stat.hardware_id = link
+        values, _, new_misses = self.reports[name].values()
+        values.update(device.counters())
+        values['published'] = str(self.published[name])
+        values['stale'] = str(device.stale)
+        values['lifecycle'] = self.lifecycle.state
+        values['vented'] = str(device.latched)
+        values['estop_held'] = str(self.estop_held)
+        values['refused_unconfigured'] = str(self.refused)
+        stat.update(values)
+        clock.frequency.run(stat)  # summary and keys of the sample rate against 1 kHz
+        if self.stopped:
+            stat.summary(diagnostics.STALE, 'driver stopped: these are the final counts')
+        elif device.stale:
+            stat.summary(diagnostics.ERROR, f'no data from {link} (link down or device stopped)')
+        else:
+            if new_misses:
+                stat.mergeSummary(diagnostics.WARN, f'{new_misses} samples missed')
+            if self.estop_held:
+                stat.mergeSummary(diagnostics.WARN, 'vented by the emergency stop')
             elif self.vent_requested:
-                level, message = diagnostics.WARN, 'vented until released'
-            elif new_misses:
-                level, message = diagnostics.WARN, f'{new_misses} samples missed'
+                stat.mergeSummary(diagnostics.WARN, 'vented until released (~/release)')
             elif not self.active:
-                message = f'{self.lifecycle.state}: vented, commands refused'
-            statuses.append(diagnostics.status(self, f'driver_node: {name}', values, level,
-                                               message, hardware_id=link))
-        diagnostics.publish(self, self.diag_pub, statuses)
+                stat.mergeSummary(diagnostics.OK, f'{self.lifecycle.state}: vented, commands '
+                                  'refused')
+        return stat
+
+    def diagnose_lifecycle(self, stat):
+        """Report the node's state: lifecycle, emergency stop, vent latch, refused commands."""
+        state = self.lifecycle.state
+        stat.update({'lifecycle': state, 'devices': self._devices() or 'none',
+                     'estop_held': str(self.estop_held),
+                     'vent_requested': str(self.vent_requested),
+                     'refused_unconfigured': str(self.refused),
+                     'last_failure': self.failure or 'none'})
+        if self.stopped:
+            stat.summary(diagnostics.STALE, 'driver stopped')
+        elif self.estop_held:
+            stat.summary(diagnostics.WARN, f'vented by the emergency stop ({interfaces.ESTOP.name}'
+                         ' True)')
+        elif self.vent_requested:
+            stat.summary(diagnostics.WARN, 'vented until released (~/release)')
+        elif state == 'active':
+            stat.summary(diagnostics.OK, 'active: commands accepted')
+        elif state == 'unconfigured' and self.failure:
+            stat.summary(diagnostics.ERROR, f'configure failed: {self.failure}')
+        else:
+            stat.summary(diagnostics.OK, f'{state}: vented, commands refused')
+        return stat
 
 
 def main(args=None):

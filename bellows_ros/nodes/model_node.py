@@ -62,8 +62,8 @@ PARAMETERS = (
 
 class ModelNode(Node):
 
-    def __init__(self, runtime):
-        super().__init__('model_node', runtime)
+    def __init__(self, **kwargs):
+        super().__init__('model_node', **kwargs)
         given = self.declare_specs(PARAMETERS)
         segments, max_pending = given['segments'], given['max_pending']
         params_file, latency_budget = given['params_file'] or None, given['latency_budget']
@@ -82,15 +82,22 @@ class ModelNode(Node):
         self.report = diagnostics.LoopReport(self.stats)
         self.latency = []
         self.latency_budget_ns = round(latency_budget * 1e9)
+        self.reported = dict.fromkeys(['rejected', 'unmatched_dropped'], 0)
         self._last_stamp = None
         self._p_limit = 2.0 * self.params.p_max
 
         self.drive_pub = self.publisher(interfaces.DRIVING_TORQUE)
         self.external_pub = self.publisher(interfaces.EXTERNAL_TORQUE)
-        self.diag_pub = self.publisher(interfaces.DIAGNOSTICS)
         self.subscription(interfaces.JOINT_STATES, self.on_joint_states)
         self.subscription(interfaces.CHAMBERS, self.on_chambers)
-        self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
+        self.diagnostics = diagnostics.Updater(self)
+        self.diagnostics.setHardwareID('none')  # software: no device of its own
+        self.diagnostics.add('driving torque', self.diagnose_evaluation)
+        # The delay from a sample's stamp to its torque's publication, against latency_budget.
+        self.latency_status = diagnostics.TimeStampStatus(
+            lambda: self.get_clock().now().nanoseconds * 1e-9, max_acceptable=latency_budget,
+            name='latency')
+        self.diagnostics.add(self.latency_status)
         self.get_logger().info(f"evaluating {', '.join(self.names)}"
                                + (f' with {params_file}' if params_file else ''))
 
@@ -99,6 +106,7 @@ class ModelNode(Node):
         """Take a live latency_budget (ros2 param set) from the next torque on."""
         if 'latency_budget' in changed:
             self.latency_budget_ns = round(changed['latency_budget'] * 1e9)
+            self.latency_status.max_acceptable = changed['latency_budget']
 
     def on_joint_states(self, msg):
         if self.names[0] in msg.name:
@@ -129,8 +137,10 @@ class ModelNode(Node):
         out_drive = self.msg.JointState(name=list(self.names), effort=array('d', drive))
         out_drive.header = joints.header
         self.drive_pub.publish(out_drive)
-        latency = self.get_clock().now().nanoseconds - stamp  # on the node clock
+        now = self.get_clock().now().nanoseconds  # on the node clock
+        latency = now - stamp
         self.latency.append(latency)
+        self.latency_status.tick(stamp * 1e-9, now * 1e-9)
         if latency > self.latency_budget_ns:
             self.counts['late'] += 1
         self.counts['evaluated'] += 1
@@ -151,7 +161,8 @@ class ModelNode(Node):
         out.header = header
         self.external_pub.publish(out)
 
-    def publish_diagnostics(self):
+    def diagnose_evaluation(self, stat):
+        """Report the evaluation: rate, counts, latency percentiles; what is wrong."""
         values, rate, _ = self.report.values()
         values.update({k: str(v) for k, v in self.counts.items()})
         values['unmatched_dropped'] = str(self.pairs.dropped)
@@ -161,12 +172,23 @@ class ModelNode(Node):
             values['latency_p50_us'] = f'{ordered[len(ordered) // 2] * 1e-3:.1f}'
             values['latency_p99_us'] = f'{ordered[int(0.99 * (len(ordered) - 1))] * 1e-3:.1f}'
             self.latency = []
-        stale = rate == 0.0
-        level = diagnostics.WARN if stale or self.counts['rejected'] else diagnostics.OK
-        message = 'no samples (stale)' if stale else 'OK'
-        diagnostics.publish(self, self.diag_pub,
-                            [diagnostics.status(self, 'model_node: driving torque', values, level,
-                                                message)])
+        stat.update(values)
+        rejected = self.counts['rejected'] - self.reported['rejected']
+        dropped = self.pairs.dropped - self.reported['unmatched_dropped']
+        self.reported.update(rejected=self.counts['rejected'],
+                             unmatched_dropped=self.pairs.dropped)
+        if rate == 0.0:
+            stat.summary(diagnostics.STALE, 'no samples since the last report (no driver '
+                         'publishing /joint_states and /bellows/chambers?)')
+            return stat
+        stat.summary(diagnostics.OK, f'evaluating {rate:.0f} samples/s')
+        if rejected:
+            stat.mergeSummary(diagnostics.WARN, f'{rejected} samples rejected (non-finite, or '
+                              'a pressure outside [0, 2 p_max])')
+        if dropped:
+            stat.mergeSummary(diagnostics.WARN, f'{dropped} half-samples dropped without their '
+                              'other half (max_pending)')
+        return stat
 
 
 def main(args=None):

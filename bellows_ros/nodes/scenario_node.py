@@ -69,8 +69,8 @@ PARAMETERS = (
 
 class ScenarioNode(Node):
 
-    def __init__(self, runtime):
-        super().__init__('scenario_node', runtime)
+    def __init__(self, **kwargs):
+        super().__init__('scenario_node', **kwargs)
         given = self.declare_specs(PARAMETERS)
         self.duration, self.step_time = given['duration'], given['step_time']
         k_low, self.k_high = given['stiffness_low'], given['stiffness_high']

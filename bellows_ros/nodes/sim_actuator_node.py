@@ -69,8 +69,8 @@ PARAMETERS = (
 
 class SimActuatorNode(Node):
 
-    def __init__(self, runtime):
-        super().__init__('sim_actuator_node', runtime)
+    def __init__(self, **kwargs):
+        super().__init__('sim_actuator_node', **kwargs)
         given = self.declare_specs(PARAMETERS)
         port, actuator_params = given['port'], given['actuator_params'] or None
         hardware_params = given['hardware_params'] or None
@@ -92,9 +92,10 @@ class SimActuatorNode(Node):
         config = actuator_board_config(hardware_params, actuator_params)
         self.board = SimActuatorBoard(self.step, config=config, link_path=port)
         self.board.start()
-        self.diag_pub = self.create_publisher(self.msg.DiagnosticArray, '/diagnostics', 10)
         self.report = diagnostics.LoopReport(self.board.stats)
-        self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
+        self.diagnostics = diagnostics.Updater(self)
+        self.diagnostics.setHardwareID(self.board.port)  # the board's serial port
+        self.diagnostics.add('plant', self.diagnose_plant)
         self.get_logger().info(f'simulated actuator board on {self.board.port}, effects: '
                                f"{', '.join(effects) or 'none'}")
 
@@ -113,18 +114,17 @@ class SimActuatorNode(Node):
             self.clock_pub.publish(self.msg.Clock(clock=now))
         return sample
 
-    def publish_diagnostics(self):
-        values, _, new_misses = self.report.values()
+    def diagnose_plant(self, stat):
+        """Report the simulated board's 1 kHz loop and the plant's state."""
+        values, rate, new_misses = self.report.values()
         values.update(self.board.counters())
         values.update(x_c=f'{self.plant.x_nut:.6f}', gas_p_ref=f'{self.plant.gas:.1f}',
                       pressure=f'{self.plant.pressure:.1f}', duty=f'{self.board.duty:.3f}',
                       x_c_min_seen=f'{self.x_c_seen[0]:.6f}',
                       x_c_max_seen=f'{self.x_c_seen[1]:.6f}',
                       end_stop_hits=str(self.end_stop_hits), t_plant=f'{self.plant.t:.3f}')
-        level = diagnostics.WARN if new_misses else diagnostics.OK
-        diagnostics.publish(self, self.diag_pub, [diagnostics.status(
-            self, 'sim_actuator_node: plant', values, level,
-            f'{new_misses} ticks missed' if new_misses else 'OK', hardware_id=self.board.port)])
+        stat.update(values)
+        return diagnostics.loop_summary(stat, rate, new_misses)
 
     def close(self):
         self.board.close()

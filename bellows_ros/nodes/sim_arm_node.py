@@ -62,8 +62,8 @@ PARAMETERS = (
 
 class SimArmNode(Node):
 
-    def __init__(self, runtime):
-        super().__init__('sim_arm_node', runtime)
+    def __init__(self, **kwargs):
+        super().__init__('sim_arm_node', **kwargs)
         given = self.declare_specs(PARAMETERS)
         interface, channel = given['can.interface'], given['can.channel']
         n_segments, segment_params = given['n_segments'], given['segment_params'] or None
@@ -87,9 +87,10 @@ class SimArmNode(Node):
         self.sim = SimArmBus(bus, self.step, n_segments=n_segments, vent_pressure=params.p0)
         self.sim.start()
         self.link = f'{interface}:{channel}'
-        self.diag_pub = self.create_publisher(self.msg.DiagnosticArray, '/diagnostics', 10)
         self.report = diagnostics.LoopReport(self.sim.stats)
-        self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
+        self.diagnostics = diagnostics.Updater(self)
+        self.diagnostics.setHardwareID(self.link)  # the CAN interface and channel
+        self.diagnostics.add('plant', self.diagnose_plant)
         self.get_logger().info(f'simulated arm ({n_segments} segments) on {self.link}, effects: '
                                f"{', '.join(effects) or 'none'}")
 
@@ -106,15 +107,14 @@ class SimArmNode(Node):
             self.clock_pub.publish(self.msg.Clock(clock=now))
         return measured
 
-    def publish_diagnostics(self):
-        values, _, new_misses = self.report.values()
+    def diagnose_plant(self, stat):
+        """Report the simulated arm's 1 kHz bus loop and each segment's angle."""
+        values, rate, new_misses = self.report.values()
         values.update(self.sim.counters())
         for i, plant in enumerate(self.plants):
             values[f'segment_{i + 1}.psi'] = f'{plant.psi:.4f}'
-        level = diagnostics.WARN if new_misses else diagnostics.OK
-        diagnostics.publish(self, self.diag_pub, [diagnostics.status(
-            self, 'sim_arm_node: plant', values, level,
-            f'{new_misses} ticks missed' if new_misses else 'OK', hardware_id=self.link)])
+        stat.update(values)
+        return diagnostics.loop_summary(stat, rate, new_misses)
 
     def close(self):
         self.sim.close()

@@ -83,8 +83,8 @@ PARAMETERS = (
 
 class StiffnessControllerNode(Node):
 
-    def __init__(self, runtime):
-        super().__init__('stiffness_controller_node', runtime)
+    def __init__(self, **kwargs):
+        super().__init__('stiffness_controller_node', **kwargs)
         given = self.declare_specs(PARAMETERS)
         actuator_params = given['actuator_params'] or None
         gains = PDGains(**{field: given[name] for name, field in _PD_GAINS.items()})
@@ -113,11 +113,12 @@ class StiffnessControllerNode(Node):
 
         self.motor_pub = self.publisher(interfaces.MOTOR_COMMAND)
         self.stiffness_pub = self.publisher(interfaces.STIFFNESS)
-        self.diag_pub = self.publisher(interfaces.DIAGNOSTICS)
         self.subscription(interfaces.STIFFNESS_SETPOINT, self.on_setpoint)
         self.subscription(interfaces.CHAMBERS, self.on_chambers)
         self.subscription(interfaces.JOINT_STATES, self.on_joint_states)
-        self.create_timer(diagnostics.PERIOD, self.publish_diagnostics)
+        self.diagnostics = diagnostics.Updater(self)
+        self.diagnostics.setHardwareID('none')  # software: the driver reports the devices
+        self.diagnostics.add('control', self.diagnose_control)
 
     # --- live parameters (ros2 param set): from the next control step -------------------------
     def on_parameters(self, changed):
@@ -180,8 +181,9 @@ class StiffnessControllerNode(Node):
             self.stiffness_pub.publish(self.msg.Float64(data=self.setpoint.estimate()))
         self.stats.record(dt, 0.0, time.perf_counter() - start)
 
-    def publish_diagnostics(self):
-        values, rate, new_misses = self.report.values()
+    def diagnose_control(self, stat):
+        """Report the control loop: rate, set-point, its reach (range, branch), why it is off."""
+        values, rate, _ = self.report.values()
         values.update({k: str(v) for k, v in self.counts.items()})
         values['gas_p_ref'] = f'{self.setpoint.gas:.1f}'
         values['target_x_c'] = 'none' if self.target is None else f'{self.target:.6f}'
@@ -191,12 +193,15 @@ class StiffnessControllerNode(Node):
         values['stiffness_range'] = f'{k_low:.1f}-{k_high:.1f}'
         values['branch_x_c'] = f'rising {x_low:.6f}-{x_high:.6f}'
         values['warning'] = self.setpoint.warning or 'none'
-        stale = rate == 0.0
-        level = diagnostics.WARN if stale or self.setpoint.warning else diagnostics.OK
-        message = ('no samples (stale)' if stale else
-                   'set-point out of reach' if self.setpoint.warning else 'OK')
-        diagnostics.publish(self, self.diag_pub, [diagnostics.status(
-            self, 'stiffness_controller_node: control', values, level, message)])
+        stat.update(values)
+        if rate == 0.0:
+            stat.summary(diagnostics.STALE, 'no samples since the last report (no driver '
+                         'publishing the actuator on /joint_states?): not controlling')
+        elif self.setpoint.warning:
+            stat.summary(diagnostics.WARN, f'set-point out of reach: {self.setpoint.warning}')
+        else:
+            stat.summary(diagnostics.OK, f'controlling at {rate:.0f} Hz')
+        return stat
 
 
 def main(args=None):

@@ -15,9 +15,11 @@
 """
 The runtime the nodes run on: rclpy, or plain Cyclone DDS with ROS 2's wire conventions.
 
-Nodes are written once against `Node` (runtime/node.py, the narrow interface) and started with
-`run(NodeClass, args)`, which picks the implementation once: `rclpy_runtime` where rclpy imports,
-else `dds_node`; `$BELLOWS_RUNTIME=rclpy|dds` chooses explicitly.
+Nodes are written once against the runtime contract (runtime/contract.py), subclassing `Node`
+(runtime/node.py), and started with `run(NodeClass, args)`, which picks the implementation once
+(`rclpy_runtime` where rclpy imports, else `dds_node`; `$BELLOWS_RUNTIME=rclpy|dds` chooses
+explicitly) and composes the node class with it: `NodeClass.on(runtime)`, on rclpy an
+`rclpy.node.Node`.
 """
 from bellows_ros.runtime.node import Node, run, select_runtime, stamp_ns
 

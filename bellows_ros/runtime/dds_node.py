@@ -56,8 +56,7 @@ from bellows_ros.errors import ParameterError
 from bellows_ros.runtime import parameter_services, ros_args
 from bellows_ros.runtime.messages import (message_class, msg,  # noqa: F401 (msg: the interface)
                                           type_hash)
-from bellows_ros.runtime.node import check_override
-from bellows_ros.runtime.parameters import descriptor_message
+from bellows_ros.runtime.parameters import check_type, descriptor_message
 from bellows_ros.runtime.services import fields_of, srv  # noqa: F401 (srv: the interface)
 
 NAME = 'dds'
@@ -181,12 +180,31 @@ def ok():
 
 
 def shutdown():
-    """Leave the domain (deletes every reader and writer of the process)."""
+    """Leave the domain: delete every node's entities, then the participant's."""
     _context.shutdown.set()
+    for node in list(_context.nodes):
+        node.destroy_node()
+    _delete(_context.graph_writer, *_context.topics.values(), _context.participant)
     _context.participant = None
     _context.topics = {}
     _context.nodes = []
     _context.graph_writer = None
+
+
+def _delete(*entities):
+    """
+    Delete DDS entities now, in the order given: children before their parent.
+
+    cyclonedds-python deletes an entity in its `__del__`. Left to the garbage collector, a node's
+    entities sit in reference cycles (a ReadCondition holds its reader, a callback its node), are
+    collected at a random moment in no particular order, and a reader or participant deleted
+    before what hangs on it corrupted the heap: a test process that joined and left the domain
+    some tens of times crashed in a later write. `__del__` deletes once and then forgets the
+    handle, so an entity deleted here is not deleted again.
+    """
+    for entity in entities:
+        if entity is not None:
+            entity.__del__()
 
 
 _GRAPH_TYPE = 'rmw_dds_common/msg/ParticipantEntitiesInfo'
@@ -429,6 +447,12 @@ class Node:
         _context.nodes.append(self)
         # What rclpy's Node offers: `ros2 param list/get/set/describe` reach this node too.
         self._parameter_services = parameter_services.ParameterServices(self, srv)
+        # rclpy's /parameter_events: every declaration and change, for rqt_reconfigure and
+        # `ros2 param` watchers (depth 1000, reliable, volatile: rclpy's
+        # qos_profile_parameter_events).
+        self._parameter_events = self.create_publisher(
+            message_class('rcl_interfaces/msg/ParameterEvent'), '/parameter_events',
+            QoSProfile(depth=1000))
         _publish_graph()
         if self.declare_parameter('use_sim_time', False).value:
             self._clock.sim_time = 0
@@ -441,6 +465,9 @@ class Node:
     # names
     def get_name(self):
         return self._name
+
+    def get_fully_qualified_name(self):
+        return self._namespace.rstrip('/') + '/' + self._name
 
     def get_namespace(self):
         return self._namespace
@@ -455,13 +482,22 @@ class Node:
         if name in self._overrides:
             override, source = self._overrides[name]
             try:
-                check_override(self._name, name, value, override)
+                check_type(self._name, name, value, override)
             except ParameterError as exc:
                 raise ParameterError(f'{source}: {exc}') from None
             value = override
         self._parameters[name] = Parameter(name, value)
         self._descriptors[name] = descriptor
+        self._publish_parameter_event(new=[self._parameters[name]])
         return self._parameters[name]
+
+    def _publish_parameter_event(self, new=(), changed=()):
+        def entries(parameters):
+            return [message_class('rcl_interfaces/msg/Parameter')(
+                name=p.name, value=parameter_services.to_message(p.value)) for p in parameters]
+        self._parameter_events.publish(message_class('rcl_interfaces/msg/ParameterEvent')(
+            stamp=self._clock.now().to_msg(), node=self.get_fully_qualified_name(),
+            new_parameters=entries(new), changed_parameters=entries(changed)))
 
     def parameter_names(self):
         return list(self._parameters)
@@ -496,7 +532,7 @@ class Node:
                 result.successful, result.reason = False, f"parameter '{name}': no value given"
             else:
                 try:
-                    check_override(self._name, name, self._parameters[name].value, value)
+                    check_type(self._name, name, self._parameters[name].value, value)
                 except ParameterError as exc:
                     result.successful, result.reason = False, str(exc)
             if not result.successful:
@@ -508,6 +544,7 @@ class Node:
                 return result
         for change in changes:
             self._parameters[change.name] = change
+        self._publish_parameter_event(changed=changes)
         for callback in self._post_set:
             callback(changes)
         return result
@@ -584,8 +621,17 @@ class Node:
         return self._clock
 
     def destroy_node(self):
+        if self._waitset is None:  # destroyed already
+            return
         self._wakeup.set(True)
+        endpoints = self._subscriptions + self._services
+        for endpoint in endpoints:
+            self._waitset.detach(endpoint.condition)
+        self._waitset.detach(self._wakeup)
+        _delete(*[e.condition for e in endpoints], *[e.reader for e in endpoints],
+                *[s.writer for s in self._services], *self._writers, self._wakeup, self._waitset)
         self._subscriptions, self._timers, self._writers, self._services = [], [], [], []
+        self._waitset = self._wakeup = None
         if self in _context.nodes and _context.graph_writer is not None:
             _context.nodes.remove(self)
             _publish_graph()
@@ -626,10 +672,6 @@ class Node:
 
 def spin_once(node, timeout_sec=None):
     node._spin_once(timeout_sec)
-
-
-def create_node(name):
-    return Node(name)
 
 
 def descriptor(spec):

@@ -13,31 +13,31 @@
 # limitations under the License.
 
 """
-The one interface every bellows node is written against, and `main`, which picks the runtime.
+The bellows part of every node, and `main`, which picks the runtime and composes the node with it.
 
-A bellows node subclasses `Node` and gets the runtime it runs on as its constructor's argument::
+A bellows node subclasses `Node` and is written against the runtime contract (runtime/contract.py:
+rclpy.node.Node's names, which both runtimes' node classes implement)::
 
     class Talker(Node):
-        def __init__(self, runtime):
-            super().__init__('talker', runtime)
+        def __init__(self, **kwargs):
+            super().__init__('talker', **kwargs)
             self.pub = self.create_publisher(self.msg.Float64, '/x', 10)
 
     def main(args=None):
         return run(Talker, args)
 
-`Node` is narrow on purpose: parameters (`declare_parameter`, `get_parameter`, `has_parameter`),
-`create_publisher`, `create_subscription`, `create_timer`, `get_logger`, `get_clock`, `get_name`,
-`get_namespace`, `destroy_node`, and `msg` (the message classes: JointState, WrenchStamped,
-Float64, DiagnosticArray, DiagnosticStatus, KeyValue, Clock, Header, Time). Publishers,
-subscriptions, timers, loggers and clocks are the runtime's own objects with rclpy's methods
-(`publish`, `wait_for_all_acked`, `get_subscription_count`, `now`, ...).
+`Talker.on(runtime)` is the class composed with the runtime's node class (`runtime.Node`), a
+subclass of both: on rclpy `rclpy.node.Node`, so a node is spun by any rclpy executor and several
+share a process (`rclpy.spin(Talker.on(rclpy_runtime)())`, after `rclpy_runtime.init()`); on the
+DDS runtime `dds_node.Node`. `run` does that composition. `Node` adds what is bellows' own:
+`declare_specs` (a node's parameter table, checked by `parameters.validate`, the one check, at
+start and for every change while running), `publisher`/`subscription` (a topic of
+bellows_ros/interfaces.py), `msg` and `srv` (the runtime's message and service classes), the
+`parameters` dict kept current, and `runtime`.
 
-A runtime is a module with the same names in both implementations (`rclpy_runtime`, `dds_node`):
-`NAME`, `msg`, `srv`, `service_message(ros_name)`, `Time`, `Duration`, `SENSOR_DATA`, `LATCHED`,
-`init(args)`, `create_node(name)`, `spin_once(node, timeout_sec)`, `ok()`, `shutdown()`,
-`descriptor(spec)`, `parameter_overrides(node)` and the exception tuples `INTERRUPTED` and
-`USER_ERRORS`. `select_runtime` picks one, once, in `run`: `$BELLOWS_RUNTIME` = `rclpy` or
-`dds`, else rclpy when it imports. `rclpy_unavailable` asks
+A runtime is a module with the same names in both implementations (`rclpy_runtime`, `dds_node`),
+the `Runtime` Protocol of runtime/contract.py. `select_runtime` picks one, once, in `run`:
+`$BELLOWS_RUNTIME` = `rclpy` or `dds`, else rclpy when it imports. `rclpy_unavailable` asks
 a child Python whether rclpy could run the nodes here, for a process (the bench, the tests) that
 uses the DDS runtime itself.
 """
@@ -100,103 +100,83 @@ def stamp_ns(stamp: Any) -> int:
     return stamp.sec * 1_000_000_000 + stamp.nanosec
 
 
-# rcl's parameter types, as rclpy names them in its errors.
-def parameter_type(value: Any) -> str:
-    """Return rcl's type name for a parameter value ('double', 'integer_array', ...)."""
-    if isinstance(value, (list, tuple)):
-        if not value:
-            return 'array'
-        kinds = {parameter_type(v) for v in value}
-        return f'{kinds.pop()}_array' if len(kinds) == 1 else 'mixed array'
-    for kind, name in ((bool, 'bool'), (int, 'integer'), (float, 'double'), (str, 'string')):
-        if isinstance(value, kind):
-            return name
-    return type(value).__name__
-
-
-def check_override(node_name: str, name: str, default: Any, override: Any) -> None:
-    """
-    Raise ParameterError when `override` does not have the type of the declared `default`.
-
-    rcl's rule: no conversion, not even integer to double.
-    """
-    if default is None:
-        return
-    expected, given = parameter_type(default), parameter_type(override)
-    if given == expected or (given == 'array' and expected.endswith('_array')) \
-            or (expected == 'array' and given.endswith('_array')):
-        return
-    hint = ' (write it with a decimal point)' if (expected, given) == ('double', 'integer') else ''
-    raise ParameterError(f"{node_name}: parameter '{name}' must be {_article(expected)}, "
-                         f'got {_article(given)} {override!r}{hint}')
-
-
 def _plain(value: Any) -> Any:
     """Return a parameter value as declared: rclpy hands arrays over as array.array."""
     return list(value) if isinstance(value, array.array) else value
 
 
-def _article(kind: str) -> str:
-    return ('an ' if kind[0] in 'aeiou' else 'a ') + kind.replace('_', ' ')
-
-
 class Node:
-    """A bellows node on either runtime: the narrow interface (see the module docstring)."""
+    """
+    A bellows node's own part, on either runtime: composed with the runtime's node class.
 
-    def __init__(self, node_name: str, runtime: ModuleType) -> None:
-        self.runtime = runtime
+    `on(runtime)` makes the class a node of that runtime, `NodeClass.on(runtime)`, a subclass
+    of both (cached): on rclpy an `rclpy.node.Node`. See the module docstring.
+    """
+
+    # The runtime module (rclpy_runtime or dds_node): set on the class `on` returns.
+    runtime: ModuleType
+
+    @classmethod
+    def on(cls, runtime: ModuleType) -> type:
+        """Return this node class composed with `runtime.Node` (one class per pair, cached)."""
+        if 'runtime' in cls.__dict__:  # composed already
+            return cls
+        key = (cls, runtime)
+        if key not in _composed:
+            _composed[key] = type(cls.__name__, (cls, runtime.Node), {
+                'runtime': runtime, '__module__': cls.__module__,
+                '__qualname__': cls.__qualname__, '__doc__': cls.__doc__})
+        return _composed[key]
+
+    def __init__(self, node_name: str, **kwargs: Any) -> None:
+        """Create the node `node_name`; `kwargs` go to the runtime's Node (`namespace`, ...)."""
+        runtime = getattr(type(self), 'runtime', None)
+        if runtime is None:
+            raise TypeError(f'{type(self).__name__} needs a runtime: build it with '
+                            f'{type(self).__name__}.on(runtime)()')
         self.msg = runtime.msg
         self.srv = runtime.srv
-        self._node = runtime.create_node(node_name)
-        self._overrides = runtime.parameter_overrides(self._node)
         self._specs = {}
         # The value of every parameter declared with a Spec, kept current while the node runs.
         self.parameters = {}
+        super().__init__(node_name, **kwargs)
+        # Every parameter given to this node (files, -p), declared or not: {name: value}.
+        self._given = runtime.parameter_overrides(self)
 
     # parameters
-    def declare_parameter(self, name: str, value: Any) -> Any:
-        """Declare `name` with default `value`; an override of another type is a ParameterError."""
-        if name in self._overrides:
-            check_override(self.get_name(), name, value, self._overrides[name])
-        return self._node.declare_parameter(name, value)
-
     def declare_specs(self, specs: Sequence[Any]) -> dict:
         """
         Declare every parameter of `specs` (runtime/parameters.py) and check its value.
 
-        The value given (file or -p), else the default, is checked against its Spec before it is
-        declared, the same way on both runtimes; rclpy also gets the Spec as the parameter's
-        descriptor. Returns {name: value}.
+        The value given (file or -p), else the default, is checked against its Spec
+        (`parameters.validate`) before it is declared, the same way on both runtimes; rclpy also
+        gets the Spec as the parameter's descriptor. Returns {name: value}.
         """
         values = {}
         for spec in specs:
-            value = spec.default
-            if spec.name in self._overrides:
-                value = self._overrides[spec.name]
-                check_override(self.get_name(), spec.name, spec.default, value)
-            validate(self.get_name(), spec, value)
-            values[spec.name] = self._node.declare_parameter(
-                spec.name, spec.default, self.runtime.descriptor(spec)).value
+            validate(self.get_name(), spec, self._given.get(spec.name, spec.default))
+            values[spec.name] = _plain(self.declare_parameter(
+                spec.name, spec.default, self.runtime.descriptor(spec)).value)
         self._specs.update({spec.name: spec for spec in specs})
         self.parameters.update(values)
         return values
 
     # A change while running (`ros2 param set`, rqt_reconfigure), the same way on both runtimes:
     # the runtime has checked that the parameter is declared and keeps its type; here its Spec
-    # decides (read-only, bounds, choices, rule), and the node is told once the change is taken.
+    # decides (read-only, type, bounds, choices, rule), and the node is told once the change is
+    # taken.
     def _check_change(self, changes: Sequence[Any]) -> Any:
         result = self.runtime.service_message('rcl_interfaces/msg/SetParametersResult')(
             successful=True)
         for change in changes:
-            spec, value = self._specs.get(change.name), _plain(change.value)
+            spec = self._specs.get(change.name)
             if spec is None or spec.read_only:
                 result.successful = False
                 result.reason = (f"parameter '{change.name}' is read-only: the node reads it at "
                                  'start (restart the node to change it)')
                 return result
             try:
-                check_override(self.get_name(), change.name, spec.default, value)
-                validate(self.get_name(), spec, value)
+                validate(self.get_name(), spec, _plain(change.value))
             except ParameterError as error:
                 result.successful, result.reason = False, str(error)
                 return result
@@ -213,15 +193,9 @@ class Node:
             # The node's own reaction (rebuild a filter, new gains): from the next control step.
             self.on_parameters(changed)
 
-    def get_parameter(self, name: str) -> Any:
-        return self._node.get_parameter(name)
-
-    def has_parameter(self, name: str) -> bool:
-        return self._node.has_parameter(name)
-
     def check_parameters(self) -> None:
         """Raise ParameterError for a given parameter (file or -p) the node does not declare."""
-        unknown = [name for name in self._overrides if not self.has_parameter(name)]
+        unknown = [name for name in self._given if not self.has_parameter(name)]
         if unknown:
             raise ParameterError(f"unknown parameter '{unknown[0]}' for node '{self.get_name()}' "
                                  '(given in a params file or with -p; the node has no such '
@@ -233,17 +207,10 @@ class Node:
 
         Not before: rclpy runs these callbacks for each declaration too.
         """
-        self._node.add_on_set_parameters_callback(self._check_change)
-        self._node.add_post_set_parameters_callback(self._take_change)
+        self.add_on_set_parameters_callback(self._check_change)
+        self.add_post_set_parameters_callback(self._take_change)
 
-    # communication
-    def create_publisher(self, msg_type: type, topic: str, qos_profile: Any) -> Any:
-        return self._node.create_publisher(msg_type, topic, qos_profile)
-
-    def create_subscription(self, msg_type: type, topic: str, callback: Callable[[Any], None],
-                            qos_profile: Any) -> Any:
-        return self._node.create_subscription(msg_type, topic, callback, qos_profile)
-
+    # communication on the topics of the contract (bellows_ros/interfaces.py)
     def publisher(self, topic: Any) -> Any:
         """Create a publisher on a topic of the contract (bellows_ros/interfaces.py)."""
         return self.create_publisher(getattr(self.msg, topic.message), topic.name,
@@ -257,28 +224,8 @@ class Node:
     def _qos(self, topic: Any) -> Any:
         return self.runtime.LATCHED if topic.latched else topic.depth
 
-    def create_service(self, srv_type: Any, name: str, callback: Callable[[Any, Any], Any]) -> Any:
-        """Offer a service of `self.srv`; `callback(request, response) -> response`, as rclpy."""
-        return self._node.create_service(srv_type, name, callback)
 
-    def create_timer(self, period: float, callback: Callable[[], None]) -> Any:
-        return self._node.create_timer(period, callback)
-
-    # the rest
-    def get_logger(self) -> Any:
-        return self._node.get_logger()
-
-    def get_clock(self) -> Any:
-        return self._node.get_clock()
-
-    def get_name(self) -> str:
-        return self._node.get_name()
-
-    def get_namespace(self) -> str:
-        return self._node.get_namespace()
-
-    def destroy_node(self) -> None:
-        self._node.destroy_node()
+_composed = {}
 
 
 # Where the process is with respect to SIGINT/SIGTERM: while a node is being built a signal
@@ -303,8 +250,9 @@ def run(node_class: Any, args: Optional[Sequence[str]] = None,
     """
     Run one node until Ctrl-C/SIGTERM; a user mistake is one line on stderr and exit status 2.
 
-    Picks the runtime (`select_runtime`) unless one is given, builds `node_class(runtime)`, which
-    must declare its parameters up front, then checks that every given parameter was declared.
+    Picks the runtime (`select_runtime`) unless one is given, builds `node_class.on(runtime)()`
+    (which must declare its parameters up front), then checks that every given parameter was
+    declared.
     A node with a `done` attribute runs until it is true, then `finish()` is called (the scenario).
     A node may define `close()` for its own clean-up (devices, threads); it runs before shutdown.
     A node that declares `realtime_priority` and `cpu_latency_limit` gets them here
@@ -328,7 +276,7 @@ def run(node_class: Any, args: Optional[Sequence[str]] = None,
         runtime = runtime or select_runtime()
         runtime.init(args)
         for cls in classes:
-            nodes.append(cls(runtime))
+            nodes.append(cls.on(runtime)())
         for node in nodes:
             node.check_parameters()
             node.watch_parameters()
@@ -373,7 +321,7 @@ def run(node_class: Any, args: Optional[Sequence[str]] = None,
 def _spin(runtime: ModuleType, node: Node) -> None:
     """Spin `node` until a signal, its end (`done`, the scenario) or the runtime's shutdown."""
     while not _signals['stop'] and not getattr(node, 'done', False) and runtime.ok():
-        runtime.spin_once(node._node, timeout_sec=None)
+        runtime.spin_once(node, timeout_sec=None)
 
 
 def _user_error(program: str, exc: Exception) -> int:

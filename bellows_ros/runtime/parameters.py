@@ -27,6 +27,7 @@ tests walk.
 `read_only` is True unless the node applies a change while it runs; a parameter the node reads
 once (a port, the segments) must say so, rather than accept a change that does nothing.
 """
+import array
 from dataclasses import dataclass
 import math
 from typing import Any, Callable, Optional, Sequence
@@ -154,8 +155,50 @@ def _number(value):
     return str(value) if isinstance(value, int) else f'{value:g}'
 
 
+# rcl's parameter types, as rclpy names them in its errors.
+def parameter_type(value: Any) -> str:
+    """Return rcl's type name for a parameter value ('double', 'integer_array', ...)."""
+    if isinstance(value, (list, tuple, array.array)):
+        if not len(value):
+            return 'array'
+        kinds = {parameter_type(v) for v in value}
+        return f'{kinds.pop()}_array' if len(kinds) == 1 else 'mixed array'
+    for kind, name in ((bool, 'bool'), (int, 'integer'), (float, 'double'), (str, 'string')):
+        if isinstance(value, kind):
+            return name
+    return type(value).__name__
+
+
+def check_type(node_name: str, name: str, default: Any, value: Any) -> None:
+    """
+    Raise ParameterError when `value` does not have the type of the declared `default`.
+
+    rcl's rule: no conversion, not even integer to double. Both runtimes apply it to every
+    declaration with a value given (file or -p); `validate` applies it to a Spec's value.
+    """
+    if default is None:
+        return
+    expected, given = parameter_type(default), parameter_type(value)
+    if given == expected or (given == 'array' and expected.endswith('_array')) \
+            or (expected == 'array' and given.endswith('_array')):
+        return
+    hint = ' (write it with a decimal point)' if (expected, given) == ('double', 'integer') else ''
+    raise ParameterError(f"{node_name}: parameter '{name}' must be {_article(expected)}, "
+                         f'got {_article(given)} {value!r}{hint}')
+
+
+def _article(kind: str) -> str:
+    return ('an ' if kind[0] in 'aeiou' else 'a ') + kind.replace('_', ' ')
+
+
 def validate(node_name, spec, value):
-    """Raise ParameterError naming node and parameter when `value` is not allowed by `spec`."""
+    """
+    Raise ParameterError naming node and parameter when `value` is not allowed by `spec`.
+
+    The one check of a Spec's value, at start (given or default) and for every change while the
+    node runs: the type (`check_type`), then bounds, choices, elements and the Spec's own rule.
+    """
+    check_type(node_name, spec.name, spec.default, value)
     problem = spec.problem(value)
     if problem:
         raise ParameterError(f"{node_name}: parameter '{spec.name}' = {value!r}: {problem} "

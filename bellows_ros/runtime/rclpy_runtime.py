@@ -15,8 +15,14 @@
 """
 The rclpy runtime: the nodes on ROS 2 itself (what `ros2 run` and `ros2 launch` start).
 
-The same names as the DDS runtime (`dds_node`), so `runtime.node.run` uses either unchanged. Import
+The same names as the DDS runtime (`dds_node`): the `Runtime` Protocol of runtime/contract.py, so
+`runtime.node.run` uses either unchanged. `Node` is an `rclpy.node.Node`, the base every bellows
+node is composed with here (`NodeClass.on(rclpy_runtime)`): any rclpy executor spins it. Import
 fails with ImportError where rclpy or the message packages are absent.
+
+Public rclpy API only, but for `WaitLoop` (what `run` spins a node with, for speed): rclpy has no
+public wait set, so it uses rclpy's own (`rclpy.impl.implementation_singleton`, as rclpy's
+executors do).
 
 The nodes' messages travel as serialized CDR: publishers and subscriptions are rclpy's own (same
 types, type hashes, QoS and graph entries as any rclpy node), but a message is encoded and decoded
@@ -26,6 +32,7 @@ structs, then rmw_cyclonedds_cpp's introspection serializer, cost the model node
 sample than its model (docs/nodes.md, "rclpy beside the DDS runtime").
 """
 import importlib
+import inspect
 import sys
 import time
 import types
@@ -39,13 +46,12 @@ import rclpy.node
 import rclpy.qos
 import rclpy.serialization
 import rclpy.signals
-from rclpy.subscription import Subscription
 import rclpy.time
 from rclpy.waitable import NumberOfEntities
 
 from bellows_ros.errors import ParameterError
 from bellows_ros.runtime import cdr, ros_args
-from bellows_ros.runtime.parameters import descriptor_message
+from bellows_ros.runtime.parameters import check_type, descriptor_message
 
 NAME = 'rclpy'
 
@@ -86,33 +92,44 @@ _MAX_ROUNDS = 64
 
 def init(args=None):
     """rclpy.init; a malformed `--ros-args` (or parameter file) is a ParameterError."""
-    # The DDS runtime's reading first: the same mistakes get the same one-line messages.
-    ros_args.parse(sys.argv if args is None else args, strict=False)
+    # The DDS runtime's reading first: the same mistakes get the same one-line messages. Kept:
+    # the parameters given to each node (parameter_overrides) are read from it.
+    global _ros_args
+    _ros_args = ros_args.parse(sys.argv if args is None else args, strict=False)[0]
     try:
         # Without rclpy's signal handlers: they shut the context down at SIGINT, before a node's
         # close() could publish its final counts. SIGINT is then Python's KeyboardInterrupt, raised
         # when the executor's wait returns (spin wakes at least every _MAX_WAIT_S for that).
         rclpy.init(args=args, signal_handler_options=rclpy.signals.SignalHandlerOptions.NO)
-    except _rclpy.UnknownROSArgsError as exc:
-        # rclpy's message is the list of unknown arguments, as text.
-        unknown = str(exc).strip('[]').split(',')[0].strip().strip("'")
-        raise ParameterError(f"--ros-args: unknown argument '{unknown}'") from None
-    except (_rclpy.RCLError, _rclpy.RCLInvalidROSArgsError) as exc:
+    except RuntimeError as exc:  # rclpy's argument errors are RuntimeErrors (public behaviour)
+        text = str(exc)
+        if text.startswith('['):  # UnknownROSArgsError: the list of unknown arguments, as text
+            unknown = text.strip('[]').split(',')[0].strip().strip("'")
+            raise ParameterError(f"--ros-args: unknown argument '{unknown}'") from None
         # rcl appends the C source locations of the error (', at /path/file.c:123'): drop them.
-        message = ' '.join(str(exc).split()).split(', at /')[0]
+        message = ' '.join(text.split()).split(', at /')[0]
         raise ParameterError(message.removeprefix('failed to initialize rcl: ')) from None
 
 
-def create_node(name):
-    return CdrNode(name)
+# --ros-args of the process, as runtime/ros_args.py reads them (init; else sys.argv's, as rclpy).
+_ros_args = None
 
 
-class CdrNode(rclpy.node.Node):
+class Node(rclpy.node.Node):
     """
     rclpy's Node, moving messages of cdr's plain classes as serialized bytes.
 
-    Any other message class (rclpy's own) takes rclpy's usual path.
+    Any other message class (rclpy's own) takes rclpy's usual path. A parameter given (file or
+    -p) with another type than its declared default is a ParameterError (rcl's rule, the DDS
+    runtime's message).
     """
+
+    def declare_parameter(self, name, value=None, descriptor=None, ignore_override=False):
+        if not ignore_override:
+            given = parameter_overrides(self)
+            if name in given:
+                check_type(self.get_name(), name, value, given[name])
+        return super().declare_parameter(name, value, descriptor, ignore_override)
 
     def create_publisher(self, msg_type, topic, qos_profile, **kwargs):
         if not hasattr(msg_type, '__ros_type__'):
@@ -181,9 +198,17 @@ def descriptor(spec):
 
 
 def parameter_overrides(node):
-    """{name: value} of every parameter given to `node` (files, -p), declared or not."""
-    # rclpy keeps them in the node (rcl resolves files and -p rules); no public accessor exists.
-    return {name: parameter.value for name, parameter in node._parameter_overrides.items()}
+    """
+    {name: value} of every parameter given to `node` (files, -p), declared or not.
+
+    Read from the process's --ros-args by runtime/ros_args.py (rcl's rules, as the DDS runtime):
+    rclpy keeps its own reading in the node, with no public accessor.
+    """
+    global _ros_args
+    if _ros_args is None:  # rclpy.init was called by someone else: with sys.argv, by default
+        _ros_args = ros_args.parse(sys.argv, strict=False)[0]
+    return {name: value for name, (value, _) in ros_args.parameter_overrides(
+        _ros_args, node.get_fully_qualified_name()).items()}
 
 
 class WaitLoop:
@@ -206,6 +231,7 @@ class WaitLoop:
         self._shape = None
         self._wait_set = None
         self._entities = ((), (), (), (), ())
+        self._with_info = {}  # id(subscription) -> its callback takes (message, MessageInfo)
         self._next_slow = 0.0
 
     def _refresh(self):
@@ -225,6 +251,7 @@ class WaitLoop:
                 counts.num_clients, counts.num_services, counts.num_events,
                 node.context.handle)
             self._shape = shape
+            self._with_info = {id(s): _takes_info(s.callback) for s in subscriptions}
         self._entities = entities
 
     def once(self, timeout_sec):
@@ -284,24 +311,33 @@ class WaitLoop:
             if waitable.is_ready(wait_set):
                 _run_to_completion(waitable.execute(waitable.take_data()))
 
-    @staticmethod
-    def _serve_subscriptions(subscriptions):
+    def _serve_subscriptions(self, subscriptions):
         for _ in range(_MAX_ROUNDS):
             full = False  # a full batch: that subscription may hold more, go round again
             for subscription in subscriptions:
+                with_info = self._with_info[id(subscription)]
                 for _ in range(_BATCH):
                     taken = subscription.handle.take_message(subscription.msg_type,
                                                              subscription.raw)
                     if taken is None:
                         break
-                    if subscription._callback_type is Subscription.CallbackType.MessageOnly:
-                        subscription.callback(taken[0])
-                    else:
+                    if with_info:
                         subscription.callback(*taken)
+                    else:
+                        subscription.callback(taken[0])
                 else:
                     full = True
             if not full:
                 return
+
+
+def _takes_info(callback):
+    """Whether a subscription's callback takes (message, MessageInfo): rclpy's own rule."""
+    try:
+        inspect.signature(callback).bind(object())
+        return False
+    except TypeError:
+        return True
 
 
 def _run_to_completion(coroutine):
@@ -332,5 +368,7 @@ def ok():
 
 
 def shutdown():
+    global _ros_args
     _loops.clear()
+    _ros_args = None
     rclpy.try_shutdown()
