@@ -2,7 +2,8 @@
 # The whole bellows graph on simulated hardware, plus a short scripted scenario.
 #
 #   scripts/launch_sim.sh [--no-scenario] [--duration S] [--output DIR] [--params FILE]
-#                         [--namespace NS] [-- extra --ros-args for every node]
+#                         [--namespace NS] [--record BAG] [--actuator-only]
+#                         [-- extra --ros-args for every node]
 #
 # Starts sim_arm_node (CAN over udp_multicast) and sim_actuator_node (serial on a pty), then
 # driver_node, model_node, stiffness_controller_node and arm_controller_node, all in the background
@@ -10,7 +11,12 @@
 # tracking an angle sweep): it prints a summary and writes DIR/scenario.png and .csv, and the
 # graph is stopped. With --no-scenario the graph runs until Ctrl-C. With --namespace NS every node
 # runs in /NS (its topics under /NS/...), so graphs in different namespaces run side by side,
-# each with its own pty and CAN group. Every process is stopped on
+# each with its own pty and CAN group. With --record BAG, `bellows record` writes the devices'
+# samples (/joint_states, /bellows/chambers, /bellows/wrench) to the rosbag2 directory BAG while
+# the graph runs (root namespace only; docs/workflow.md). With --actuator-only the arm's nodes
+# (sim_arm_node, model_node, arm_controller_node) are left out and the actuator path runs
+# SCHED_FIFO as the arm's does (a lighter graph whose recording keeps every sample on a busy
+# machine; the scenario's angle part then reports no samples). Every process is stopped on
 # exit, Ctrl-C or error (trap). Works from a checkout, a pip install and a colcon install (the
 # executables are found as `ros2 run` finds them). DDS discovery stays on this host.
 set -euo pipefail
@@ -26,6 +32,8 @@ output="$here/out/scenario"
 duration=40.0
 scenario=1
 namespace=''
+record=''
+arm=1
 extra=()
 while [ $# -gt 0 ]; do
   case "$1" in
@@ -35,7 +43,9 @@ while [ $# -gt 0 ]; do
     --params) params="$2"; shift ;;
     --) shift; extra=("$@"); break ;;
     --namespace) namespace="$2"; shift ;;
-    -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
+    --record) record="$2"; shift ;;
+    --actuator-only) arm=0 ;;
+    -h|--help) sed -n '2,23p' "$0"; exit 0 ;;
     *) echo "launch_sim.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
   shift
@@ -48,6 +58,10 @@ case "$duration" in
 esac
 [ -f "$params" ] || { echo "launch_sim.sh: --params '$params': no such file" >&2; exit 2; }
 namespace=${namespace#/}
+if [ -n "$record" ]; then
+  [ -z "$namespace" ] || { echo "launch_sim.sh: --record records the root namespace; drop --namespace" >&2; exit 2; }
+  [ ! -e "$record" ] || { echo "launch_sim.sh: --record '$record': already exists (a bag is a new directory)" >&2; exit 2; }
+fi
 if [ -n "$namespace" ] && ! [[ "$namespace" =~ ^[A-Za-z][A-Za-z0-9_]*(/[A-Za-z][A-Za-z0-9_]*)*$ ]]; then
   echo "launch_sim.sh: --namespace '$namespace': expected a ROS name such as arm_a" >&2; exit 2
 fi
@@ -73,9 +87,10 @@ cat >"$overrides.tmp" <<YAML
 /**/sim_arm_node:
   ros__parameters: {can: {channel: '$group'}}
 /**/sim_actuator_node:
-  ros__parameters: {port: '$port'}
+  ros__parameters: {port: '$port'$( [ "$arm" = 1 ] || echo ', realtime_priority: 60')}
 /**/driver_node:
-  ros__parameters: {autostart: true, arm: {channel: '$group'}, actuator: {port: '$port'}}
+  ros__parameters: {autostart: true, arm: {channel: '$group'$( [ "$arm" = 1 ] || echo ', enabled: false')}, actuator: {port: '$port'}}
+$( [ "$arm" = 1 ] || printf '%s\n  %s' '/**/stiffness_controller_node:' 'ros__parameters: {realtime_priority: 50}')
 /**/scenario_node:
   ros__parameters: {duration: $duration, output_dir: '$output'}
 YAML
@@ -95,15 +110,21 @@ start() {  # start NAME ARGS...: a node in the background, log in $output/logs/N
   echo "launch_sim: $1 (pid $!)" >&2
 }
 
-start sim_arm_node
+[ "$arm" = 1 ] && start sim_arm_node
 start sim_actuator_node
 for _ in $(seq 50); do [ -e "$port" ] && break; sleep 0.1; done
 nodes_alive launch_sim
 # The driver is a managed node: autostart (launch_parameters.yaml) configures and activates it.
 start driver_node
-start model_node
+[ "$arm" = 1 ] && start model_node
 start stiffness_controller_node
-start arm_controller_node
+[ "$arm" = 1 ] && start arm_controller_node
+if [ -n "$record" ]; then
+  "$bin/bellows" record --output "$record" --topics /joint_states /bellows/chambers \
+    /bellows/wrench >"$node_logs/record.log" 2>&1 &
+  pids+=($!)
+  echo "launch_sim: bellows record -> $record (pid $!)" >&2
+fi
 sleep 3
 nodes_alive launch_sim
 

@@ -101,6 +101,15 @@ CASES = [
     ('reindex missing', 'missing'),
     ('reindex r.csv', 'r.csv'),
     ('bench --only no_such_bench', 'no_such_bench'),
+    ('export actuator r.csv', '--output'),
+    ('export actuator r.csv --output r.csv', 'input of this command'),
+    ('export actuator missing --output o.csv', 'missing'),
+    ('export segment r.csv --output o.csv', 'r.csv'),
+    ('stiffness missing.csv', 'missing.csv'),
+    ('stiffness r.csv --window abc', '--window'),
+    ('stiffness r.csv --window -1', 'window'),
+    ('stiffness r.csv', 'no window'),
+    ('stiffness r.csv --params missing.yaml', 'missing.yaml'),
 ]
 
 

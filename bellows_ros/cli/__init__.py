@@ -31,6 +31,8 @@ SUBCOMMANDS = {
     'bench': 'benchmarks: medians and ratios against a reference measured in the same run',
     'record': 'record the bellows topics to a rosbag2 (MCAP) without ROS',
     'reindex': 'rebuild what readers need in a recording that was killed (ros2 bag reindex)',
+    'export': "a recording's data table (segment or actuator) as CSV",
+    'stiffness': 'the actuator stiffness a record measured, per spring cycle',
 }
 
 

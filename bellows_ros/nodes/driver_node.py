@@ -18,7 +18,9 @@ driver_node: the arm on CAN and/or the actuator on serial, wired to the topic co
 One message per device sample and group (docs/interfaces.md): `/joint_states`, `/bellows/chambers`,
 and for the actuator's load cell `/bellows/wrench` (frame `actuator`, force.z = spring force). The
 devices' 1 kHz sampling is the clock: messages go out from the drivers' reader threads as each
-sample arrives, stamped with the node clock at arrival; there is no ROS timer at 1 kHz.
+sample arrives, stamped with the node clock at arrival (the actuator's: at the time the board
+took it, from the board's clock mapped onto the node clock, `sample_delivery.DeviceClock`, so a
+burst read after a stall keeps its 1 ms spacing); there is no ROS timer at 1 kHz.
 Commands (`/bellows/pressure_command`, `/actuator/motor_command`) pass through the hardware layer's
 safety limits (clamping, end stops, watchdogs).
 
@@ -63,6 +65,7 @@ from bellows_ros.errors import BellowsError
 from bellows_ros.hardware import actuator_board, arm_bus
 from bellows_ros.hardware.can_protocol import dbc_segments
 from bellows_ros.hardware.loop_timing import LoopStats
+from bellows_ros.hardware.sample_delivery import DeviceClock
 from bellows_ros.models.derivatives import rate
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime, run
@@ -310,6 +313,7 @@ class DriverNode(Node):
             raise BellowsError(f'driver_node: actuator board port {config.port} does not exist '
                                '(device absent? set actuator.port)')
         self.actuator_clock = SampleClock(1e-3)
+        self.actuator_stamps = DeviceClock()
         self.reports['actuator'] = diagnostics.LoopReport(self.actuator_clock.stats)
         self.diagnostics.add('actuator', lambda stat: self.diagnose_device('actuator', stat))
         self.actuator = actuator_board.ActuatorBoard(config, on_sample=self.on_actuator_sample)
@@ -404,7 +408,8 @@ class DriverNode(Node):
 
     def on_actuator_sample(self, sample):
         start = time.monotonic()
-        stamp = self.get_clock().now().to_msg()
+        stamp = self.runtime.Time(nanoseconds=self.actuator_stamps.stamp(
+            int(round(sample.t_device * 1e9)), self.get_clock().now().nanoseconds)).to_msg()
         state = self._header(self.msg.JointState(name=list(interfaces.ACTUATOR_JOINTS),
                                                  position=[sample.x_c, sample.x_s]), stamp)
         chambers = self._header(self.msg.JointState(name=[interfaces.ACTUATOR_CHAMBER],

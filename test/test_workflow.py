@@ -1,0 +1,259 @@
+# Copyright 2026 bellows_ros maintainers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The user's workflow end to end (docs/workflow.md), on a simulated actuator that is not the default.
+
+The device: paper B's actuator whose spring buckles earlier and loses more stiffness than
+config/actuator.yaml says (`actuator.buckling` stiffness_loss 4000 instead of 3091 N/m,
+critical_compression 30 instead of 62.5 mm, given to sim_actuator_node only), on a test machine
+that cycles the spring over 0-20 mm.
+The path, as a user runs it, on the node graph (sim_actuator_node, driver_node,
+stiffness_controller_node, scenario_node, `bellows record`):
+
+1. record a bag while the scenario steps the stiffness (controller on the default parameters);
+2. `bellows identify actuator` it (from the bag, and from the CSV `bellows export` makes of it);
+3. `bellows diagnose actuator` it with the identified parameters;
+4. start the nodes with the doctor's extended.yaml (`actuator_params` of the controller and the
+   scenario);
+5. the scenario holds one stiffness set-point: the stiffness the load cell measured
+   (`bellows stiffness`, no model involved) is compared with the set-point, with the default
+   parameters and with the extended ones, on the same device and the same scenario.
+
+The code gets only the records; the device's parameters are used to build it and nowhere else.
+"""
+import json
+import math
+import random
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+from runtimes import BIN, launch, logs, node_env, override, stop_all
+from test_doctor_bag import write_actuator_bag
+
+from bellows_ros.cli import main
+from bellows_ros.config.actuator import load_actuator, load_actuator_params
+from bellows_ros.data import read_table, write_csv
+from bellows_ros.hardware.sample_delivery import DeviceClock
+from bellows_ros.identify.measured_stiffness import measured_stiffness
+from bellows_ros.models.actuator import stiffness
+from bellows_ros.models.actuator_plant import ActuatorPlant
+from bellows_ros.models.stiffness_map import compression_for_stiffness
+
+DEVICE_YAML = """\
+/**:
+  ros__parameters:
+    actuator:
+      buckling:
+        stiffness_loss: 4000.0
+        critical_compression: 0.03
+"""
+EFFECTS = '[wall_bulging, buckling]'
+SPRING, PERIOD = 0.02, 4.0      # m, s: the test machine's spring motion
+K_LOW, K_SET = 1500.0, 1900.0   # N/m: the recorded step's start, and the set-point held
+RECORD_S, STEP_S, TRACK_S = 28.0, 4.0, 22.0
+SETTLE_S = 6.0                  # s: windows before this are not scored in a tracking run
+
+
+def bellows(*args, timeout=900):
+    """Run the `bellows` command; its finished process (stdout and stderr as text)."""
+    done = subprocess.run([str(BIN / 'bellows'), *map(str, args)], capture_output=True,
+                          text=True, timeout=timeout)
+    assert done.returncode == 0, (args, done.stdout[-2000:], done.stderr[-2000:])
+    return done
+
+
+def run_scenario(env, out, device, controller_params, k_low, k_high, step_time, duration,
+                 x_c0):
+    """
+    Run the actuator graph on `device` with the scenario and a recorder; return the bag.
+
+    The actuator path runs SCHED_FIFO (the simulated board above the driver above the controller,
+    as config/nodes_sim.yaml orders the arm's): at normal priority on the shared 2-core machine
+    the simulated board skipped ticks (a late tick steps the plant by the whole delay and sends
+    one sample), the record had 442 gaps of 10-139 ms in 31 s, and the doctor refuses gaps over
+    10 sampling intervals.
+    """
+    out.mkdir()
+    port = str(out / 'actuator')
+    sim = (override('sim_actuator_node', 'port', port)
+           + override('sim_actuator_node', 'actuator_params', device)
+           + override('sim_actuator_node', 'effects', EFFECTS)
+           + override('sim_actuator_node', 'x_c0', x_c0)
+           + override('sim_actuator_node', 'spring.amplitude', SPRING)
+           + override('sim_actuator_node', 'spring.period', PERIOD)
+           + override('sim_actuator_node', 'realtime_priority', 60))
+    controller = override('stiffness_controller_node', 'realtime_priority', 50)
+    scenario = (override('scenario_node', 'stiffness_low', k_low)
+                + override('scenario_node', 'stiffness_high', k_high)
+                + override('scenario_node', 'step_time', step_time)
+                + override('scenario_node', 'duration', duration)
+                + override('scenario_node', 'trajectory_start', 24 * 3600.0)
+                + override('scenario_node', 'output_dir', out))
+    if controller_params:  # rcl refuses `name:=` (an empty value): the default is left alone
+        controller += override('stiffness_controller_node', 'actuator_params', controller_params)
+        scenario += override('scenario_node', 'actuator_params', controller_params)
+    processes = [launch('sim_actuator_node', sim, env, out),
+                 launch('stiffness_controller_node', controller, env, out)]
+    bag = out / 'bag'
+    try:
+        time.sleep(1.0)
+        processes.append(launch('driver_node', override('driver_node', 'arm.enabled', 'false')
+                                + override('driver_node', 'actuator.port', port), env, out))
+        recorder = subprocess.Popen(
+            [str(BIN / 'bellows'), 'record', '--output', str(bag), '--topics', '/joint_states',
+             '/bellows/chambers', '/bellows/wrench'], env=env,
+            stdout=open(out / 'record.log', 'w'), stderr=subprocess.STDOUT)
+        processes.append(recorder)
+        time.sleep(2.0)
+        node = launch('scenario_node', scenario, env, out)
+        processes.append(node)
+        assert node.wait(timeout=duration + 120) == 0, logs(out)
+    finally:
+        stop_all(processes)
+    assert recorder.returncode == 0, logs(out)
+    return bag
+
+
+def stiffness_error(bag, k_set):
+    """RMS of measured stiffness minus `k_set` over the held spring cycles after SETTLE_S."""
+    params = load_actuator_params()
+    windows = [w for w in measured_stiffness(read_table(bag, 'actuator'), params.x_s_low,
+                                             params.x_s_high, PERIOD) if w.t >= SETTLE_S]
+    assert len(windows) >= 2, (bag, windows)
+    return (sum((w.k - k_set) ** 2 for w in windows) / len(windows)) ** 0.5, windows
+
+
+def identify_and_diagnose(data, out):
+    """Run steps 2 and 3 on `data` (bag or CSV); return report.json and extended.yaml."""
+    fitted, report = out / 'fitted.yaml', out / 'report'
+    bellows('identify', 'actuator', data, '--output', fitted, '--quiet')
+    load_actuator_params(str(fitted))  # the identified file loads as parameters
+    bellows('diagnose', 'actuator', data, '--params', fitted, '--report', report, '--quiet')
+    return json.loads((report / 'report.json').read_text()), report / 'extended.yaml'
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(1800)
+def test_record_identify_diagnose_extend_track(runtime, tmp_path, monkeypatch):
+    domain = str(random.randint(201, 230))
+    monkeypatch.setenv('ROS_DOMAIN_ID', domain)
+    env = node_env(runtime, ROS_DOMAIN_ID=domain)
+    device = tmp_path / 'device.yaml'
+    device.write_text(DEVICE_YAML)
+    default = load_actuator_params()
+
+    # 1. Record: the scenario's stiffness step, the controller on the default parameters.
+    bag = run_scenario(env, tmp_path / 'record', device, '', K_LOW, K_SET, STEP_S, RECORD_S,
+                       compression_for_stiffness(default, K_LOW))
+    # 2.-3. From the bag, and from the CSV of the same record.
+    csv = tmp_path / 'record.csv'
+    bellows('export', 'actuator', bag, '--output', csv)
+    extended = {}
+    for source, data in (('bag', bag), ('csv', csv)):
+        out = tmp_path / source
+        out.mkdir()
+        report, extended[source] = identify_and_diagnose(data, out)
+        assert 'buckling' in report['causes'], (source, report['causes'])
+        load_actuator_params(str(extended[source]))
+
+    # 4.-5. The same scenario on the same device: default, then extended parameters.
+    x_c0 = compression_for_stiffness(default, K_SET)
+    errors = {}
+    for name, params in (('default', ''), ('bag', extended['bag']), ('csv', extended['csv'])):
+        track = run_scenario(env, tmp_path / f'track_{name}', device, params, K_SET, K_SET,
+                             0.0, TRACK_S, x_c0)
+        errors[name] = stiffness_error(track, K_SET)
+    summary = {name: round(rms, 1) for name, (rms, _) in errors.items()}
+    print(f'stiffness error RMS at {K_SET:g} N/m [{runtime}]:', summary, file=sys.stderr)
+    for source in ('bag', 'csv'):
+        assert errors[source][0] < 0.5 * errors['default'][0], (summary, errors)
+
+
+def held_chamber_record(x_c, duration=9.0, dt=1e-3):
+    """Simulate a record (plant with sensor noise): chamber held at x_c, spring 0-20 mm."""
+    config = load_actuator()
+    plant = ActuatorPlant(config.model, config.plant, seed=3, x_c0=x_c)
+    rows = {name: [] for name in ('t', 'x_c', 'x_s', 'p', 'f')}
+    for i in range(int(round(duration / dt))):
+        x_s = 0.5 * SPRING * (1.0 - math.cos(2.0 * math.pi * i * dt / PERIOD))
+        sample = plant.step_nut(dt, x_c, x_s_imposed=x_s)
+        for name in rows:
+            rows[name].append(getattr(sample, name))
+    return {name: np.array(values) for name, values in rows.items()}, plant.params
+
+
+def test_stiffness_measured_from_the_load_cell_is_the_models(tmp_path, capsys):
+    default = load_actuator_params()
+    x_c = compression_for_stiffness(default, 1700.0)
+    record, truth = held_chamber_record(x_c)
+    table = tmp_path / 'held.csv'
+    write_csv(table, read_table_from(record), {})
+    assert main(['stiffness', str(table), '--setpoint', '1700']) == 0
+    out = capsys.readouterr().out
+    expected = stiffness(truth, x_c)  # the plant's own static physics, no effects
+    measured = [float(line.split('stiffness')[1].split()[0]) for line in out.splitlines()
+                if line.startswith('t ')]
+    assert len(measured) == 2, out
+    assert all(abs(k - expected) < 0.005 * expected for k in measured), (measured, expected)
+    assert 'RMS' in out.splitlines()[-1]
+
+
+def test_stiffness_refuses_a_record_without_a_held_cycle(tmp_path, capsys):
+    record, _ = held_chamber_record(0.0, duration=3.0)  # shorter than one spring period
+    table = tmp_path / 'short.csv'
+    write_csv(table, read_table_from(record), {})
+    assert main(['stiffness', str(table)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and 'short.csv' in err, err
+
+
+def test_export_writes_the_table_identify_reads(tmp_path):
+    record, _ = held_chamber_record(0.0, duration=1.0)
+    bag = tmp_path / 'bag'
+    write_actuator_bag(bag, record, every=2)
+    out = tmp_path / 'bag.csv'
+    assert main(['export', 'actuator', str(bag), '--output', str(out)]) == 0
+    from_bag, from_csv = read_table(bag, 'actuator'), read_table(out, 'actuator')
+    for name in ('t', 'x_c', 'x_s', 'p', 'f'):
+        assert np.allclose(from_bag[name], from_csv[name], rtol=1e-12, atol=1e-12), name
+    assert main(['export', 'actuator', str(bag), '--output', str(out)]) == 0  # replaced whole
+    assert main(['export', 'actuator', str(out), '--output', str(out)]) == 2  # never its input
+
+
+def read_table_from(record):
+    """Return `record` (name -> array) as a Table, for write_csv."""
+    from bellows_ros.table import Table
+    names = list(record)
+    return Table('record', names, record)
+
+
+def test_device_clock_stamps_a_burst_at_the_times_the_board_took_it():
+    clock, ms = DeviceClock(), 1_000_000
+    # 1 kHz samples; the reader stalls 18 ms at sample 10 and reads the backlog in a burst.
+    burst = [33 * ms + k * 50_000 for k in range(19)]
+    arrivals = [5 * ms + k * ms for k in range(10)] + burst
+    stamps = [clock.stamp(k * ms, t) for k, t in enumerate(arrivals)]
+    assert all(abs(b - a - ms) <= 200 for a, b in zip(stamps, stamps[1:])), stamps  # ns
+    assert stamps[0] == 5 * ms  # the least-delayed arrival sets the offset (+ 100 ppm drift)
+    # A device clock 50 ppm slow is followed (the offset rises by at most 100 ppm) ...
+    clock = DeviceClock()
+    stamps = [clock.stamp(k * ms, int(k * ms * 1.00005)) for k in range(0, 200_000, 50)]
+    assert abs(stamps[-1] - int(199_950 * ms * 1.00005)) < ms
+    # ... a restarted device (its clock back at 0) starts again, and stamps never go backwards.
+    assert clock.stamp(0, stamps[-1] + 7 * ms) == stamps[-1] + 7 * ms
+    assert clock.stamp(ms, stamps[-1] + 7 * ms) > stamps[-1] + 7 * ms
