@@ -282,3 +282,52 @@ def test_the_diagnostics_check_sees_a_status():
               "x = d.TimeStampStatus(now, name='latency')\n"
               'class G(d.DiagnosticTaskGroup):\n    pass\n')
     assert coded_statuses(source) == {'plant', 'latency', '<...>'}
+
+
+# Dated measurements live in docs/bench_log.md only. In the reference documents (README.md and
+# docs/*.md but the log) a date may appear only inside inline code (a parameter example) or as a
+# citation of a log entry: `docs/bench_log.md, YYYY-MM-DD` (more dates joined by `,` or `and`).
+BENCH_LOG = ROOT / 'docs' / 'bench_log.md'
+DATE = r'\d{4}-[01]\d-[0-3]\d'
+INLINE_CODE = re.compile(r'`[^`\n]*`')
+CITATION = re.compile(r'bench_log\.md,\s+(' + DATE + r'(?:(?:,\s+|,?\s+and\s+)' + DATE + r')*)')
+LOG_HEADING = re.compile(r'^#{2,3} (' + DATE + r'):', re.MULTILINE)
+
+
+def uncited_dates(text):
+    """Return the dates of `text` outside inline code and log citations, and the cited ones."""
+    text = INLINE_CODE.sub('', text)
+    cited = [date for match in CITATION.finditer(text) for date in re.findall(DATE, match[1])]
+    return re.findall(DATE, CITATION.sub('', text)), cited
+
+
+def reference_documents():
+    return [ROOT / 'README.md'] + sorted(
+        path for path in (ROOT / 'docs').glob('*.md') if path != BENCH_LOG)
+
+
+def test_reference_documents_carry_no_dated_measurement():
+    logged = set(LOG_HEADING.findall(BENCH_LOG.read_text(encoding='utf-8')))
+    found = []
+    for path in reference_documents():
+        loose, cited = uncited_dates(path.read_text(encoding='utf-8'))
+        found += [f'{path.relative_to(ROOT)}: {date} (move the measurement to docs/bench_log.md)'
+                  for date in loose]
+        found += [f'{path.relative_to(ROOT)}: cites docs/bench_log.md, {date}, not a log entry'
+                  for date in cited if date not in logged]
+    assert not found, '\n'.join(found)
+
+
+def test_the_dated_measurement_rule_sees_what_it_should():
+    assert uncited_dates('Runs of 2026-11-22 (host busy):') == (['2026-11-22'], [])
+    assert uncited_dates('### rclpy beside the DDS runtime (2026-11-23)') == (['2026-11-23'], [])
+    assert uncited_dates('`2026-01-01` strings') == ([], [])
+    assert uncited_dates('(numbers: docs/bench_log.md, 2026-11-22, 2026-11-23 and\n2026-11-24)') \
+        == ([], ['2026-11-22', '2026-11-23', '2026-11-24'])
+    assert uncited_dates('docs/bench_log.md, 2026-11-23; measured again 2026-11-25') \
+        == (['2026-11-25'], ['2026-11-23'])
+
+
+def test_the_bench_log_is_newest_first():
+    dates = LOG_HEADING.findall(BENCH_LOG.read_text(encoding='utf-8'))
+    assert dates and dates == sorted(dates, reverse=True), dates

@@ -24,7 +24,7 @@ rclpy imports, on rclpy (`graph.rclpy.*`):
 - `graph.rclpy.sim_above.*` (rclpy only): the simulated arm 10 above the host nodes, so it preempts
   them at every tick as a real arm never would. This was the bench's setting until that cost was
   measured: each tick of the stand-in, about 0.4 ms of CPU on this machine, then lands on the
-  host path (docs/nodes.md, "rclpy beside the DDS runtime");
+  host path (docs/bench_log.md, 2026-11-24, "where rclpy's tail came from");
 - `graph.normal.*`: every node at normal scheduling (config/nodes_sim.yaml, or a machine that does
   not grant real-time priority);
 - `graph.no_latency_limit.*`: normal scheduling, and no node holding the CPU latency limit the

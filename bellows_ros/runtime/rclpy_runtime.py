@@ -29,7 +29,7 @@ types, type hashes, QoS and graph entries as any rclpy node), but a message is e
 by runtime/cdr.py and handed to rclpy as bytes (`publish(bytes)`, `raw=True` subscriptions).
 `msg` holds cdr's plain classes. rclpy's conversion of each message between Python objects and C
 structs, then rmw_cyclonedds_cpp's introspection serializer, cost the model node more CPU per
-sample than its model (docs/nodes.md, "rclpy beside the DDS runtime").
+sample than its model (docs/bench_log.md, 2026-11-23).
 """
 import importlib
 import inspect
