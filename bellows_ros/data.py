@@ -132,8 +132,8 @@ def _split_rows(path, reader, required, skipped=0):
                             line=reader.line_num + skipped)
         rows.append(row)
         lines.append(reader.line_num + skipped)
-    if not rows:
-        raise DataError(path, 'no data rows after the header')
+    if not rows:  # line 2: where the first data row belongs (as read_chunks says it)
+        raise DataError(path, 'no data rows after the header', line=2)
     return header, rows, lines
 
 

@@ -243,7 +243,7 @@ def test_a_header_only_csv_gives_its_error_and_no_warning(tmp_path):
     path.write_text('t,x_c,x_s,p,f\n')
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter('always')
-        with pytest.raises(DataError, match=r'h\.csv: no data rows after the header'):
+        with pytest.raises(DataError, match=r'h\.csv:2: no data rows after the header'):
             data.read_table(path, 'actuator')
     assert [str(w.message) for w in caught] == []
 
@@ -256,7 +256,7 @@ def test_the_cli_prints_only_the_error_for_a_header_only_csv(tmp_path):
                              '--output', 'o.yaml', '--quiet'], cwd=tmp_path,
                             capture_output=True, text=True, timeout=120)
     assert result.returncode == 2
-    assert result.stderr == 'bellows identify: error: h.csv: no data rows after the header\n'
+    assert result.stderr == 'bellows identify: error: h.csv:2: no data rows after the header\n'
 
 
 @pytest.mark.parametrize('text, needle', [
