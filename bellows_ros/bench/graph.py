@@ -253,8 +253,9 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
     rates = [float(w['rate_hz']) for w in measured]
     p50 = [float(w['latency_p50_us']) * 1e-6 for w in measured]
     p99 = [float(w['latency_p99_us']) * 1e-6 for w in measured]
-    scheduling = {name.split(':')[0]: values.get('scheduling', '?')
-                  for name, values in final.items() if name.split(':')[0] in NODES}
+    # A node reports several statuses (one per concern); the one of its loop says how it ran.
+    scheduling = {name.split(':')[0]: values['scheduling'] for name, values in final.items()
+                  if name.split(':')[0] in NODES and 'scheduling' in values}
     arm = final.get('sim_arm_node: plant', {})
     arm_lateness = float(arm.get('lateness_p99_us', 'nan')) * 1e-6
     results = [Result(f'{prefix}.rate', statistics.median(rates) if rates else 0.0, 'Hz',
