@@ -53,6 +53,7 @@ import random
 from typing import NamedTuple
 
 from bellows_ros.errors import ParameterError
+from bellows_ros.models import effect_strengths
 from bellows_ros.models.actuator import (forward, gas_amount, p_ref_of_amount, scaled_buckling,
                                          scaled_bulging, total_volume, without_buckling,
                                          without_bulging)
@@ -174,22 +175,8 @@ def strengths_of(chosen):
 
 
 def with_strengths(chosen, strengths):
-    """
-    Return effects `chosen` ({name: {parameter: value}}) with new strengths {effect: value}.
-
-    0 switches an effect off; another value switches it on (its other parameters from the YAML,
-    filled in by `effect_parameters`) or changes its strength.
-    """
-    chosen = {name: dict(values) for name, values in chosen.items()}
-    for name, value in strengths.items():
-        if name not in STRENGTHS:
-            raise ParameterError(f"unknown actuator effect '{name}' (known: "
-                                 f"{', '.join(ACTUATOR_EFFECTS)})")
-        if value == 0.0:
-            chosen.pop(name, None)
-        else:
-            chosen[name] = {**chosen.get(name, {}), STRENGTHS[name]: float(value)}
-    return chosen
+    """Return effects `chosen` with new strengths {effect: value}, 0 = off (effect_strengths)."""
+    return effect_strengths.with_strengths(chosen, strengths, STRENGTHS, 'actuator')
 
 
 def model_params(params, chosen=None):

@@ -48,6 +48,7 @@ import math
 import numpy as np
 
 from bellows_ros.errors import ParameterError
+from bellows_ros.models import effect_strengths
 from bellows_ros.models.derivatives import rate
 from bellows_ros.models.segment import motion_torque, SegmentModel, SegmentOutput
 
@@ -260,15 +261,8 @@ class SegmentPlant:
 
     def effects_for(self, strengths):
         """Return the effects set now with new strengths, checked (ParameterError), not taken."""
-        effects = {name: dict(values) for name, values in self._pending.effects}
-        for name, value in strengths.items():
-            if name not in STRENGTHS:
-                raise ParameterError(f"segment effect '{name}' has no strength (known: "
-                                     f"{', '.join(STRENGTHS)})")
-            if value == 0.0:
-                effects.pop(name, None)
-            else:
-                effects[name] = {**effects.get(name, {}), STRENGTHS[name]: float(value)}
+        effects = effect_strengths.with_strengths(dict(self._pending.effects), strengths,
+                                                  STRENGTHS, 'segment')
         return self._effects_of(check_effects(effects), self._pending.model.carried_on)
 
     def reset(self, psi0=0.0):

@@ -50,6 +50,7 @@ from bellows_ros.config.hardware import actuator_board_config
 from bellows_ros.config.ranges import RANGES
 from bellows_ros.errors import ParameterError
 from bellows_ros.hardware.sim_actuator_board import SimActuatorBoard
+from bellows_ros.models import effect_strengths
 from bellows_ros.models.actuator_plant import (ACTUATOR_EFFECTS, ActuatorPlant, effect_parameters,
                                                STRENGTHS, strengths_of, with_strengths)
 from bellows_ros.nodes import diagnostics
@@ -60,7 +61,7 @@ from bellows_ros.runtime.parameters import Spec
 def _strength_spec(effect, key):
     # The physical range of the YAML's value (config/ranges.py), from 0 = off.
     rule = RANGES[f'actuator.effects.{effect}.{key}']
-    return Spec(f'effect.{effect}.{key}', math.nan,
+    return Spec(effect_strengths.parameter_name(effect, key), math.nan,
                 f'strength of the {effect} effect ({key}, {rule.unit}); 0 = off, nan = as effects '
                 'and actuator_params say', low=0.0, high=rule.high, read_only=False)
 
@@ -123,12 +124,7 @@ class SimActuatorNode(Node):
 
     def _strengths(self, values):
         """Return {effect: strength} of `effect.*` parameter values; nan = the start value."""
-        strengths = {}
-        for effect, key in STRENGTHS.items():
-            value = values.get(f'effect.{effect}.{key}')
-            if value is not None:
-                strengths[effect] = self.start_strengths[effect] if math.isnan(value) else value
-        return strengths
+        return effect_strengths.from_parameters(values, STRENGTHS, self.start_strengths)
 
     def parameter_problem(self, changes):
         """Say why the plant cannot take new strengths ('' when it can), e.g. no buckling YAML."""
@@ -172,7 +168,8 @@ class SimActuatorNode(Node):
                       end_stop_hits=str(self.end_stop_hits), t_plant=f'{self.plant.t:.3f}')
         # The effect strengths the plant steps with (taken at its last step: 0 = off).
         effects = self.plant.effects
-        values.update({f'effect.{effect}.{key}': format(effects.get(effect, {}).get(key, 0.0), 'g')
+        values.update({effect_strengths.parameter_name(effect, key):
+                       format(effects.get(effect, {}).get(key, 0.0), 'g')
                        for effect, key in STRENGTHS.items()})
         stat.update(values)
         return diagnostics.loop_summary(stat, rate, new_misses)

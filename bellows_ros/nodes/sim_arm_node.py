@@ -45,6 +45,7 @@ from bellows_ros.errors import BellowsError, ParameterError
 from bellows_ros.hardware.arm_bus import open_can
 from bellows_ros.hardware.can_protocol import dbc_segments
 from bellows_ros.hardware.sim_arm_bus import SimArmBus
+from bellows_ros.models import effect_strengths
 from bellows_ros.models.segment_plant import SEGMENT_EFFECTS, SegmentPlant, STRENGTHS
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime, run
@@ -60,7 +61,7 @@ _RANGE_OF = {'c_fp': ('segment.friction.c_fp', 0.0), 'c_psi0_p': ('segment.resto
 def _strength_spec(effect, key):
     name, low = _RANGE_OF[key]
     rule = RANGES[name]
-    return Spec(f'effect.{effect}.{key}', math.nan,
+    return Spec(effect_strengths.parameter_name(effect, key), math.nan,
                 f'strength of the {effect} effect on every segment ({key}, {rule.unit}); 0 = off, '
                 'nan = as effects and segment_params say', low=rule.low if low is None else low,
                 high=rule.high, read_only=False)
@@ -126,12 +127,7 @@ class SimArmNode(Node):
 
     def _strengths(self, values):
         """Return {effect: strength} of `effect.*` parameter values; nan = the start value."""
-        strengths = {}
-        for effect, key in STRENGTHS.items():
-            value = values.get(f'effect.{effect}.{key}')
-            if value is not None:
-                strengths[effect] = self.start_strengths[effect] if math.isnan(value) else value
-        return strengths
+        return effect_strengths.from_parameters(values, STRENGTHS, self.start_strengths)
 
     def parameter_problem(self, changes):
         """Say why the plants cannot take new strengths ('' when they can)."""
@@ -171,7 +167,7 @@ class SimArmNode(Node):
             values[f'segment_{i + 1}.psi'] = f'{plant.psi:.4f}'
         # The strengths the plants step with (taken at their last step: 0 = off).
         in_use = self.plants[0].strengths(in_use=True)
-        values.update({f'effect.{effect}.{key}': format(in_use[effect], 'g')
+        values.update({effect_strengths.parameter_name(effect, key): format(in_use[effect], 'g')
                        for effect, key in STRENGTHS.items()})
         stat.update(values)
         return diagnostics.loop_summary(stat, rate, new_misses)
