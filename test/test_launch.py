@@ -281,6 +281,11 @@ def test_two_namespaced_graphs_run_side_by_side(prefix, tmp_path, monkeypatch):
                                 str(tmp_path / 'b')], env=dict(env, BELLOWS_RUNTIME='dds'),
                                stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
     names = {'/arm_a': [], '/arm_b': [], '/': []}
+    actuator = {interfaces.ACTUATOR_JOINTS, (interfaces.ACTUATOR_CHAMBER,)}
+    arm_a = {(interfaces.segment_joint(1),),
+             (interfaces.chain_chamber(1, 1), interfaces.chain_chamber(1, 2))}
+    arm_b = {tuple(interfaces.segment_joint(i) for i in (1, 2)),
+             tuple(interfaces.chain_chamber(i, j) for i in (1, 2) for j in (1, 2))}
     monkeypatch.setenv('ROS_DOMAIN_ID', env['ROS_DOMAIN_ID'])
     dds_node.init([])
     try:
@@ -290,7 +295,9 @@ def test_two_namespaced_graphs_run_side_by_side(prefix, tmp_path, monkeypatch):
                 probe.create_subscription(msg.JointState, topic.resolved(namespace),
                                           lambda m, seen=seen: seen.append(tuple(m.name)), 1000)
         deadline = time.monotonic() + GUARD
-        while not (names['/arm_a'] and names['/arm_b']) and time.monotonic() < deadline:
+        # Until each graph's arm speaks (its actuator may come up seconds earlier on a busy host)
+        while not (set(names['/arm_a']) & arm_a and set(names['/arm_b']) & arm_b) \
+                and time.monotonic() < deadline:
             dds_node.spin_once(probe, timeout_sec=0.1)
         end = time.monotonic() + 3.0
         while time.monotonic() < end:
@@ -299,11 +306,6 @@ def test_two_namespaced_graphs_run_side_by_side(prefix, tmp_path, monkeypatch):
         dds_node.shutdown()
         _stop(graph_a)
         _stop(graph_b)
-    actuator = {interfaces.ACTUATOR_JOINTS, (interfaces.ACTUATOR_CHAMBER,)}
-    arm_a = {(interfaces.segment_joint(1),),
-             (interfaces.chain_chamber(1, 1), interfaces.chain_chamber(1, 2))}
-    arm_b = {tuple(interfaces.segment_joint(i) for i in (1, 2)),
-             tuple(interfaces.chain_chamber(i, j) for i in (1, 2) for j in (1, 2))}
     logs = '\n'.join(p.read_text()[-800:] for p in (tmp_path / 'b' / 'logs').glob('*.log'))
     assert len(names['/arm_a']) > 100 and len(names['/arm_b']) > 100, logs
     assert set(names['/arm_a']) <= arm_a | actuator and set(names['/arm_a']) & arm_a
