@@ -42,7 +42,7 @@ here: the controller feeds samples and reports the numbers on /diagnostics.
   as timed out, and the process is restarted for the next.
 - `LiveDoctor`: the three together, as the controller uses them.
 """
-from collections import deque
+from collections import deque, OrderedDict
 import math
 import multiprocessing
 import threading
@@ -66,6 +66,10 @@ PERSIST = 2         # updates in a row above the limit before the residual has l
 FIT_RATE = 50.0     # Hz of the block means the live diagnosis fits (leak and buckling are slow)
 STARTUP_BOUND = 120.0   # s a worker process may take to start (imports) before it is given up
 READY = 'ready'
+# Slots of the three messages of one sample (`LiveDoctor.put`), and how many incomplete samples
+# are kept before the oldest is given up (counted in `unpaired`).
+STATE, PRESSURE, FORCE = 0, 1, 2
+MAX_PENDING = 100
 
 
 class RingBuffer:
@@ -88,7 +92,7 @@ class RingBuffer:
         """Return ({column: array} of the samples appended after `count`, still held; count)."""
         with self._lock:
             end = self.count
-            start = max(count, end - self.capacity)
+            start = max(count, end - self.capacity, 0)
             index = np.arange(start, end) % self.capacity
             data = self._data[:, index]     # fancy indexing: a copy
         return dict(zip(self.columns, data)), end
@@ -317,7 +321,11 @@ class LiveDoctor:
     """
     The rolling comparison, the ring buffer and the worker, as the controller uses them.
 
-    `sample(t, x_c, x_s, p, f)` on the sample thread (its cost is counted: `cost_us`);
+    `put(stamp_ns, slot, value)` on the sample thread, for each of a sample's three messages
+    (STATE: (x_c, x_s), PRESSURE: p, FORCE: f) in any order: the sample goes into the buffer once
+    the three with its stamp are in (the pressure of one instant with the compression of the
+    same); `sample(t, x_c, x_s, p, f)` for a caller that has them together. Their cost is counted
+    (`cost_us`, per sample buffered);
     `update()` from a timer: the new samples into `health`, a diagnosis of the last `diagnosis_s`
     seconds submitted when the residual has left the floor (again every `rediagnose_s` while it
     stays out), a finished one collected into `verdict`. `verdict` is cleared when the residual
@@ -337,9 +345,31 @@ class LiveDoctor:
         self._read = 0
         self._submitted_at = None
         self._cost_s, self._cost_n, self._cost_max = 0.0, 0, 0.0
+        self._pending = OrderedDict()       # stamp (ns) -> [(x_c, x_s), p, f], incomplete
+        self.unpaired = 0
+
+    def put(self, stamp_ns, slot, value):
+        """Take one message of a sample on the sample thread (class docstring)."""
+        start = time.perf_counter()
+        entry = self._pending.get(stamp_ns)
+        if entry is None:
+            entry = self._pending[stamp_ns] = [None, None, None]
+            if len(self._pending) > MAX_PENDING:
+                self._pending.popitem(last=False)
+                self.unpaired += 1
+        entry[slot] = value
+        if entry[0] is not None and entry[1] is not None and entry[2] is not None:
+            del self._pending[stamp_ns]
+            (x_c, x_s), p, f = entry
+            self.buffer.append((stamp_ns * 1e-9, x_c, x_s, p, f))
+            self._cost_n += 1
+        cost = time.perf_counter() - start
+        self._cost_s += cost
+        if cost > self._cost_max:
+            self._cost_max = cost
 
     def sample(self, t, x_c, x_s, p, f):
-        """Take one sample on the sample thread: a row into the ring buffer, its cost counted."""
+        """Take one whole sample on the sample thread: a row into the ring buffer, counted."""
         start = time.perf_counter()
         self.buffer.append((t, x_c, x_s, p, f))
         cost = time.perf_counter() - start
@@ -349,7 +379,11 @@ class LiveDoctor:
             self._cost_max = cost
 
     def cost_us(self):
-        """Return (mean, max) µs the sample thread spent per sample since the last call."""
+        """
+        Return (mean µs per sample buffered, max µs of one call) since the last call.
+
+        The mean counts every call of `put` and `sample`, divided by the samples they buffered.
+        """
         mean = self._cost_s / self._cost_n * 1e6 if self._cost_n else math.nan
         worst = self._cost_max * 1e6 if self._cost_n else math.nan
         self._cost_s, self._cost_n, self._cost_max = 0.0, 0, 0.0
@@ -372,13 +406,15 @@ class LiveDoctor:
         due = self._submitted_at is None or now - self._submitted_at >= self.rediagnose_s
         if due and not self.worker.busy and self.health.floors is not None:
             window = self.buffer.last(int(self.diagnosis_s / self._dt()))
+            order = np.argsort(window['t'], kind='stable')   # completed in any order
+            window = {name: column[order] for name, column in window.items()}
             if self.worker.submit(diagnose_window, self.config, window, dict(self.health.floors)):
                 self._submitted_at = now
         return state
 
     def _dt(self):
         rows = self.buffer.last(100)
-        steps = np.diff(rows['t'])
+        steps = np.diff(np.sort(rows['t']))
         return float(np.median(steps)) if len(steps) else 1e-3
 
     def close(self):

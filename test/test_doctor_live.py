@@ -83,6 +83,22 @@ def test_ring_buffer_keeps_the_last_samples_in_order():
     assert len(ring.since(8)[0]['t']) == 0
 
 
+def test_the_three_messages_of_a_sample_are_joined_by_stamp_in_any_order():
+    doctor = live.LiveDoctor(CONFIG, rate=10.0)
+    doctor.put(2_000_000, live.PRESSURE, 1.2e5)
+    doctor.put(1_000_000, live.STATE, (0.01, 0.0))
+    doctor.put(2_000_000, live.FORCE, 3.0)
+    assert doctor.buffer.count == 0             # no sample has all three yet
+    doctor.put(2_000_000, live.STATE, (0.02, 0.001))
+    rows = doctor.buffer.last(5)
+    assert [list(rows[c]) for c in live.COLUMNS] == [[0.002], [0.02], [0.001], [1.2e5], [3.0]]
+    for k in range(live.MAX_PENDING + 1):       # halves that never complete are given up
+        doctor.put(10_000_000 + k, live.FORCE, 0.0)
+    assert doctor.unpaired == 2 and doctor.buffer.count == 1   # 1 ms and the first of these
+    mean_us, max_us = doctor.cost_us()
+    assert 0.0 < mean_us and 0.0 < max_us      # counted over every call, per sample buffered
+
+
 def test_a_healthy_run_stays_within_the_floor(healthy):
     health = live.ModelHealth(CONFIG.model, calibration=20.0, window=5.0)
     states = feed(health, healthy)

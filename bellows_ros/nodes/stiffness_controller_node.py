@@ -182,10 +182,12 @@ class StiffnessControllerNode(Node):
     def on_chambers(self, msg):
         if interfaces.ACTUATOR_CHAMBER in msg.name:
             self.pressure = msg.effort[msg.name.index(interfaces.ACTUATOR_CHAMBER)]
+            self.live.put(stamp_ns(msg.header.stamp), live.PRESSURE, self.pressure)
 
     def on_wrench(self, msg):
         if msg.header.frame_id == interfaces.ACTUATOR_FRAME:
             self.force = msg.wrench.force.z
+            self.live.put(stamp_ns(msg.header.stamp), live.FORCE, self.force)
 
     def on_joint_states(self, msg):
         chamber, spring = interfaces.ACTUATOR_JOINTS
@@ -197,6 +199,7 @@ class StiffnessControllerNode(Node):
         stamp = stamp_ns(msg.header.stamp)
         dt = 1e-3 if self._last_stamp is None else max(1e-6, (stamp - self._last_stamp) * 1e-9)
         self._last_stamp = stamp
+        self.live.put(stamp, live.STATE, (x_c, x_s))
         if self.pressure is None:
             self.counts['samples_without_pressure'] += 1
             return
@@ -204,8 +207,6 @@ class StiffnessControllerNode(Node):
         self._elapsed += dt
         if self.force is None:
             self.counts['samples_without_force'] += 1
-        else:
-            self.live.sample(stamp * 1e-9, x_c, x_s, self.pressure, self.force)
         if self.samples % self.control_every:
             return
         dt, self._elapsed = self._elapsed, 0.0
@@ -263,6 +264,7 @@ class StiffnessControllerNode(Node):
         stat.add('cost_per_sample_max_us', f'{max_us:.1f}')
         stat.add('update_ms', f'{self._health_update_ms:.2f}')
         stat.add('samples_without_force', self.counts['samples_without_force'])
+        stat.add('unpaired', self.live.unpaired)
         if self.live.buffer.count == 0:
             stat.summary(diagnostics.STALE, 'no samples with pressure and spring force (no '
                          'driver publishing /bellows/wrench?): not comparing')
