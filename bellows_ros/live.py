@@ -224,7 +224,10 @@ def _serve(connection):
     """Serve in the worker process: say it is ready, answer (job, function, args) until None."""
     connection.send(READY)
     while True:
-        request = connection.recv()
+        try:
+            request = connection.recv()
+        except EOFError:        # the node is gone
+            return
         if request is None:
             return
         job, function, args = request
