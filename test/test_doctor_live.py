@@ -239,3 +239,34 @@ def test_the_controllers_model_health_status_says_each_state(leaking):
                 'cost_per_sample_us', 'update_ms', 'diagnosis'):
         assert stat.get(key) is not None, key
     assert float(stat.get('ratio_p')) > float(stat.get('limit_p'))
+
+
+def stepping_run(seconds, effect, at):
+    """Return samples of the plant whose chamber a P loop steps between 24 and 30 mm every 4 s."""
+    plant = ActuatorPlant(CONFIG.model, CONFIG.plant, effects=['wall_bulging', 'buckling'],
+                          seed=2, x_c0=0.0244)
+    rows, x = [], 0.0244
+    for k in range(int(round(seconds / DT))):
+        t = k * DT
+        if abs(t - at) < DT / 2:
+            plant.set_strengths(dict([effect]))
+        target = 0.0244 if (t // 4) % 2 == 0 else 0.0304
+        s = plant.step(DT, max(-0.8, min(0.8, 400.0 * (target - x))), x_s_imposed=0.0)
+        x = plant.x_from_counts(s.encoder_counts)
+        rows.append((s.t, x, s.x_s, s.p, s.f))
+    return np.array(rows)
+
+
+def test_a_sensor_lag_switched_on_is_named_with_its_time_constant():
+    tau = 0.1
+    data = stepping_run(60.0, ('sensor_lag', tau), at=T_LEAK)
+    health = live.ModelHealth(CONFIG.model, calibration=20.0, window=5.0)
+    states = feed(health, data)
+    out = [t for t, s in states if s == 'out of floor']
+    assert out and min(out) > T_LEAK, states
+    # The force is not lagged: only the pressure leaves its floor.
+    assert health.values()['ratio_f'] < health.values()['limit_f']
+    verdict = live.diagnose_window(CONFIG, dict(zip(live.COLUMNS, data[-20000:].T)),
+                                   health.floors)
+    assert verdict['causes'] == ['sensor_lag'], verdict
+    assert 0.7 * tau < verdict['values']['sensor_lag']['time_constant'] < 1.3 * tau, verdict
