@@ -327,7 +327,8 @@ class LiveDoctor:
     `put(stamp_ns, slot, value)` on the sample thread, for each of a sample's three messages
     (STATE: (x_c, x_s), PRESSURE: p, FORCE: f) in any order: the sample goes into the buffer once
     the three with its stamp are in (the pressure of one instant with the compression of the
-    same); `sample(t, x_c, x_s, p, f)` for a caller that has them together. Their cost is counted
+    same); `sample(t, x_c, x_s, p, f)` for a caller that has them together. One thread at a time
+    (a node's callbacks in its default, mutually exclusive callback group). Their cost is counted
     (`cost_us`, per sample buffered);
     `update()` from a timer: the new samples into `health`, a diagnosis of the last `diagnosis_s`
     seconds submitted when the residual has left the floor (again every `rediagnose_s` while it

@@ -25,6 +25,7 @@ on; a WARN `model_health` naming air_leak must follow within DEADLINE s.
 
 Runs twice: the nodes on rclpy (`[rclpy]`) and on the DDS runtime (`[dds]`).
 """
+import os
 import random
 import time
 
@@ -42,13 +43,14 @@ pytestmark = pytest.mark.slow   # three node processes for ~2 min per runtime
 SETPOINTS = (2100.0, 2300.0)    # N/m: 2.5-6.5 kPa above ambient, the gas leaks out
 SWITCH = 4.0                    # s between set-point changes
 CALIBRATION = 20.0              # s: the controller's healthy window (model_health.calibration)
-HEALTHY = 30.0                  # s watched healthy after it
+# s watched healthy after it; BELLOWS_LIVE_DOCTOR_HEALTHY=600 for the issue's 10 min, by hand
+HEALTHY = float(os.environ.get('BELLOWS_LIVE_DOCTOR_HEALTHY', '30'))
 DEADLINE = 60.0                 # s from the leak's switch-on to the WARN naming it
 LEAK = '1e-11'                  # m³/(s·Pa), config/actuator.yaml's leak
 STATUS = 'stiffness_controller_node: model_health'
 
 
-@pytest.mark.timeout(400)
+@pytest.mark.timeout(370 + HEALTHY)
 def test_a_leak_set_mid_run_is_named_within_a_minute_and_no_warn_before(
         runtime, tmp_path, monkeypatch):
     params = load_actuator_params()
