@@ -270,3 +270,13 @@ def test_a_sensor_lag_switched_on_is_named_with_its_time_constant():
                                    health.floors)
     assert verdict['causes'] == ['sensor_lag'], verdict
     assert 0.7 * tau < verdict['values']['sensor_lag']['time_constant'] < 1.3 * tau, verdict
+
+
+def test_a_gas_amount_identified_a_little_off_is_not_a_fault(healthy):
+    """The healthy window's offset is the reference: a p_ref 300 Pa off stays within the floor."""
+    import dataclasses
+    off = dataclasses.replace(CONFIG.model, p_ref=CONFIG.model.p_ref + 300.0)
+    health = live.ModelHealth(off, calibration=20.0, window=5.0)
+    states = feed(health, healthy)
+    assert {s for t, s in states if t > 21.0} == {'healthy'}, states
+    assert abs(health.offsets['p']) > 10 * health.floors['p']   # the offset is really there
