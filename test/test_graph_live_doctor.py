@@ -46,7 +46,7 @@ CALIBRATION = 20.0              # s: the controller's healthy window (model_heal
 # s watched healthy after it; BELLOWS_LIVE_DOCTOR_HEALTHY=600 for the 10 min, by hand
 HEALTHY = float(os.environ.get('BELLOWS_LIVE_DOCTOR_HEALTHY', '30'))
 DEADLINE = 60.0                 # s from the leak's switch-on to the WARN naming it
-LEAK = '1e-11'                  # m³/(s·Pa), config/actuator.yaml's leak
+LEAK = '1.0e-11'                # m³/(s·Pa), config/actuator.yaml's leak
 STATUS = 'stiffness_controller_node: model_health'
 
 
