@@ -37,6 +37,7 @@ LAYERS = {
     'config': 2,
     'identify': 3, 'doctor': 3,                               # offline stack
     'hardware': 3, 'control': 4, 'nodes': 5, 'runtime': 5,   # online stack
+    'live': 4,                                # the bridge: the doctor live, for the nodes
     'bag_repair': 5,
     'bench': 6, 'demos': 6, 'cli': 6,
 }
@@ -153,6 +154,18 @@ def test_the_two_stacks_do_not_import_each_other():
                     for target in targets
                     if stack(source) and stack(target) and stack(source) != stack(target))
     assert across == []
+
+
+def test_the_online_stack_reaches_the_offline_one_only_through_the_live_doctor():
+    """The nodes reach the doctor through `bellows_ros.live` alone, and only the controller."""
+    graph = import_graph()
+    offline = {m for m in graph if m.count('.') and m.split('.')[1] in STACKS['offline']}
+    online = [m for m in graph if m.count('.') and m.split('.')[1] in STACKS['online']]
+    without_bridge = {m: t - {'bellows_ros.live'} for m, t in graph.items()}
+    assert [m for m in online if reachable(without_bridge, m) & offline] == []
+    users = sorted(m for m in online if 'bellows_ros.live' in graph[m])
+    assert users == ['bellows_ros.nodes.stiffness_controller_node']
+    assert reachable(graph, 'bellows_ros.live') & offline    # the rule is not vacuous
 
 
 def test_layers_import_only_downward():

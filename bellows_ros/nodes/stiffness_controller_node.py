@@ -31,21 +31,33 @@ the rising branch (`models.stiffness_map`), logs it and its range at start, refu
 outside the range (error, previous target kept) and warns when a leak pushes the held set-point
 out of it; /diagnostics carries branch, range and warning.
 
+The doctor live (docs/doctor.md, `bellows_ros.live`): every sample (x_c, x_s from /joint_states,
+the pressure, the spring force from /bellows/wrench) goes into a ring buffer; once a second the
+residuals of the model at its identified gas amount (measured pressure and force minus (17),
+(7)-(12)) are compared with their noise floors, taken from the first `model_health.calibration`
+seconds, and reported as `model_health` on /diagnostics. When they leave the floor, the doctor
+diagnoses the last `model_health.diagnosis_window` seconds in a separate process (one at a time,
+killed after `model_health.time_bound` s) and the status turns WARN naming the cause and its
+fitted size. The sample callback only appends a row; its cost is counted (`cost_per_sample_us`).
+
 Parameters: actuator_params (str: YAML over config/actuator.yaml), pd.kp (1/m), pd.kd (s/m),
 pd.velocity_cutoff (Hz), pd.duty_max, pd.deadband (m), gas_time_constant (s),
 control_every (samples per control step), target_every (control steps between re-computations
 of x_c* from the gas estimate), publish_every,
-initial_stiffness (N/m; 0 = hold still until the first set-point), realtime_priority (SCHED_FIFO
+initial_stiffness (N/m; 0 = hold still until the first set-point), model_health.calibration,
+model_health.window, model_health.diagnosis_window, model_health.time_bound,
+model_health.rediagnose (s: the doctor live), realtime_priority (SCHED_FIFO
 priority 1-99 for the node's threads; 0 = normal scheduling), cpu_latency_limit (s: CPU wake-up
 latency held while the node runs, 0 = idle CPUs poll, negative = off; runtime/realtime.py).
 The PD gains, gas_time_constant, control_every, target_every and publish_every are live: `ros2
 param set` takes effect at the next control step (`on_parameters`); the others are read-only.
 """
 import dataclasses
+import math
 import time
 
-from bellows_ros import interfaces
-from bellows_ros.config.actuator import load_actuator_params
+from bellows_ros import interfaces, live
+from bellows_ros.config.actuator import load_actuator
 from bellows_ros.control.pd import PDController, PDGains
 from bellows_ros.control.stiffness import StiffnessSetpoint
 from bellows_ros.errors import BellowsError
@@ -78,6 +90,17 @@ PARAMETERS = (
          read_only=False),
     Spec('initial_stiffness', 0.0, 'stiffness held from the start, N/m (0 = hold still until '
          'the first set-point)', low=0.0, high=1e6),
+    # The doctor live (bellows_ros.live): read once at start.
+    Spec('model_health.calibration', 20.0, 'first seconds of samples taken as healthy: noise '
+         'floors and limits of the model residuals, s', low=5.0, high=3600.0),
+    Spec('model_health.window', 5.0, 'rolling window of the residual RMS, s', low=0.5,
+         high=600.0),
+    Spec('model_health.diagnosis_window', 20.0, 'last seconds the doctor diagnoses when the '
+         'residual leaves its floor, s', low=5.0, high=600.0),
+    Spec('model_health.time_bound', 30.0, 'longest a diagnosis may run before it is killed, s',
+         low=1.0, high=600.0),
+    Spec('model_health.rediagnose', 10.0, 'seconds between diagnoses while the residual stays '
+         'out of its floor', low=0.0, high=3600.0),
 )
 
 
@@ -93,7 +116,16 @@ class StiffnessControllerNode(Node):
         self.publish_every, initial = given['publish_every'], given['initial_stiffness']
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
-        self.setpoint = StiffnessSetpoint(load_actuator_params(actuator_params), gas_time_constant)
+        config = load_actuator(actuator_params)
+        self.setpoint = StiffnessSetpoint(config.model, gas_time_constant)
+        self.live = live.LiveDoctor(
+            config, calibration=given['model_health.calibration'],
+            window=given['model_health.window'],
+            diagnosis_s=given['model_health.diagnosis_window'],
+            time_bound=given['model_health.time_bound'],
+            rediagnose_s=given['model_health.rediagnose'])
+        self.force = None
+        self._health_update_ms = math.nan
         self.pd = PDController(gains)
         k_low, k_high = self.setpoint.range()
         x_low, x_high = self.setpoint.branch()
@@ -107,7 +139,8 @@ class StiffnessControllerNode(Node):
         self.samples = 0
         self._last_stamp = None
         self._elapsed = 0.0  # s since the last control step
-        self.counts = dict.fromkeys(['rejected_setpoints', 'samples_without_pressure'], 0)
+        self.counts = dict.fromkeys(['rejected_setpoints', 'samples_without_pressure',
+                                     'samples_without_force'], 0)
         self.stats = LoopStats()
         self.report = diagnostics.LoopReport(self.stats)
 
@@ -116,9 +149,11 @@ class StiffnessControllerNode(Node):
         self.subscription(interfaces.STIFFNESS_SETPOINT, self.on_setpoint)
         self.subscription(interfaces.CHAMBERS, self.on_chambers)
         self.subscription(interfaces.JOINT_STATES, self.on_joint_states)
+        self.subscription(interfaces.WRENCH, self.on_wrench)
         self.diagnostics = diagnostics.Updater(self)
         self.diagnostics.setHardwareID('none')  # software: the driver reports the devices
         self.diagnostics.add('control', self.diagnose_control)
+        self.diagnostics.add('model_health', self.diagnose_model_health)
 
     # --- live parameters (ros2 param set): from the next control step -------------------------
     def on_parameters(self, changed):
@@ -147,6 +182,12 @@ class StiffnessControllerNode(Node):
     def on_chambers(self, msg):
         if interfaces.ACTUATOR_CHAMBER in msg.name:
             self.pressure = msg.effort[msg.name.index(interfaces.ACTUATOR_CHAMBER)]
+            self.live.put(stamp_ns(msg.header.stamp), live.PRESSURE, self.pressure)
+
+    def on_wrench(self, msg):
+        if msg.header.frame_id == interfaces.ACTUATOR_FRAME:
+            self.force = msg.wrench.force.z
+            self.live.put(stamp_ns(msg.header.stamp), live.FORCE, self.force)
 
     def on_joint_states(self, msg):
         chamber, spring = interfaces.ACTUATOR_JOINTS
@@ -158,11 +199,14 @@ class StiffnessControllerNode(Node):
         stamp = stamp_ns(msg.header.stamp)
         dt = 1e-3 if self._last_stamp is None else max(1e-6, (stamp - self._last_stamp) * 1e-9)
         self._last_stamp = stamp
+        self.live.put(stamp, live.STATE, (x_c, x_s))
         if self.pressure is None:
             self.counts['samples_without_pressure'] += 1
             return
         self.samples += 1
         self._elapsed += dt
+        if self.force is None:
+            self.counts['samples_without_force'] += 1
         if self.samples % self.control_every:
             return
         dt, self._elapsed = self._elapsed, 0.0
@@ -201,6 +245,39 @@ class StiffnessControllerNode(Node):
             stat.summary(diagnostics.WARN, f'set-point out of reach: {self.setpoint.warning}')
         else:
             stat.summary(diagnostics.OK, f'controlling at {rate:.0f} Hz')
+        return stat
+
+    def diagnose_model_health(self, stat):
+        """Report the model's residuals against their floors; WARN with the doctor's verdict."""
+        started = time.perf_counter()
+        health = self.live.health
+        state = self.live.update()
+        self._health_update_ms = (time.perf_counter() - started) * 1e3
+        mean_us, max_us = self.live.cost_us()
+        for key, value in health.values().items():
+            stat.add(key, value if isinstance(value, str) else f'{value:.6g}')
+        verdict = self.live.verdict
+        stat.add('diagnosis', live.describe(verdict) if health.out_of_floor else 'none')
+        stat.add('diagnosis_s', f"{verdict['seconds']:.2f}" if verdict else 'nan')
+        stat.add('diagnoses', self.live.diagnoses)
+        stat.add('cost_per_sample_us', f'{mean_us:.2f}')
+        stat.add('cost_per_sample_max_us', f'{max_us:.1f}')
+        stat.add('update_ms', f'{self._health_update_ms:.2f}')
+        stat.add('samples_without_force', self.counts['samples_without_force'])
+        stat.add('unpaired', self.live.unpaired)
+        if self.live.buffer.count == 0:
+            stat.summary(diagnostics.STALE, 'no samples with pressure and spring force (no '
+                         'driver publishing /bellows/wrench?): not comparing')
+        elif state == 'calibrating':
+            stat.summary(diagnostics.OK, 'calibrating: taking the noise floors of the first '
+                         f'{health.calibration:g} s')
+        elif health.out_of_floor:
+            worst = max(live.OUTPUTS, key=lambda n: health.ratios[n] / health.limits[n])
+            stat.summary(diagnostics.WARN, f'model residual {health.ratios[worst]:.1f} x its '
+                         f'noise floor ({worst}, limit {health.limits[worst]:.1f}): '
+                         f'{live.describe(verdict)}')
+        else:
+            stat.summary(diagnostics.OK, 'model within its noise floor')
         return stat
 
 

@@ -1,0 +1,440 @@
+# Copyright 2026 bellows_ros maintainers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The doctor live (docs/doctor.md): model against measurement, rolling; a diagnosis off the thread.
+
+A rolling comparison of model and measurement, and a diagnosis of the last window, in bounded
+time, off the sample thread, when the residual leaves its floor.
+
+The bridge between the two stacks (test_import_layers): the one module of the package through
+which the online stack (the stiffness controller) reaches the offline one (the doctor). No ROS
+here: the controller feeds samples and reports the numbers on /diagnostics.
+
+- `RingBuffer`: the last samples (t, x_c, x_s, p, f: the actuator's columns, `table.COLUMNS`),
+  preallocated; `append` is all the sample thread does (a lock and one column write).
+- `ModelHealth`: the residuals of paper B's model at the identified gas amount, measured pressure
+  minus (17) at the measured (x_c, x_s), and measured spring force minus (7)-(12) on that
+  pressure. A leak makes the pressure residual drift; a sensor lag makes it follow the rate;
+  buckling shows in the force. The first `calibration` seconds are taken as healthy: they give
+  each output's noise floor (`actuator_causes.noise_floors`, the doctor's), its residual offset
+  (an identified gas amount a little off is not a fault) and the largest RMS-over-floor ratio
+  any `window` of it showed; the limit is `MARGIN` times that ratio, at least `LIMIT_MIN`. Every
+  update, each output's RMS of (residual - offset) over the last `window` s, over its floor, is
+  its ratio; the residual has left the floor when a ratio is above its limit `PERSIST` updates in
+  a row. Nothing is taken from a device's nominal numbers.
+- `diagnose_window`: the doctor (`diagnosis.diagnose`) on block means of the last window with the
+  healthy window's noise floors, over the causes that develop in service (`LIVE_CAUSES`).
+- `DiagnosisWorker`: runs `diagnose_window` in a separate process (spawned: no fork of a process
+  holding DDS threads; a process, not a thread, so the fit does not take the interpreter lock
+  from the 1 kHz callback), one job at a time; a job over its time bound is killed, reported
+  as timed out, and the process is restarted for the next.
+- `LiveDoctor`: the three together, as the controller uses them.
+"""
+from collections import deque, OrderedDict
+import math
+import multiprocessing
+import threading
+import time
+
+import numpy as np
+
+from bellows_ros.doctor import actuator_causes, diagnosis
+from bellows_ros.models.actuator import evaluate_array
+from bellows_ros.table import COLUMNS as TABLE_COLUMNS
+
+COLUMNS = TABLE_COLUMNS['actuator'][0]   # t, x_c, x_s, p, f
+OUTPUTS = ('p', 'f')
+# Causes that develop while the actuator runs (a leak opens, a sensor's port clogs, the spring
+# starts to buckle); the others (wall bulging, heat exchange, backlash) belong to the build and
+# are the offline doctor's (`bellows diagnose`).
+LIVE_CAUSES = ('air_leak', 'sensor_lag', 'buckling')
+LIMIT_MIN = 3.0     # the limit of the RMS-over-floor ratio is never below this ...
+MARGIN = 2.0        # ... nor below this times the largest ratio of the healthy window
+PERSIST = 2         # updates in a row above the limit before the residual has left the floor
+FIT_RATE = 50.0     # Hz of the block means the live diagnosis fits (leak and buckling are slow)
+STARTUP_BOUND = 120.0   # s a worker process may take to start (imports) before it is given up
+READY = 'ready'
+# Slots of the three messages of one sample (`LiveDoctor.put`), and how many incomplete samples
+# are kept before the oldest is given up (counted in `unpaired`).
+STATE, PRESSURE, FORCE = 0, 1, 2
+MAX_PENDING = 100
+
+
+class RingBuffer:
+    """The last `capacity` samples of `columns`; `append` in O(1), copies in order."""
+
+    def __init__(self, capacity, columns=COLUMNS):
+        self.columns = tuple(columns)
+        self.capacity = int(capacity)
+        self._data = np.zeros((len(self.columns), self.capacity))
+        self.count = 0                      # samples appended since the start
+        self._lock = threading.Lock()
+
+    def append(self, row):
+        """One sample, its values in `columns` order."""
+        with self._lock:
+            self._data[:, self.count % self.capacity] = row
+            self.count += 1
+
+    def since(self, count):
+        """Return ({column: array} of the samples appended after `count`, still held; count)."""
+        with self._lock:
+            end = self.count
+            start = max(count, end - self.capacity, 0)
+            index = np.arange(start, end) % self.capacity
+            data = self._data[:, index]     # fancy indexing: a copy
+        return dict(zip(self.columns, data)), end
+
+    def last(self, n):
+        """Return {column: array} of the last `n` samples (fewer if not yet held), a copy."""
+        return self.since(self.count - int(n))[0]
+
+
+def residuals(params, rows):
+    """Return ({output: measured - model}) of paper B's model at its gas amount over `rows`."""
+    p_model, f_model, _ = evaluate_array(params, rows['x_c'], rows['x_s'])
+    return {'p': rows['p'] - p_model, 'f': rows['f'] - f_model}
+
+
+class ModelHealth:
+    """
+    The rolling comparison of model and measurement (module docstring).
+
+    `update(rows)` takes the new samples ({column: array}); `values()` the numbers to report.
+    `state`: 'calibrating', 'healthy' or 'out of floor'.
+    """
+
+    def __init__(self, params, calibration=20.0, window=5.0):
+        self.params = params
+        self.calibration, self.window = float(calibration), float(window)
+        self.floors = None                  # {output: noise floor} of the healthy window
+        self.offsets = None                 # {output: mean residual} of the healthy window
+        self.limits = None                  # {output: limit of the ratio}
+        self.healthy_ratio = None           # {output: largest ratio of the healthy window}
+        self.ratios = {name: math.nan for name in OUTPUTS}
+        self.rms = {name: math.nan for name in OUTPUTS}
+        self.above = 0                      # updates in a row above the limit
+        self._chunks = deque()              # (t, {output: residual}, {column: raw}) chunks
+        self._calibration_rows = []
+        self.state = 'calibrating'
+
+    @property
+    def out_of_floor(self):
+        return self.state == 'out of floor'
+
+    def update(self, rows):
+        """Take new samples; return the state."""
+        if len(rows['t']) == 0:
+            return self.state
+        residual = residuals(self.params, rows)
+        if self.floors is None:
+            self._calibration_rows.append((rows, residual))
+            t0 = self._calibration_rows[0][0]['t'][0]
+            if rows['t'][-1] - t0 >= self.calibration:
+                self._calibrate()
+            return self.state
+        self._chunks.append((rows['t'], residual))
+        t_end = rows['t'][-1]
+        while self._chunks and self._chunks[0][0][-1] < t_end - self.window:
+            self._chunks.popleft()
+        t = np.concatenate([c[0] for c in self._chunks])
+        keep = t >= t_end - self.window
+        for name in OUTPUTS:
+            r = np.concatenate([c[1][name] for c in self._chunks])[keep] - self.offsets[name]
+            self.rms[name] = float(np.sqrt(np.mean(r ** 2)))
+            self.ratios[name] = self.rms[name] / self.floors[name]
+        over = any(self.ratios[n] > self.limits[n] for n in OUTPUTS)
+        self.above = self.above + 1 if over else 0
+        self.state = 'out of floor' if self.above >= PERSIST else 'healthy'
+        return self.state
+
+    def _calibrate(self):
+        rows = {c: np.concatenate([r[c] for r, _ in self._calibration_rows]) for c in COLUMNS}
+        residual = {n: np.concatenate([e[n] for _, e in self._calibration_rows]) for n in OUTPUTS}
+        self._calibration_rows = []
+        self.floors = actuator_causes.noise_floors(rows)
+        self.offsets = {n: float(np.mean(residual[n])) for n in OUTPUTS}
+        t = rows['t']
+        self.healthy_ratio, self.limits = {}, {}
+        for name in OUTPUTS:
+            centred = residual[name] - self.offsets[name]
+            worst = 0.0
+            for start in np.arange(t[0], t[-1] - self.window + 1e-9, self.window / 2):
+                part = centred[(t >= start) & (t < start + self.window)]
+                if len(part):
+                    worst = max(worst, float(np.sqrt(np.mean(part ** 2))) / self.floors[name])
+            self.healthy_ratio[name] = worst
+            self.limits[name] = max(LIMIT_MIN, MARGIN * worst)
+        self.state = 'healthy'
+
+    def values(self):
+        """{key: number} to report (nan before the healthy window is in)."""
+        out = {'state': self.state, 'window_s': self.window, 'calibration_s': self.calibration}
+        for name in OUTPUTS:
+            out[f'residual_rms_{name}'] = self.rms[name]
+            out[f'noise_floor_{name}'] = (self.floors or {}).get(name, math.nan)
+            out[f'ratio_{name}'] = self.ratios[name]
+            out[f'limit_{name}'] = (self.limits or {}).get(name, math.nan)
+        return out
+
+
+def block_means(rows, factor):
+    """Return block means of `factor` consecutive rows of every column (`Record.decimated`)."""
+    n = len(rows['t']) // factor * factor
+    return {name: np.asarray(column[:n], float).reshape(-1, factor).mean(axis=1)
+            for name, column in rows.items()}
+
+
+def diagnose_window(config, rows, floors, causes=LIVE_CAUSES):
+    """
+    Return the doctor's verdict on one window: {'causes', 'values', 'seconds', 'error'}.
+
+    `rows`: {column: array} at the full sample rate; `floors`: the healthy window's noise floors
+    (the window itself is not healthy). Fitted on block means at `FIT_RATE` Hz. A window the
+    doctor refuses (too short, the chamber never moves) gives the refusal as `error`.
+    """
+    started = time.perf_counter()
+    dt = float(np.median(np.diff(rows['t'])))
+    factor = max(1, int(round(1.0 / (dt * FIT_RATE))))
+    try:
+        result = diagnosis.diagnose('actuator', block_means(rows, factor), config,
+                                    causes=causes, source='live window',
+                                    raw_noise=floors, factor=factor)
+    except Exception as exc:   # reported, not raised: a live window may be anything
+        return {'causes': [], 'values': {}, 'seconds': time.perf_counter() - started,
+                'error': f'{type(exc).__name__}: {exc}'}
+    return {'causes': list(result.causes),
+            'values': {c: dict(result.values[c]) for c in result.causes},
+            'seconds': time.perf_counter() - started, 'error': None}
+
+
+def _serve(connection):
+    """Serve in the worker process: say it is ready, answer (job, function, args) until None."""
+    connection.send(READY)
+    while True:
+        try:
+            request = connection.recv()
+        except EOFError:        # the node is gone
+            return
+        if request is None:
+            return
+        job, function, args = request
+        connection.send((job, function(*args)))
+
+
+class DiagnosisWorker:
+    """
+    One diagnosis at a time in a spawned process, within `time_bound` s.
+
+    `submit(function, *args)` -> False if one is running; `poll()` -> a finished result (the
+    function's return value, or {'error': 'timed out ...'} after the bound), else None. The
+    bound counts from the moment the process is ready: a fresh process first imports the doctor
+    (`STARTUP_BOUND`).
+    """
+
+    def __init__(self, time_bound=30.0):
+        self.time_bound = float(time_bound)
+        self._context = multiprocessing.get_context('spawn')
+        self._process = self._connection = None
+        self._job, self._started = 0, None
+        self._ready = False
+
+    @property
+    def busy(self):
+        return self._started is not None
+
+    def submit(self, function, *args):
+        if self.busy:
+            return False
+        if self._process is None:
+            self._connection, child = self._context.Pipe()
+            self._process = self._context.Process(target=_serve, args=(child,), daemon=True,
+                                                  name='live_doctor')
+            self._process.start()
+            child.close()
+            self._ready = False
+        self._job += 1
+        self._connection.send((self._job, function, args))
+        self._started = time.monotonic()
+        return True
+
+    def poll(self):
+        if not self.busy:
+            return None
+        if not self._ready:
+            if self._connection.poll() and self._connection.recv() == READY:
+                self._ready, self._started = True, time.monotonic()
+            elif time.monotonic() - self._started > STARTUP_BOUND:
+                self._restart()
+                return {'causes': [], 'values': {}, 'seconds': math.nan,
+                        'error': f'worker did not start within {STARTUP_BOUND:g} s'}
+            else:
+                return None
+        if self._connection.poll():
+            try:
+                job, result = self._connection.recv()
+            except (EOFError, OSError) as exc:
+                self._restart()
+                return {'causes': [], 'values': {}, 'seconds': math.nan,
+                        'error': f'worker lost: {type(exc).__name__}'}
+            if job == self._job:
+                self._started = None
+                return result
+        elapsed = time.monotonic() - self._started
+        if elapsed > self.time_bound:
+            self._restart()
+            return {'causes': [], 'values': {}, 'seconds': elapsed,
+                    'error': f'timed out after {self.time_bound:g} s'}
+        return None
+
+    def _restart(self):
+        """Kill the process (the next `submit` starts another)."""
+        self._started = None
+        if self._process is not None:
+            self._process.kill()
+            self._process.join(5.0)
+            self._connection.close()
+        self._process = self._connection = None
+
+    def close(self):
+        if self._process is not None and not self.busy:
+            try:
+                self._connection.send(None)
+            except OSError:
+                pass
+            self._process.join(2.0)
+        if self._process is not None and self._process.is_alive():
+            self._restart()
+        self._process = self._connection = None
+
+
+class LiveDoctor:
+    """
+    The rolling comparison, the ring buffer and the worker, as the controller uses them.
+
+    `put(stamp_ns, slot, value)` on the sample thread, for each of a sample's three messages
+    (STATE: (x_c, x_s), PRESSURE: p, FORCE: f) in any order: the sample goes into the buffer once
+    the three with its stamp are in (the pressure of one instant with the compression of the
+    same); `sample(t, x_c, x_s, p, f)` for a caller that has them together. One thread at a time
+    (a node's callbacks in its default, mutually exclusive callback group). Their cost is counted
+    (`cost_us`, per sample buffered);
+    `update()` from a timer: the new samples into `health`, a diagnosis of the last `diagnosis_s`
+    seconds submitted when the residual has left the floor (again every `rediagnose_s` while it
+    stays out), a finished one collected into `verdict`. `verdict` is cleared when the residual
+    is back within its floor.
+    """
+
+    def __init__(self, config, calibration=20.0, window=5.0, diagnosis_s=20.0, time_bound=30.0,
+                 rediagnose_s=30.0, rate=1000.0, worker=None):
+        self.config = config
+        self.health = ModelHealth(config.model, calibration, window)
+        self.diagnosis_s, self.rediagnose_s = float(diagnosis_s), float(rediagnose_s)
+        self.buffer = RingBuffer(int((max(calibration, diagnosis_s) + 2 * window) * rate))
+        self.worker = worker or DiagnosisWorker(time_bound)
+        self.verdict = None                 # the last finished diagnosis while out of floor
+        self.diagnoses = 0
+        self.out_since = None               # sample time the residual left the floor
+        self._read = 0
+        self._submitted_at = None
+        self._cost_s, self._cost_n, self._cost_max = 0.0, 0, 0.0
+        self._pending = OrderedDict()       # stamp (ns) -> [(x_c, x_s), p, f], incomplete
+        self.unpaired = 0
+
+    def put(self, stamp_ns, slot, value):
+        """Take one message of a sample on the sample thread (class docstring)."""
+        start = time.perf_counter()
+        entry = self._pending.get(stamp_ns)
+        if entry is None:
+            entry = self._pending[stamp_ns] = [None, None, None]
+            if len(self._pending) > MAX_PENDING:
+                self._pending.popitem(last=False)
+                self.unpaired += 1
+        entry[slot] = value
+        if entry[0] is not None and entry[1] is not None and entry[2] is not None:
+            del self._pending[stamp_ns]
+            (x_c, x_s), p, f = entry
+            self.buffer.append((stamp_ns * 1e-9, x_c, x_s, p, f))
+            self._cost_n += 1
+        cost = time.perf_counter() - start
+        self._cost_s += cost
+        if cost > self._cost_max:
+            self._cost_max = cost
+
+    def sample(self, t, x_c, x_s, p, f):
+        """Take one whole sample on the sample thread: a row into the ring buffer, counted."""
+        start = time.perf_counter()
+        self.buffer.append((t, x_c, x_s, p, f))
+        cost = time.perf_counter() - start
+        self._cost_s += cost
+        self._cost_n += 1
+        if cost > self._cost_max:
+            self._cost_max = cost
+
+    def cost_us(self):
+        """
+        Return (mean µs per sample buffered, max µs of one call) since the last call.
+
+        The mean counts every call of `put` and `sample`, divided by the samples they buffered.
+        """
+        mean = self._cost_s / self._cost_n * 1e6 if self._cost_n else math.nan
+        worst = self._cost_max * 1e6 if self._cost_n else math.nan
+        self._cost_s, self._cost_n, self._cost_max = 0.0, 0, 0.0
+        return mean, worst
+
+    def update(self):
+        rows, self._read = self.buffer.since(self._read)
+        state = self.health.update(rows)
+        result = self.worker.poll()
+        if result is not None:
+            self.diagnoses += 1
+            if self.health.out_of_floor:
+                self.verdict = result
+        if not self.health.out_of_floor:
+            self.verdict = self.out_since = self._submitted_at = None
+            return state
+        now = time.monotonic()
+        if self.out_since is None:
+            self.out_since = float(rows['t'][-1]) if len(rows['t']) else math.nan
+        due = self._submitted_at is None or now - self._submitted_at >= self.rediagnose_s
+        if due and not self.worker.busy and self.health.floors is not None:
+            window = self.buffer.last(int(self.diagnosis_s / self._dt()))
+            order = np.argsort(window['t'], kind='stable')   # completed in any order
+            window = {name: column[order] for name, column in window.items()}
+            if self.worker.submit(diagnose_window, self.config, window, dict(self.health.floors)):
+                self._submitted_at = now
+        return state
+
+    def _dt(self):
+        rows = self.buffer.last(100)
+        steps = np.diff(np.sort(rows['t']))
+        return float(np.median(steps)) if len(steps) else 1e-3
+
+    def close(self):
+        self.worker.close()
+
+
+def describe(verdict):
+    """One line naming a verdict's causes with their fitted sizes (or why there is none)."""
+    if verdict is None:
+        return 'diagnosing'
+    if verdict.get('error'):
+        return f'no diagnosis: {verdict["error"]}'
+    if not verdict['causes']:
+        return 'no live cause explains it (' + ', '.join(LIVE_CAUSES) + ' tried)'
+    parts = []
+    for cause in verdict['causes']:
+        sizes = ', '.join(f'{k} {v:.3g}' for k, v in verdict['values'][cause].items())
+        parts.append(f'{cause} ({sizes})')
+    return ', '.join(parts)
