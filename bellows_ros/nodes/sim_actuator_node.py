@@ -48,12 +48,12 @@ import math
 from bellows_ros.config.actuator import load_actuator
 from bellows_ros.config.hardware import actuator_board_config
 from bellows_ros.config.ranges import RANGES
-from bellows_ros.errors import ParameterError
 from bellows_ros.hardware.sim_actuator_board import SimActuatorBoard
 from bellows_ros.models import effect_strengths
 from bellows_ros.models.actuator_plant import (ACTUATOR_EFFECTS, ActuatorPlant, effect_parameters,
                                                STRENGTHS, strengths_of, with_strengths)
 from bellows_ros.nodes import diagnostics
+from bellows_ros.nodes.live_effects import LiveEffectStrengths
 from bellows_ros.runtime import Node, realtime, run
 from bellows_ros.runtime.parameters import Spec
 
@@ -86,7 +86,8 @@ PARAMETERS = (
 )
 
 
-class SimActuatorNode(Node):
+class SimActuatorNode(LiveEffectStrengths, Node):
+    strength_table = STRENGTHS
 
     def __init__(self, **kwargs):
         super().__init__('sim_actuator_node', **kwargs)
@@ -101,7 +102,7 @@ class SimActuatorNode(Node):
         params, plant = load_actuator(actuator_params, hardware_params)
         chosen = effect_parameters(plant, effects)
         self.start_strengths = strengths_of(chosen)  # what nan stands for
-        chosen = with_strengths(chosen, self._strengths(given))
+        chosen = with_strengths(chosen, self.given_strengths(given))
         effects = list(chosen)
         self.plant = ActuatorPlant(params, plant, effects=chosen, seed=seed,
                                    x_c0=None if math.isnan(x_c0) else x_c0)
@@ -122,25 +123,9 @@ class SimActuatorNode(Node):
         self.get_logger().info(f'simulated actuator board on {self.board.port}, effects: '
                                f"{', '.join(effects) or 'none'}")
 
-    def _strengths(self, values):
-        """Return {effect: strength} of `effect.*` parameter values; nan = the start value."""
-        return effect_strengths.from_parameters(values, STRENGTHS, self.start_strengths)
-
-    def parameter_problem(self, changes):
-        """Say why the plant cannot take new strengths ('' when it can), e.g. no buckling YAML."""
-        try:
-            self.plant.effects_for(self._strengths(changes))
-        except ParameterError as error:
-            return str(error)
-        return ''
-
-    def on_parameters(self, changed):
-        """Hand new effect strengths to the plant: the board's loop takes them at its next step."""
-        strengths = self._strengths(changed)
-        if strengths:
-            self.plant.set_strengths(strengths)
-            on = ', '.join(f'{e} {v:g}' for e, v in self.plant.strengths().items() if v)
-            self.get_logger().info(f"effects from the next step: {on or 'none'}")
+    def effect_plants(self):
+        """Return the plant that takes live effect strengths."""
+        return [self.plant]
 
     def step(self, dt, duty):
         """Step the plant once (called by the board's 1 kHz loop)."""

@@ -41,13 +41,14 @@ import math
 
 from bellows_ros.config.ranges import RANGES
 from bellows_ros.config.segment import load_segment
-from bellows_ros.errors import BellowsError, ParameterError
+from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.arm_bus import open_can
 from bellows_ros.hardware.can_protocol import dbc_segments
 from bellows_ros.hardware.sim_arm_bus import SimArmBus
 from bellows_ros.models import effect_strengths
 from bellows_ros.models.segment_plant import SEGMENT_EFFECTS, SegmentPlant, STRENGTHS
 from bellows_ros.nodes import diagnostics
+from bellows_ros.nodes.live_effects import LiveEffectStrengths
 from bellows_ros.runtime import Node, realtime, run
 from bellows_ros.runtime.parameters import Spec
 
@@ -85,7 +86,8 @@ PARAMETERS = (
 )
 
 
-class SimArmNode(Node):
+class SimArmNode(LiveEffectStrengths, Node):
+    strength_table = STRENGTHS
 
     def __init__(self, **kwargs):
         super().__init__('sim_arm_node', **kwargs)
@@ -100,7 +102,7 @@ class SimArmNode(Node):
         self.plants = [SegmentPlant(params, plant, effects=effects, seed=seed + i)
                        for i in range(n_segments)]
         self.start_strengths = self.plants[0].strengths()  # what nan stands for
-        given_strengths = {effect: value for effect, value in self._strengths(given).items()
+        given_strengths = {effect: value for effect, value in self.given_strengths(given).items()
                            if value != self.start_strengths[effect]}
         if given_strengths:
             for segment in self.plants:
@@ -125,26 +127,9 @@ class SimArmNode(Node):
         self.get_logger().info(f'simulated arm ({n_segments} segments) on {self.link}, effects: '
                                f"{', '.join(effects) or 'none'}")
 
-    def _strengths(self, values):
-        """Return {effect: strength} of `effect.*` parameter values; nan = the start value."""
-        return effect_strengths.from_parameters(values, STRENGTHS, self.start_strengths)
-
-    def parameter_problem(self, changes):
-        """Say why the plants cannot take new strengths ('' when they can)."""
-        try:
-            self.plants[0].effects_for(self._strengths(changes))
-        except ParameterError as error:
-            return str(error)
-        return ''
-
-    def on_parameters(self, changed):
-        """Hand new strengths to every segment plant: the bus loop takes them at its next step."""
-        strengths = self._strengths(changed)
-        if strengths:
-            for plant in self.plants:
-                plant.set_strengths(strengths)
-            on = ', '.join(f'{e} {v:g}' for e, v in self.plants[0].strengths().items() if v)
-            self.get_logger().info(f"effect strengths from the next step: {on or 'none'}")
+    def effect_plants(self):
+        """Return the segment plants: every segment takes the same strengths."""
+        return self.plants
 
     def step(self, dt, setpoints):
         """One step of every segment plant with the valves' set-points (SimArmBus's 1 kHz loop)."""
