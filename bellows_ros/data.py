@@ -352,7 +352,7 @@ def read_record(path, system, required=None, per_chunk=None, max_rows=None):
         if per_chunk is not None:
             chunks.append(per_chunk(table))
         if factor == 1:
-            parts.append((table.values, list(table.lines), {}))
+            parts.append((table.values, list(table.lines)))
             continue
         values, lines_of = dict(table.values), np.asarray(table.lines)
         if pending is not None:
@@ -397,7 +397,7 @@ def _block_means(values, lines, starts, end):
     counts = np.diff(np.r_[starts, end])
     means = {name: np.add.reduceat(column[:end], starts) / counts
              for name, column in values.items()}
-    return means, [int(line) for line in lines[starts]], {}
+    return means, [int(line) for line in lines[starts]]
 
 
 def _check_chunk(table, system, required, last):
