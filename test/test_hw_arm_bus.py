@@ -106,6 +106,41 @@ def rig(request):
         thing.close()
 
 
+class StallingPattern(Pattern):
+    """`Pattern` whose plant stalls the simulated arm once for `stall` s, at instant 200."""
+
+    def __init__(self, stall):
+        super().__init__()
+        self.stall, self.dts = stall, []
+
+    def __call__(self, dt, setpoints):
+        self.dts.append(dt)
+        if len(self.dts) == 200:
+            time.sleep(self.stall)
+        return super().__call__(dt, setpoints)
+
+
+def test_a_stalled_arm_takes_every_sample_it_missed(rig):
+    # A late tick that stepped the plant by the whole delay and sent one row squeezed the delay
+    # into one sample period of the driver's time base (index x period).
+    channel = rig.channel
+    plant = StallingPattern(0.5)
+    sim = SimArmBus(can.Bus(interface='virtual', channel=channel), plant, N)
+    received = []
+    arm = ArmBus(dataclasses.replace(CONFIG, interface='virtual', channel=channel),
+                 on_sample=received.append)
+    sim.start()
+    try:
+        assert wait_for(lambda: len(plant.dts) > 1000, timeout=60.0)
+    finally:
+        sim.close()
+        arm.close()
+    assert max(plant.dts) < 1.5 * sim.period  # every plant step one sample period
+    assert check_stream(received) == 0
+    # The driver's index counts the instants: every one the plant stepped, less those in flight.
+    assert received[-1].index - received[0].index >= 0.9 * len(plant.dts)
+
+
 @pytest.mark.slow
 def test_corrupt_and_replayed_frames_never_reach_the_user(rig):
     received = []

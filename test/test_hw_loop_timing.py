@@ -23,7 +23,7 @@ import time
 import numpy as np
 import pytest
 
-from bellows_ros.hardware.loop_timing import LoopStats, PeriodicLoop
+from bellows_ros.hardware.loop_timing import CATCH_UP_S, device_steps, LoopStats, PeriodicLoop
 
 
 def test_stats_percentiles_and_misses():
@@ -75,3 +75,10 @@ def test_slow_ticks_are_counted_as_misses_and_skipped_not_replayed():
             stop.set()
     assert loop.stats.misses >= 2 * 4
     assert sum(round(dt / 1e-3) for dt in dts) == len(dts) + loop.stats.misses
+
+
+def test_a_device_takes_every_sample_a_late_tick_stands_for():
+    assert device_steps(1e-3, 1e-3) == [1e-3]
+    steps = device_steps(0.7, 1e-3)  # a 0.7 s stall: 700 samples, each one period
+    assert len(steps) == 700 and np.allclose(steps, 1e-3) and sum(steps) == pytest.approx(0.7)
+    assert device_steps(2 * CATCH_UP_S, 1e-3) == [2 * CATCH_UP_S]  # a stopped process: one step

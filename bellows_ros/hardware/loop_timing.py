@@ -31,6 +31,7 @@ API
   ``.summary() -> dict[str, float]``.
 - ``LoopThread(loop, name, log, what)``: ``loop(stop_event)`` on a daemon thread from
   ``.start()`` to ``.stop()`` (restartable); a loop that raises is logged, not lost.
+- ``device_steps(dt, period) -> list[float]``: the samples a simulated device takes for a tick.
 
 Deadlines are ``t0 + k * period`` on ``time.perf_counter`` (absolute, so sleep jitter never
 accumulates into drift). The loop only sleeps: ``time.sleep`` overshoots by 50-150 us (timer slack;
@@ -39,13 +40,31 @@ each deadline would cost ~10 % of a core per 1 kHz loop, CPU the driver and mode
 shared 2-core machine; the loops here are the simulated devices, whose samples are stamped on
 arrival at the driver. When a tick starts more than one period late, the slots it lost are
 *skipped*, not replayed in a burst, and counted as deadline misses; the returned ``dt`` then covers
-the skipped slots so that simulated time keeps pace with wall time.
+the skipped slots so that simulated time keeps pace with wall time. A simulated device then takes
+every sample it missed (`device_steps`), as a board with its own processor does while its host is
+busy: the host reads a burst instead of a record with a hole.
 """
 from collections import deque
 import threading
 import time
 
 import numpy as np
+
+
+# s of missed periods a simulated device catches up sample by sample; a longer stall (a stopped
+# process) is one step. CI on a loaded shared machine stalled the simulated boards for 0.26-0.68 s.
+CATCH_UP_S = 5.0
+
+
+def device_steps(dt, period):
+    """
+    Return the plant steps, s, that a device sampling every `period` s takes for a tick of `dt`.
+
+    One step per period the tick stands for (`PeriodicLoop.ticks`), so that every sample is taken
+    and stamped on the device's clock; one step of `dt` when that is more than CATCH_UP_S.
+    """
+    steps = max(1, int(round(dt / period)))
+    return [dt / steps] * steps if steps * period <= CATCH_UP_S else [dt]
 
 
 class LoopStats:

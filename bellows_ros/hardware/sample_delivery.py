@@ -56,10 +56,12 @@ class DeviceClock:
     `stamp(t_device, t_arrival)` keeps the smallest t_arrival - t_device, lets it rise by at most
     `drift` s per s of device time (so a device clock that runs slow is followed) and starts again
     when an arrival is more than `resync` s later than the offset predicts (the device restarted,
-    its clock was reset). Stamps never go backwards. Times in ns (int).
+    its clock was reset, during a silence). A reader stalled for less than `resync` keeps the
+    device's time base: with 1 s, a 1.2 s stall on a loaded machine would stamp the backlog after
+    a hole. Stamps never go backwards. Times in ns (int).
     """
 
-    def __init__(self, drift=1e-4, resync=1.0):
+    def __init__(self, drift=1e-4, resync=10.0):
         self.drift, self.resync_ns = drift, int(resync * 1e9)
         self.offset = self._last_device = self._last_stamp = None
 

@@ -38,6 +38,7 @@ Board behaviour (docs/protocols.md): 1 kHz telemetry; a motor command holds unti
 motor stops at an end-stop switch and after `BOARD_HEARTBEAT_TIMEOUT` without a command or
 heartbeat.
 """
+import collections
 import dataclasses
 import errno
 import logging
@@ -53,13 +54,17 @@ from bellows_ros.config.hardware import actuator_board_config
 from bellows_ros.errors import ParameterError
 from bellows_ros.hardware import serial_protocol as sp
 from bellows_ros.hardware.faults import Faults
-from bellows_ros.hardware.loop_timing import LoopStats, LoopThread, PeriodicLoop
+from bellows_ros.hardware.loop_timing import device_steps, LoopStats, LoopThread, PeriodicLoop
 from bellows_ros.hardware.safety import into_end_stop
 
 log = logging.getLogger(__name__)
 
-# Late ticks the board catches up sample by sample (`_loop`); a longer stall is one step.
-CATCH_UP = 200
+# A USB link does not drop what a busy host is slow to read, and a pty takes only ~640 telemetry
+# frames (20 kB): the board queues what the pty will not take yet (`_transmit`), up to TX_QUEUE_S
+# of samples, the oldest going first (counted in tx_overflow). A host that has not spoken for that
+# long (no driver has the port open) gets no backlog beyond what the pty holds, so a driver that
+# opens the port late does not read seconds of old data.
+TX_QUEUE_S = 5.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -108,6 +113,10 @@ class SimActuatorBoard:
         self._tty = None  # where the link this board made points; None while it has none
         self._fd_lock = threading.Lock()
         self._master = self._slave = None
+        self._tx = collections.deque()  # frames the pty has not taken yet; guarded by _fd_lock
+        self._tx_partial = False  # the head of _tx is half written
+        self._host_seen = None  # time.monotonic() of the last message from a host; None: none
+        self._tx_capacity = max(1, int(round(TX_QUEUE_S / period)))
         self._decoder = sp.FrameDecoder()
         self._thread = LoopThread(self._loop, 'sim-actuator-board', log,
                                   'simulated actuator board')
@@ -150,6 +159,8 @@ class SimActuatorBoard:
         """Make the device vanish: close the pty (the driver's reads fail), remove the symlink."""
         with self._fd_lock:
             master, slave, self._master, self._slave = self._master, self._slave, None, None
+            self._tx.clear()  # a board that loses power loses what it had not sent
+            self._tx_partial, self._host_seen = False, None
         if self._owns_link():
             os.unlink(self.port)
         self._tty = None
@@ -184,14 +195,10 @@ class SimActuatorBoard:
         for dt in PeriodicLoop(self.period, self.stats).ticks(stop):
             self._read_host()
             safety = self._apply_safety(state)
-            # A late tick catches up sample by sample, as a board with its own processor never
-            # falls behind (the host then reads a burst): a late tick that stepped the plant by
-            # the whole delay and sent one sample left 10-140 ms holes in records on a busy
-            # machine, which the doctor refuses. A stall beyond CATCH_UP periods is one step.
-            steps = max(1, int(round(dt / self.period)))
-            steps = steps if steps <= CATCH_UP else 1
-            for _ in range(steps):
-                step = dt / steps
+            # A late tick catches up sample by sample (`device_steps`): a late tick that stepped
+            # the plant by the whole delay and sent one sample left 10-140 ms holes in records on
+            # a busy machine, which the doctor refuses.
+            for step in device_steps(dt, self.period):
                 state = self._step(step, self.duty)
                 t_us = (t_us + int(round(step * 1e6))) & 0xFFFFFFFF
                 status = (safety | self._end_stops(state.x_c)
@@ -235,7 +242,7 @@ class SimActuatorBoard:
                     raise
                 return
         for message in self._decoder.feed(data):
-            self._last_host = time.monotonic()
+            self._last_host = self._host_seen = time.monotonic()
             if isinstance(message, sp.MotorCommand):
                 self._counts['motor_commands'] += 1
                 self.duty = sp.q15_to_duty(message.duty_q15)
@@ -253,13 +260,26 @@ class SimActuatorBoard:
         with self._fd_lock:
             if self._master is None:
                 return
+            self._tx.append(frame)
+            listened = (self._host_seen is not None
+                        and time.monotonic() - self._host_seen <= TX_QUEUE_S)
+            while len(self._tx) > (self._tx_capacity if listened else 1):
+                del self._tx[1 if self._tx_partial else 0]  # the oldest whole frame goes
+                self._counts['tx_overflow'] += 1
+            self._flush()
+
+    def _flush(self):
+        """Write the queued frames the pty takes now, in order; keep the rest (under _fd_lock)."""
+        while self._tx:
             try:
-                written = os.write(self._master, frame)
+                written = os.write(self._master, self._tx[0])
             except OSError as error:  # the driver is not reading: the pty buffer is full
                 if error.errno not in (errno.EAGAIN, errno.EIO):
                     raise
-                written = 0
-        if written < len(frame):
-            self._counts['tx_overflow'] += 1
-        else:
+                return
+            self._tx_partial = written < len(self._tx[0])
+            if self._tx_partial:
+                self._tx[0] = self._tx[0][written:]
+                return
+            self._tx.popleft()
             self._counts['sent'] += 1

@@ -39,7 +39,7 @@ from bellows_ros.config.hardware import vent_pressure as ambient_pressure
 from bellows_ros.hardware import can_protocol as cp
 from bellows_ros.hardware.can_echo_filter import drop_own_frames
 from bellows_ros.hardware.faults import Faults
-from bellows_ros.hardware.loop_timing import LoopStats, LoopThread, PeriodicLoop
+from bellows_ros.hardware.loop_timing import device_steps, LoopStats, LoopThread, PeriodicLoop
 
 log = logging.getLogger(__name__)
 
@@ -98,18 +98,22 @@ class SimArmBus:
         for dt in PeriodicLoop(self.period, self.stats).ticks(stop):
             self._read_host()
             self._apply_heartbeat()
-            measured = self._step(dt, self.setpoints)
-            frames = self._encode(tick, measured)
-            for frame in frames:
-                previous = self._transmit(frame, previous)
-            if tick % self._status_every == 0:
-                values = {'HeartbeatLost': int(self._heartbeat_lost), 'SensorFault': 0,
-                          'RxErrors': min(255, self._checker.crc_errors + self._checker.replayed)}
-                data = cp.encode_frame(self._status, values, tick // self._status_every)
-                status = can.Message(arbitration_id=self._status.frame_id, is_extended_id=False,
-                                     data=data)
-                self._transmit(status, None)
-            tick += 1
+            # Every missed sample is taken (`device_steps`): the driver numbers the rows it
+            # receives and times them by that index, so a late tick that stepped the plant by the
+            # whole delay and sent one row squeezed the delay into one sample period.
+            for step in device_steps(dt, self.period):
+                measured = self._step(step, self.setpoints)
+                for frame in self._encode(tick, measured):
+                    previous = self._transmit(frame, previous)
+                if tick % self._status_every == 0:
+                    values = {'HeartbeatLost': int(self._heartbeat_lost), 'SensorFault': 0,
+                              'RxErrors': min(255, self._checker.crc_errors
+                                              + self._checker.replayed)}
+                    data = cp.encode_frame(self._status, values, tick // self._status_every)
+                    status = can.Message(arbitration_id=self._status.frame_id,
+                                         is_extended_id=False, data=data)
+                    self._transmit(status, None)
+                tick += 1
 
     def _read_host(self):
         for _ in range(64):  # bounded: a flooding host cannot stall the 1 kHz loop
