@@ -41,8 +41,10 @@ here: the controller feeds samples and reports the numbers on /diagnostics.
   τ_ext = M Ψ̈ + C Ψ̇ + N(Ψ) - τ_drive, A(2). The arm has no torque sensor: with no load on it
   the measured external torque is zero, so τ_ext is the residual (model error plus noise); a
   model gone wrong, a load, a leak in a chain drives it away from its healthy level. Its floor
-  is `scoring.noise_floor` (first differences): τ_ext is no test-machine ramp, and where the
-  model holds M Ψ̈ its noise is the difference of Ψ̇'s, which second differences overstate more.
+  is `scoring.noise_floor_local` (the RMS about a 25-sample running mean), not the doctor's
+  difference estimates: the driver differences Ψ̇ from the measured Ψ, so the friction term
+  (5) flips sign from sample to sample and τ_ext's noise is far from white (first differences
+  make it about twice its size); where the model holds M Ψ̈, Ψ̈ is a difference again.
 - `SampleCost`: the sample thread's cost, per sample (`cost_us`).
 - `diagnose_window`: the doctor (`diagnosis.diagnose`) on block means of the last window with the
   healthy window's noise floors, over the causes that develop in service (`LIVE_CAUSES`).
@@ -65,7 +67,7 @@ import numpy as np
 # imported where they are first needed: the actuator's `ModelHealth` at its construction (the
 # node's start, not its 1 Hz update), `diagnose_window` in the worker process. The model node,
 # which needs neither, starts without them.
-from bellows_ros.doctor.scoring import noise_floor
+from bellows_ros.doctor.scoring import noise_floor_local
 from bellows_ros.models.actuator import evaluate_array
 from bellows_ros.table import COLUMNS as TABLE_COLUMNS
 
@@ -128,14 +130,14 @@ def external_torques(names, rows):
     return {name: rows[name] for name in names}
 
 
-def first_difference_floors(names, rows):
+def local_floors(names, rows):
     """
-    Return {name: `scoring.noise_floor` of the column} (the module docstring says why).
+    Return {name: `scoring.noise_floor_local` of the column} (the module docstring says why).
 
     A noise-free column (simulated) gets a floor of 1e-6 of its span, as the doctor's do
     (`actuator_causes.noise_floors`), so that dividing by it stays finite.
     """
-    return {name: max(noise_floor(rows[name]), 1e-6 * float(np.ptp(rows[name])), 1e-12)
+    return {name: max(noise_floor_local(rows[name]), 1e-6 * float(np.ptp(rows[name])), 1e-12)
             for name in names}
 
 
@@ -244,7 +246,7 @@ def segment_health(names, calibration=20.0, window=5.0):
     names = tuple(names)
     return ModelHealth(None, calibration, window, outputs=names,
                        residuals=functools.partial(external_torques, names),
-                       floors=functools.partial(first_difference_floors, names))
+                       floors=functools.partial(local_floors, names))
 
 
 class SampleCost:
