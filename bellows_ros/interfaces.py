@@ -34,9 +34,12 @@ Message conventions:
 """
 from dataclasses import dataclass
 
-# Depth for the 1 kHz sample topics: a reader stalled by its host for up to a second (seen on a
-# shared 2-core machine under load) must not lose samples; 1000 samples of 4 segments is ~200 kB.
-SAMPLE_DEPTH = 1000
+# Depth for the 1 kHz sample topics, writers and readers: a reader stalled by its host for up to
+# five seconds loses no sample. `bellows record` runs at normal priority and a loaded shared 2-core
+# machine starved it for over a second: with 1000 the records had holes of 0.08-0.31 s that the
+# doctor refuses (test_runtime_record: a recorder stopped 2.5 s). 5000 samples of 4 segments is
+# about 1 MB per topic, held only while a reader lags.
+SAMPLE_DEPTH = 5000
 # Depth for commands, set-points and status: only the newest few matter.
 COMMAND_DEPTH = 10
 # s: the longest gap between pressure commands after which a driver may vent the arm (its

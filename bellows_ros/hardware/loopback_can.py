@@ -31,7 +31,7 @@ python-can backend overrides a few methods of its base:
 - the kernel's default receive buffer holds 256 frames, 51 ms of the arm's 5000 frames a second:
   a reader the host stalls for longer loses whole instants, and the model's strain memory needs
   every one. `RECEIVE_BUFFER` holds about a second's frames where net.core.rmem_max allows it
-  (the DDS topics keep a second too: interfaces.SAMPLE_DEPTH). Joined on loopback, a frame and
+  (the DDS topics keep five: interfaces.SAMPLE_DEPTH). Joined on loopback, a frame and
   its echo also cost about a third less CPU than on the default interface (53-56 us instead of
   76-89 us).
 """
