@@ -24,16 +24,28 @@ here: the controller feeds samples and reports the numbers on /diagnostics.
 
 - `RingBuffer`: the last samples (t, x_c, x_s, p, f: the actuator's columns, `table.COLUMNS`),
   preallocated; `append` is all the sample thread does (a lock and one column write).
-- `ModelHealth`: the residuals of paper B's model at the identified gas amount, measured pressure
-  minus (17) at the measured (x_c, x_s), and measured spring force minus (7)-(12) on that
-  pressure. A leak makes the pressure residual drift; a sensor lag makes it follow the rate;
-  buckling shows in the force. The first `calibration` seconds are taken as healthy: they give
-  each output's noise floor (`actuator_causes.noise_floors`, the doctor's), its residual offset
-  (an identified gas amount a little off is not a fault) and the largest RMS-over-floor ratio
-  any `window` of it showed; the limit is `MARGIN` times that ratio, at least `LIMIT_MIN`. Every
-  update, each output's RMS of (residual - offset) over the last `window` s, over its floor, is
-  its ratio; the residual has left the floor when a ratio is above its limit `PERSIST` updates in
-  a row. Nothing is taken from a device's nominal numbers.
+- `ModelHealth`: the rolling comparison of a model with its measurement, for any set of outputs:
+  a `residuals(rows)` function (measured minus model, per output) and a `floors(rows)` function
+  (each output's noise floor). The first `calibration` seconds are taken as healthy: they give
+  each output's noise floor, its residual offset (a model a little off is not a fault) and the
+  largest RMS-over-floor ratio any `window` of it showed; the limit is `MARGIN` times that ratio,
+  at least `LIMIT_MIN`. Every update, each output's RMS of (residual - offset) over the last
+  `window` s, over its floor, is its ratio; the residual has left the floor when a ratio is above
+  its limit `PERSIST` updates in a row. Nothing is taken from a device's nominal numbers.
+  By default the actuator's: the residuals of paper B's model at the identified gas amount,
+  measured pressure minus (17) at the measured (x_c, x_s), and measured spring force minus
+  (7)-(12) on that pressure, over the doctor's noise floors (`actuator_causes.noise_floors`). A
+  leak makes the pressure residual drift; a sensor lag makes it follow the rate; buckling shows
+  in the force.
+- `segment_health`: the arm's (the model node's): per segment, the external torque estimate
+  τ_ext = M Ψ̈ + C Ψ̇ + N(Ψ) - τ_drive, A(2). The arm has no torque sensor: with no load on it
+  the measured external torque is zero, so τ_ext is the residual (model error plus noise); a
+  model gone wrong, a load, a leak in a chain drives it away from its healthy level. Its floor
+  is `scoring.noise_floor_local` (the RMS about a 25-sample running mean), not the doctor's
+  difference estimates: the driver differences Ψ̇ from the measured Ψ, so the friction term
+  (5) flips sign from sample to sample and τ_ext's noise is far from white (first differences
+  make it about twice its size); where the model holds M Ψ̈, Ψ̈ is a difference again.
+- `SampleCost`: the sample thread's cost, per sample (`cost_us`).
 - `diagnose_window`: the doctor (`diagnosis.diagnose`) on block means of the last window with the
   healthy window's noise floors, over the causes that develop in service (`LIVE_CAUSES`).
 - `DiagnosisWorker`: runs `diagnose_window` in a separate process (spawned: no fork of a process
@@ -43,6 +55,7 @@ here: the controller feeds samples and reports the numbers on /diagnostics.
 - `LiveDoctor`: the three together, as the controller uses them.
 """
 from collections import deque, OrderedDict
+import functools
 import math
 import multiprocessing
 import threading
@@ -50,7 +63,11 @@ import time
 
 import numpy as np
 
-from bellows_ros.doctor import actuator_causes, diagnosis
+# The doctor's fits (diagnosis, actuator_causes: scipy.signal, over a second to import) are
+# imported where they are first needed: the actuator's `ModelHealth` at its construction (the
+# node's start, not its 1 Hz update), `diagnose_window` in the worker process. The model node,
+# which needs neither, starts without them.
+from bellows_ros.doctor.scoring import noise_floor_local
 from bellows_ros.models.actuator import evaluate_array
 from bellows_ros.table import COLUMNS as TABLE_COLUMNS
 
@@ -102,31 +119,57 @@ class RingBuffer:
         return self.since(self.count - int(n))[0]
 
 
-def residuals(params, rows):
+def actuator_residuals(params, rows):
     """Return ({output: measured - model}) of paper B's model at its gas amount over `rows`."""
     p_model, f_model, _ = evaluate_array(params, rows['x_c'], rows['x_s'])
     return {'p': rows['p'] - p_model, 'f': rows['f'] - f_model}
+
+
+def external_torques(names, rows):
+    """Return {segment: τ_ext}: the residual itself, measured (zero, unloaded) minus model."""
+    return {name: rows[name] for name in names}
+
+
+def local_floors(names, rows):
+    """
+    Return {name: `scoring.noise_floor_local` of the column} (the module docstring says why).
+
+    A noise-free column (simulated) gets a floor of 1e-6 of its span, as the doctor's do
+    (`actuator_causes.noise_floors`), so that dividing by it stays finite.
+    """
+    return {name: max(noise_floor_local(rows[name]), 1e-6 * float(np.ptp(rows[name])), 1e-12)
+            for name in names}
 
 
 class ModelHealth:
     """
     The rolling comparison of model and measurement (module docstring).
 
-    `update(rows)` takes the new samples ({column: array}); `values()` the numbers to report.
-    `state`: 'calibrating', 'healthy' or 'out of floor'.
+    `outputs`: the residuals compared; `residuals(rows)` -> {output: array}, `floors(rows)` ->
+    {output: noise floor} (both on {column: array}); by default the actuator's (paper B's model
+    under `params`). `update(rows)` takes the new samples ({column: array}); `values()` the
+    numbers to report. `state`: 'calibrating', 'healthy' or 'out of floor'.
     """
 
-    def __init__(self, params, calibration=20.0, window=5.0):
+    def __init__(self, params=None, calibration=20.0, window=5.0, outputs=OUTPUTS,
+                 residuals=None, floors=None):
         self.params = params
+        self.outputs = tuple(outputs)
+        self._residuals = residuals or functools.partial(actuator_residuals, params)
+        if floors is None:
+            from bellows_ros.doctor import actuator_causes     # module docstring: not at import
+            floors = actuator_causes.noise_floors
+        self._floors = floors
         self.calibration, self.window = float(calibration), float(window)
         self.floors = None                  # {output: noise floor} of the healthy window
         self.offsets = None                 # {output: mean residual} of the healthy window
         self.limits = None                  # {output: limit of the ratio}
         self.healthy_ratio = None           # {output: largest ratio of the healthy window}
-        self.ratios = {name: math.nan for name in OUTPUTS}
-        self.rms = {name: math.nan for name in OUTPUTS}
+        self.ratios = {name: math.nan for name in self.outputs}
+        self.rms = {name: math.nan for name in self.outputs}
+        self.mean = {name: math.nan for name in self.outputs}   # of (residual - offset)
         self.above = 0                      # updates in a row above the limit
-        self._chunks = deque()              # (t, {output: residual}, {column: raw}) chunks
+        self._chunks = deque()              # (t, {output: residual}) chunks
         self._calibration_rows = []
         self.state = 'calibrating'
 
@@ -134,11 +177,15 @@ class ModelHealth:
     def out_of_floor(self):
         return self.state == 'out of floor'
 
+    def worst(self):
+        """Return the output whose ratio is nearest its limit, or past it furthest."""
+        return max(self.outputs, key=lambda n: self.ratios[n] / self.limits[n])
+
     def update(self, rows):
         """Take new samples; return the state."""
         if len(rows['t']) == 0:
             return self.state
-        residual = residuals(self.params, rows)
+        residual = self._residuals(rows)
         if self.floors is None:
             self._calibration_rows.append((rows, residual))
             t0 = self._calibration_rows[0][0]['t'][0]
@@ -151,24 +198,27 @@ class ModelHealth:
             self._chunks.popleft()
         t = np.concatenate([c[0] for c in self._chunks])
         keep = t >= t_end - self.window
-        for name in OUTPUTS:
+        for name in self.outputs:
             r = np.concatenate([c[1][name] for c in self._chunks])[keep] - self.offsets[name]
             self.rms[name] = float(np.sqrt(np.mean(r ** 2)))
+            self.mean[name] = float(np.mean(r))
             self.ratios[name] = self.rms[name] / self.floors[name]
-        over = any(self.ratios[n] > self.limits[n] for n in OUTPUTS)
+        over = any(self.ratios[n] > self.limits[n] for n in self.outputs)
         self.above = self.above + 1 if over else 0
         self.state = 'out of floor' if self.above >= PERSIST else 'healthy'
         return self.state
 
     def _calibrate(self):
-        rows = {c: np.concatenate([r[c] for r, _ in self._calibration_rows]) for c in COLUMNS}
-        residual = {n: np.concatenate([e[n] for _, e in self._calibration_rows]) for n in OUTPUTS}
+        columns = self._calibration_rows[0][0].keys()
+        rows = {c: np.concatenate([r[c] for r, _ in self._calibration_rows]) for c in columns}
+        residual = {n: np.concatenate([e[n] for _, e in self._calibration_rows])
+                    for n in self.outputs}
         self._calibration_rows = []
-        self.floors = actuator_causes.noise_floors(rows)
-        self.offsets = {n: float(np.mean(residual[n])) for n in OUTPUTS}
+        self.floors = self._floors(rows)
+        self.offsets = {n: float(np.mean(residual[n])) for n in self.outputs}
         t = rows['t']
         self.healthy_ratio, self.limits = {}, {}
-        for name in OUTPUTS:
+        for name in self.outputs:
             centred = residual[name] - self.offsets[name]
             worst = 0.0
             for start in np.arange(t[0], t[-1] - self.window + 1e-9, self.window / 2):
@@ -182,12 +232,45 @@ class ModelHealth:
     def values(self):
         """{key: number} to report (nan before the healthy window is in)."""
         out = {'state': self.state, 'window_s': self.window, 'calibration_s': self.calibration}
-        for name in OUTPUTS:
+        for name in self.outputs:
             out[f'residual_rms_{name}'] = self.rms[name]
+            out[f'residual_mean_{name}'] = self.mean[name]
             out[f'noise_floor_{name}'] = (self.floors or {}).get(name, math.nan)
             out[f'ratio_{name}'] = self.ratios[name]
             out[f'limit_{name}'] = (self.limits or {}).get(name, math.nan)
         return out
+
+
+def segment_health(names, calibration=20.0, window=5.0):
+    """Return the `ModelHealth` of the arm's segments `names`: τ_ext over its noise floor."""
+    names = tuple(names)
+    return ModelHealth(None, calibration, window, outputs=names,
+                       residuals=functools.partial(external_torques, names),
+                       floors=functools.partial(local_floors, names))
+
+
+class SampleCost:
+    """
+    The sample thread's cost: `add(seconds, samples)` per call; `take()` the numbers.
+
+    `take()` returns (mean µs per sample, max µs of one call) since the last `take`: the mean
+    counts every call's time, divided by the samples they buffered.
+    """
+
+    def __init__(self):
+        self._s, self._n, self._max = 0.0, 0, 0.0
+
+    def add(self, seconds, samples=1):
+        self._s += seconds
+        self._n += samples
+        if seconds > self._max:
+            self._max = seconds
+
+    def take(self):
+        mean = self._s / self._n * 1e6 if self._n else math.nan
+        worst = self._max * 1e6 if self._n else math.nan
+        self._s, self._n, self._max = 0.0, 0, 0.0
+        return mean, worst
 
 
 def block_means(rows, factor):
@@ -205,6 +288,7 @@ def diagnose_window(config, rows, floors, causes=LIVE_CAUSES):
     (the window itself is not healthy). Fitted on block means at `FIT_RATE` Hz. A window the
     doctor refuses (too short, the chamber never moves) gives the refusal as `error`.
     """
+    from bellows_ros.doctor import diagnosis    # in the worker process (module imports)
     started = time.perf_counter()
     dt = float(np.median(np.diff(rows['t'])))
     factor = max(1, int(round(1.0 / (dt * FIT_RATE))))
@@ -329,7 +413,7 @@ class LiveDoctor:
     the three with its stamp are in (the pressure of one instant with the compression of the
     same); `sample(t, x_c, x_s, p, f)` for a caller that has them together. One thread at a time
     (a node's callbacks in its default, mutually exclusive callback group). Their cost is counted
-    (`cost_us`, per sample buffered);
+    (`cost_us`, per sample buffered: `SampleCost`);
     `update()` from a timer: the new samples into `health`, a diagnosis of the last `diagnosis_s`
     seconds submitted when the residual has left the floor (again every `rediagnose_s` while it
     stays out), a finished one collected into `verdict`. `verdict` is cleared when the residual
@@ -348,7 +432,7 @@ class LiveDoctor:
         self.out_since = None               # sample time the residual left the floor
         self._read = 0
         self._submitted_at = None
-        self._cost_s, self._cost_n, self._cost_max = 0.0, 0, 0.0
+        self.cost = SampleCost()
         self._pending = OrderedDict()       # stamp (ns) -> [(x_c, x_s), p, f], incomplete
         self.unpaired = 0
 
@@ -362,36 +446,23 @@ class LiveDoctor:
                 self._pending.popitem(last=False)
                 self.unpaired += 1
         entry[slot] = value
+        buffered = 0
         if entry[0] is not None and entry[1] is not None and entry[2] is not None:
             del self._pending[stamp_ns]
             (x_c, x_s), p, f = entry
             self.buffer.append((stamp_ns * 1e-9, x_c, x_s, p, f))
-            self._cost_n += 1
-        cost = time.perf_counter() - start
-        self._cost_s += cost
-        if cost > self._cost_max:
-            self._cost_max = cost
+            buffered = 1
+        self.cost.add(time.perf_counter() - start, buffered)
 
     def sample(self, t, x_c, x_s, p, f):
         """Take one whole sample on the sample thread: a row into the ring buffer, counted."""
         start = time.perf_counter()
         self.buffer.append((t, x_c, x_s, p, f))
-        cost = time.perf_counter() - start
-        self._cost_s += cost
-        self._cost_n += 1
-        if cost > self._cost_max:
-            self._cost_max = cost
+        self.cost.add(time.perf_counter() - start)
 
     def cost_us(self):
-        """
-        Return (mean µs per sample buffered, max µs of one call) since the last call.
-
-        The mean counts every call of `put` and `sample`, divided by the samples they buffered.
-        """
-        mean = self._cost_s / self._cost_n * 1e6 if self._cost_n else math.nan
-        worst = self._cost_max * 1e6 if self._cost_n else math.nan
-        self._cost_s, self._cost_n, self._cost_max = 0.0, 0, 0.0
-        return mean, worst
+        """Return (mean µs per sample buffered, max µs of one call) since the last call."""
+        return self.cost.take()
 
     def update(self):
         rows, self._read = self.buffer.since(self._read)

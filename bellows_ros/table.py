@@ -65,6 +65,14 @@ class Table:
     def __contains__(self, name):
         return name in self.values
 
+    def rows(self, keep):
+        """Return a `Table` of the rows where the boolean array `keep` is true, lines kept."""
+        keep = np.asarray(keep, bool)
+        where = np.flatnonzero(keep)
+        return Table(self.path, self.names, {k: v[keep] for k, v in self.values.items()},
+                     {k: [cells[i] for i in where] for k, cells in self.extras.items()},
+                     None if self.lines is None else [self.lines[i] for i in where])
+
 
 def check_increasing(table, name='t'):
     """Time (or any column) must strictly increase."""

@@ -331,3 +331,89 @@ def test_the_dated_measurement_rule_sees_what_it_should():
 def test_the_bench_log_is_newest_first():
     dates = LOG_HEADING.findall(BENCH_LOG.read_text(encoding='utf-8'))
     assert dates and dates == sorted(dates, reverse=True), dates
+
+
+# Undated measurements are kept out of the reference documents too. A sentence (or a table row, or
+# a list item) of a reference document states a measurement when it has a quantity of time, CPU or
+# memory (a number with µs, ms, s, min, h, %, MB, GB, MiB, ...) and a word that says it was
+# measured on a machine or a run: 'measured on/in/here', 'took', 'timed', 'here', 'this machine',
+# 'the shared ... VM', 'a loaded (busy, quiet) host', 'load ≈ 6', 'takes about'. Some quantities
+# are measurements whatever the words around them: a time per step (sample, call, frame, tick),
+# CPU time or cores used, speed-ups, and a median or p99 of a time ('0.3 ms median'). Definitions,
+# parameters, targets and tolerances have neither ('≤ 20 µs per step' and 'p99 <= 1 ms' are
+# targets). What it cannot see: a figure with neither (an RMS error, a rate) stays the author's
+# to move; the rule catches the timings, loads and machines that date a sentence. Inline code
+# and fenced blocks are not read, and a sentence that cites the log (docs/bench_log.md) carries
+# its date: it may keep a figure.
+FENCED = re.compile(r'^```.*?^```', re.MULTILINE | re.DOTALL)
+NUMBER = r'(?<![\d.])(?<![≤<>≥=] )(?<![≤<>≥=])\d+(?:[.,]\d+)?(?:\s?[-–]\s?\d+(?:[.,]\d+)?)?'
+AMOUNT = NUMBER + r'\s?(?:µs|us|ms|s|min|h|%|[kKMG]i?B)(?![\w/²³])'
+EVIDENCE = re.compile(
+    r'\bmeasured(?: on| in| here| with| at| by|:)|\btook\b|\btimed\b|\bhere\b|'
+    r'\bthis (?:\d-core )?(?:machine|VM|host)\b|\bshared\b[^.;]{0,20}\b(?:machine|VM)\b|'
+    r'\b(?:loaded|busy|quiet|idle|\d-core) (?:\d-core )?(?:machine|host|VM)\b|'
+    r'\bload(?: average)?\s?(?:[≈~]\s?)?\d|\btakes? (?:about|≈|~)', re.IGNORECASE)
+MEASUREMENT = re.compile(
+    NUMBER + r'\s?(?:µs|us|ms) (?:of CPU )?(?:each )?per '
+    r'(?:step|sample|call|frame|tick|message)\b|'
+    + NUMBER + r'\s?(?:µs|us|ms) of CPU\b|' + NUMBER + r'\s?cores?\b|'
+    + NUMBER + r'\s?(?:[×x]|%) (?:faster|slower|more CPU|less CPU)\b|'
+    + AMOUNT + r' (?:median|mean|p50|p99)\b|\b(?:median|mean|p50|p99) (?:of |was |at )?' + AMOUNT)
+
+
+def statements(text):
+    """Split markdown into sentences, table rows and list items, without code."""
+    text = INLINE_CODE.sub('', FENCED.sub('', text))
+    for block in re.split(r'\n\s*\n', text):
+        rows = [line for line in block.split('\n') if line.strip()]
+        if rows and all(line.lstrip().startswith('|') for line in rows):
+            yield from rows
+            continue
+        for item in re.split(r'\n\s*(?=[-*] |\d+\. )', block):
+            yield from re.split(r'(?<=[.;!?])\s+(?=[A-Z(*_])', ' '.join(item.split()))
+
+
+def undated_measurements(text):
+    """Return the statements of `text` that carry a measurement and no log citation."""
+    return [statement for statement in statements(text)
+            if 'bench_log.md' not in statement
+            and (MEASUREMENT.search(statement)
+                 or (re.search(AMOUNT, statement) and EVIDENCE.search(statement)))]
+
+
+def test_reference_documents_carry_no_undated_measurement():
+    found = [f'{path.relative_to(ROOT)}: {statement[:160]}'
+             for path in reference_documents()
+             for statement in undated_measurements(path.read_text(encoding='utf-8'))]
+    assert not found, 'measurements belong in docs/bench_log.md (cite it):\n' + '\n'.join(found)
+
+
+def test_the_undated_measurement_rule_sees_what_it_should():
+    for text in ('Cost: 22 peeks (≈ 10 µs each on this machine) every 5 ms.',
+                 'The full bench took 2–4 min at load 6–15.',
+                 'It runs in under a minute (38 s on this 2-core machine).',
+                 'About 17 µs per step without effects, 29 µs with all of them.',
+                 '60 s at 1 kHz takes about 1.3 s.',
+                 'A diagnosis takes ≈ 12 s.',
+                 "the simulated arm's bus work fell from 0.37 to 0.245 core;",
+                 'each tick, about 0.4 ms of CPU, lands on the host path',
+                 'Measured on the shared 2-core machine (load 8-10): 37 058 in 37.05 s.',
+                 'waking it again took up to milliseconds here, 3 ms at worst.',
+                 'peak memory 257 MB on the busy machine',
+                 '| run | 998.5 Hz | p99 0.45 ms on the shared VM |',
+                 '- the step is now 3x faster',
+                 'that turns a 0.3 ms median into a 2-8 ms p99.',
+                 "rclpy's p99 was 1.08-1.64 ms in quick runs"):
+        assert undated_measurements(text), text
+    for text in ('Target ≤ 20 µs per step (issue 2), ≤ 3× the reference.',
+                 'a heartbeat thread (20 ms) also sends duty 0; after **100 ms** it vents.',
+                 'the spring moves between 0 and 20 mm every 4 s, so the load cell measures it.',
+                 'Every hidden effect must reach a gain of 30 %.',
+                 'The tick costs tens of µs here (docs/bench_log.md, 2026-11-22).',
+                 '`took 3 s here`, in code',
+                 '```\ntook 3 s here\n```',
+                 'measured Ψ every 20 ms of sample time',
+                 'It needs more than one core; a record of 60 s at 1 kHz.',
+                 'Targets: 1000 Hz, >= 99 % evaluated, latency p99 <= 1 ms.',
+                 'latency p50 and p99 (median and worst 1 s window)'):
+        assert not undated_measurements(text), text

@@ -157,14 +157,14 @@ def test_the_two_stacks_do_not_import_each_other():
 
 
 def test_the_online_stack_reaches_the_offline_one_only_through_the_live_doctor():
-    """The nodes reach the doctor through `bellows_ros.live` alone, and only the controller."""
+    """The nodes reach the doctor through `bellows_ros.live` alone: controller and model node."""
     graph = import_graph()
     offline = {m for m in graph if m.count('.') and m.split('.')[1] in STACKS['offline']}
     online = [m for m in graph if m.count('.') and m.split('.')[1] in STACKS['online']]
     without_bridge = {m: t - {'bellows_ros.live'} for m, t in graph.items()}
     assert [m for m in online if reachable(without_bridge, m) & offline] == []
     users = sorted(m for m in online if 'bellows_ros.live' in graph[m])
-    assert users == ['bellows_ros.nodes.stiffness_controller_node']
+    assert users == ['bellows_ros.nodes.model_node', 'bellows_ros.nodes.stiffness_controller_node']
     assert reachable(graph, 'bellows_ros.live') & offline    # the rule is not vacuous
 
 

@@ -36,6 +36,7 @@ The code gets only the records; the device's parameters are used to build it and
 import json
 import math
 import random
+import re
 import subprocess
 import sys
 import time
@@ -233,6 +234,39 @@ def test_export_writes_the_table_identify_reads(tmp_path):
         assert np.allclose(from_bag[name], from_csv[name], rtol=1e-12, atol=1e-12), name
     assert main(['export', 'actuator', str(bag), '--output', str(out)]) == 0  # replaced whole
     assert main(['export', 'actuator', str(out), '--output', str(out)]) == 2  # never its input
+
+
+def test_a_record_with_a_gap_is_split_where_the_doctors_refusal_says(tmp_path, capsys):
+    from test_core_big_records import actuator_series
+    source = actuator_series(tmp_path / 'gap.csv', gap_at=7777)
+    assert main(['diagnose', 'actuator', str(source), '--report', str(tmp_path / 'r'),
+                 '--quiet']) == 2
+    error = capsys.readouterr().err
+    found = re.search(r'--end ([\d.e+-]+)`, `--start ([\d.e+-]+)`', error)
+    end, start = float(found[1]), float(found[2])
+    whole = read_table(source, 'actuator')
+    parts = []
+    for i, window in enumerate((['--end', str(end)], ['--start', str(start)])):
+        part = tmp_path / f'part{i}.csv'
+        assert main(['export', 'actuator', str(source), '--output', str(part)] + window) == 0
+        parts.append(read_table(part, 'actuator'))
+    capsys.readouterr()
+    assert len(parts[0]) + len(parts[1]) == len(whole)
+    assert parts[0]['t'][-1] == end and parts[1]['t'][0] == start
+    for part in parts:  # neither part has the gap
+        assert np.max(np.diff(part['t'])) < 2 * np.median(np.diff(part['t']))
+        assert np.array_equal(part['run'], whole['run'][np.isin(whole['t'], part['t'])])
+    for window in (['--start', '5', '--end', '1'], ['--end', 'nan'], ['--start', '100']):
+        try:  # argparse's own refusals exit from inside main
+            status = main(['export', 'actuator', str(source), '--output',
+                           str(tmp_path / 'bad.csv')] + window)
+        except SystemExit as exit_:
+            status = exit_.code
+        assert status == 2, window
+        error = capsys.readouterr().err.strip().splitlines()
+        assert len(error) == 1 and ('--start' in error[0] or '--end' in error[0]
+                                    or 'no rows' in error[0]), error
+        assert not (tmp_path / 'bad.csv').exists()
 
 
 def read_table_from(record):

@@ -124,10 +124,7 @@ def checked_record(table, system, factor=1):
     dt = float(np.median(steps))
     worst = int(np.argmax(steps))
     if steps[worst] > MAX_GAP * dt:
-        raise DataError(path, f'gap of {steps[worst]:.3g} s in the time column after t = '
-                              f'{t[worst]:.6g} s (sampling interval {dt:.3g} s); split the record '
-                              'at the gap',
-                        table.line(worst + 1), 't')
+        raise gap_error(table, worst + 1, t[worst], t[worst + 1], dt)
     check_ranges(table, system)
     resampled = bool(np.std(steps) > MAX_JITTER * dt)
     if resampled:
@@ -153,6 +150,15 @@ def check_ranges(table, system):
         check_range(table, 'psi', -np.pi, np.pi, 'rad')
 
 
+def gap_error(table, row, last, first, dt):
+    """Return the DataError of a gap in `table` before data row `row`: t = `last`, then `first`."""
+    return DataError(table.path, f'gap of {first - last:.3g} s in the time column after t = '
+                                 f'{last:.6g} s (sampling interval {dt:.3g} s); split the record '
+                                 f'at the gap (`bellows export ... --end {last:.6g}`, '
+                                 f'`--start {first:.6g}`) and give each part on its own',
+                     table.line(row), 't')
+
+
 class RawChecks:
     """
     The checks of `checked_record` that block means would hide, on each raw chunk of a record.
@@ -174,10 +180,7 @@ class RawChecks:
             worst = int(np.argmax(steps))
             if steps[worst] > MAX_GAP * dt:
                 after = t[worst - before] if worst - before >= 0 else self.last
-                raise DataError(table.path, f'gap of {steps[worst]:.3g} s in the time column '
-                                            f'after t = {after:.6g} s (sampling interval '
-                                            f'{dt:.3g} s); split the record at the gap',
-                                table.line(worst + 1 - before), 't')
+                raise gap_error(table, worst + 1 - before, after, t[worst + 1 - before], dt)
         self.last = float(t[-1])
         check_ranges(table, self.system)
 

@@ -290,6 +290,24 @@ def noise_floor(signal):
     return float(1.4826 * np.median(np.abs(d)) / np.sqrt(2))
 
 
+def noise_floor_local(signal, n=25):
+    """
+    Estimate the standard deviation of the fast noise on `signal`, whatever its correlation.
+
+    The RMS of `signal` minus its centred running mean over `n` samples, scaled by
+    sqrt(n / (n - 1)) (exact for white noise). Unlike the difference estimates it does not assume
+    white Gaussian noise: a noise that flips sign from sample to sample (a friction term driven by
+    a velocity differenced from a noisy angle) has first differences twice its size. Changes
+    slower than `n` samples (the motion) fall out with the running mean.
+    """
+    x = np.asarray(signal, float)
+    if len(x) < n:
+        return float(np.std(x))
+    mean = np.convolve(x, np.ones(n) / n, mode='valid')
+    centre = x[n // 2:n // 2 + len(mean)]
+    return float(np.sqrt(np.mean((centre - mean) ** 2) * n / (n - 1)))
+
+
 def noise_floor_ramps(signal):
     """
     Estimate `noise_floor` from second differences.

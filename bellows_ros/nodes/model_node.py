@@ -32,11 +32,20 @@ realtime_priority (int: SCHED_FIFO priority 1-99 for the node's threads, 0 = nor
 cpu_latency_limit (s: CPU wake-up latency held while the node runs, 0 = idle CPUs poll, negative =
 off; runtime/realtime.py).
 A sample with a non-finite value or a pressure outside [0, 2 p_max] is rejected and counted.
+
+Model health (docs/doctor.md, "The doctor live"; `live.segment_health`): the arm has no torque
+sensor, so with no load on it τ_ext is the model's residual (model error plus noise). Every
+sample's τ_ext goes into a preallocated ring buffer (all the 1 kHz path does; its cost is counted,
+`cost_per_sample_us`); once a second the diagnostics update compares each segment's τ_ext over the
+last `model_health.window` s with its noise floor, offset and limit, all taken from the first
+`model_health.calibration` s, and reports `model_health` on /diagnostics: WARN naming the segments
+whose residual left its floor and by how much (no diagnosis: naming a segment's cause live would
+need a torque sensor). Both parameters are read once at start.
 """
 from array import array
 import time
 
-from bellows_ros import interfaces
+from bellows_ros import interfaces, live
 from bellows_ros.config.segment import load_segment_params
 from bellows_ros.hardware.can_protocol import dbc_segments
 from bellows_ros.hardware.loop_timing import LoopStats
@@ -57,7 +66,16 @@ PARAMETERS = (
          low=1, high=interfaces.SAMPLE_DEPTH),
     Spec('latency_budget', 0.002, 'a torque published later than this after its sample is '
          'counted late, s', low=1e-4, high=1.0, read_only=False),
+    # Model health (bellows_ros.live): read once at start (the limits hold for this window).
+    Spec('model_health.calibration', 20.0, 'first seconds of samples taken as healthy: noise '
+         'floors, offsets and limits of the external torque estimates, s', low=5.0, high=3600.0),
+    Spec('model_health.window', 5.0, 'rolling window of the external torque RMS, s', low=0.5,
+         high=600.0),
 )
+# The ring buffer between the sample path and the 1 Hz comparison: this many seconds of samples
+# at up to HEALTH_RATE Hz (samples older than that at an update are not compared).
+HEALTH_BUFFER_S = 10.0
+HEALTH_RATE = 2000.0
 
 
 class ModelNode(Node):
@@ -77,6 +95,13 @@ class ModelNode(Node):
         self.previous_psi_dot = [None] * len(segments)
         self.psi_ddot = [0.0] * len(segments)
         self.pairs = SamplePairs(max_pending)
+        self.health = live.segment_health(self.names, given['model_health.calibration'],
+                                          given['model_health.window'])
+        self.health_buffer = live.RingBuffer(int(HEALTH_BUFFER_S * HEALTH_RATE),
+                                             ('t', *self.names))
+        self.health_cost = live.SampleCost()
+        self._health_read = 0
+        self._health_update_ms = float('nan')
         self.counts = dict.fromkeys(['evaluated', 'rejected', 'late'], 0)
         self.stats = LoopStats()
         self.report = diagnostics.LoopReport(self.stats)
@@ -98,6 +123,7 @@ class ModelNode(Node):
             lambda: self.get_clock().now().nanoseconds * 1e-9, max_acceptable=latency_budget,
             name='latency')
         self.diagnostics.add(self.latency_status)
+        self.diagnostics.add('model_health', self.diagnose_model_health)
         self.get_logger().info(f"evaluating {', '.join(self.names)}"
                                + (f' with {params_file}' if params_file else ''))
 
@@ -146,11 +172,14 @@ class ModelNode(Node):
         self.counts['evaluated'] += 1
         dt = None if self._last_stamp is None else (stamp - self._last_stamp) * 1e-9
         self._last_stamp = stamp
-        self.publish_external(joints.header, inputs, drive, dt or 0.0)
+        external = self.publish_external(joints.header, inputs, drive, dt or 0.0)
+        started = time.perf_counter()
+        self.health_buffer.append((stamp * 1e-9, *external))
+        self.health_cost.add(time.perf_counter() - started)
         self.stats.record(dt or 0.0, 0.0, time.perf_counter() - start)
 
     def publish_external(self, header, inputs, drive, dt):
-        """Publish τ_ext (2) per segment on /bellows/external_torque; Ψ̈ from successive Ψ̇."""
+        """Publish τ_ext (2) per segment on /bellows/external_torque, return it; Ψ̈ from Ψ̇'s."""
         external = []
         for i, ((psi, psi_dot, _, _), tau_drive) in enumerate(zip(inputs, drive)):
             psi_ddot = self.psi_ddot[i] = rate(psi_dot, self.previous_psi_dot[i], dt,
@@ -160,6 +189,7 @@ class ModelNode(Node):
         out = self.msg.JointState(name=list(self.names), effort=array('d', external))
         out.header = header
         self.external_pub.publish(out)
+        return external
 
     def diagnose_evaluation(self, stat):
         """Report the evaluation: rate, counts, latency percentiles; what is wrong."""
@@ -188,6 +218,35 @@ class ModelNode(Node):
         if dropped:
             stat.mergeSummary(diagnostics.WARN, f'{dropped} half-samples dropped without their '
                               'other half (max_pending)')
+        return stat
+
+    def diagnose_model_health(self, stat):
+        """Report each segment's τ_ext against its healthy floor; WARN: which left it, how far."""
+        started = time.perf_counter()
+        rows, self._health_read = self.health_buffer.since(self._health_read)
+        health = self.health
+        state = health.update(rows)
+        self._health_update_ms = (time.perf_counter() - started) * 1e3
+        mean_us, max_us = self.health_cost.take()
+        for key, value in health.values().items():
+            stat.add(key, value if isinstance(value, str) else f'{value:.6g}')
+        stat.add('cost_per_sample_us', f'{mean_us:.2f}')
+        stat.add('cost_per_sample_max_us', f'{max_us:.1f}')
+        stat.add('update_ms', f'{self._health_update_ms:.2f}')
+        if self.health_buffer.count == 0:
+            stat.summary(diagnostics.STALE, 'no samples evaluated (no driver publishing '
+                         '/joint_states and /bellows/chambers?): not comparing')
+        elif state == 'calibrating':
+            stat.summary(diagnostics.OK, 'calibrating: taking the noise floors of the first '
+                         f'{health.calibration:g} s')
+        elif health.out_of_floor:
+            out = sorted((n for n in health.outputs if health.ratios[n] > health.limits[n]),
+                         key=lambda n: -health.ratios[n] / health.limits[n]) or [health.worst()]
+            stat.summary(diagnostics.WARN, 'external torque left its noise floor: ' + ', '.join(
+                f'{n} {health.ratios[n]:.1f} x its floor (limit {health.limits[n]:.1f}), '
+                f'{health.mean[n]:+.3g} N·m from its healthy level' for n in out))
+        else:
+            stat.summary(diagnostics.OK, 'external torque within its noise floor')
         return stat
 
 

@@ -25,7 +25,8 @@ Node parameters:
   n_segments (int), segment_params (str: YAML over config/segment.yaml),
   effects (string array): contact_hysteresis, pressure_friction, natural_curvature, sensor_lag
       ([''] = the baseline plant), seed (int),
-  load_torque (N·m): constant external torque on every segment (0 = free).
+  load_torque (N·m, live): constant external torque on every segment (0 = free); a change
+      (`ros2 param set`) takes effect at the next plant step.
   effect.<effect>.<parameter> (live): the strength of each effect on every segment
       (`segment_plant.STRENGTHS`: pressure_friction c_fp N·m, natural_curvature c_psi0_p rad,
       sensor_lag tau s), 0 = off, nan = as `effects` and segment_params say; a change
@@ -78,7 +79,7 @@ PARAMETERS = (
          choices=('', *SEGMENT_EFFECTS), unique=True),
     Spec('seed', 1, 'seed of the sensor noise', low=0, high=2 ** 32 - 1 - dbc_segments()),
     Spec('load_torque', 0.0, 'constant external torque on every segment, N·m', low=-100.0,
-         high=100.0),
+         high=100.0, read_only=False),
     Spec('clock_rate', 100.0, '/clock messages per second when use_sim_time is on', low=1.0,
          high=1000.0),
     # One live strength per effect that has one (`segment_plant.STRENGTHS`).
@@ -126,6 +127,13 @@ class SimArmNode(LiveEffectStrengths, Node):
         self.diagnostics.add('plant', self.diagnose_plant)
         self.get_logger().info(f'simulated arm ({n_segments} segments) on {self.link}, effects: '
                                f"{', '.join(effects) or 'none'}")
+
+    def on_parameters(self, changed):
+        """Take a live load torque (read by `step`, one float) and effect strengths."""
+        if 'load_torque' in changed:
+            self.load_torque = changed['load_torque']
+            self.get_logger().info(f'load torque {self.load_torque:g} N·m from the next step')
+        super().on_parameters(changed)
 
     def effect_plants(self):
         """Return the segment plants: every segment takes the same strengths."""

@@ -274,7 +274,7 @@ class StiffnessControllerNode(Node):
             stat.summary(diagnostics.OK, 'calibrating: taking the noise floors of the first '
                          f'{health.calibration:g} s')
         elif health.out_of_floor:
-            worst = max(live.OUTPUTS, key=lambda n: health.ratios[n] / health.limits[n])
+            worst = health.worst()
             stat.summary(diagnostics.WARN, f'model residual {health.ratios[worst]:.1f} x its '
                          f'noise floor ({worst}, limit {health.limits[worst]:.1f}): '
                          f'{live.describe(verdict)}')
