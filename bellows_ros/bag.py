@@ -15,10 +15,13 @@
 """
 rosbag2 recordings (sqlite3 or MCAP) as data tables (docs/interfaces.md "Data files").
 
-The rows are the `/joint_states` samples of the wanted device group; pressures
-(`/bellows/chambers`) and the force/torque sensor (`/bellows/wrench`) are aligned onto them by
+The rows are the joint-state samples of the wanted device group (the arm's on `/joint_states`,
+the actuator's on `/actuator/joint_states`); pressures (`/bellows/chambers`,
+`/actuator/chambers`) and the force/torque sensor (`/bellows/wrench`) are aligned onto them by
 stamp, zero-order hold: each row takes the latest message stamped at or before it (the first
 message for rows before any). `t` is the sample stamp in seconds from the first row.
+A recording made before the actuator had topics of its own holds its samples on `/joint_states`
+and `/bellows/chambers`: where the bag has no `/actuator/...` topic, that one is read instead.
 
 Topic and joint names are the contract's (`bellows_ros.interfaces`, also for the wrench axes),
 in the root namespace. Columns:
@@ -40,9 +43,14 @@ from bellows_ros.errors import DataError
 from bellows_ros.table import check_increasing, COLUMNS, Table
 
 SEGMENT = interfaces.segment_joint(1)
-JOINT_STATES, CHAMBERS, WRENCH = (topic.resolved() for topic in (
-    interfaces.JOINT_STATES, interfaces.CHAMBERS, interfaces.WRENCH))
-TYPES = {name: interfaces.by_name()[name] for name in (JOINT_STATES, CHAMBERS, WRENCH)}
+JOINT_STATES, CHAMBERS, ACTUATOR_JOINT_STATES, ACTUATOR_CHAMBERS, WRENCH = (
+    topic.resolved() for topic in (interfaces.JOINT_STATES, interfaces.CHAMBERS,
+                                   interfaces.ACTUATOR_JOINT_STATES, interfaces.ACTUATOR_CHAMBERS,
+                                   interfaces.WRENCH))
+TYPES = {name: interfaces.by_name()[name]
+         for name in (JOINT_STATES, CHAMBERS, ACTUATOR_JOINT_STATES, ACTUATOR_CHAMBERS, WRENCH)}
+# The actuator's topics, and where a recording from before they existed held its samples.
+ACTUATOR_FALLBACK = {ACTUATOR_JOINT_STATES: JOINT_STATES, ACTUATOR_CHAMBERS: CHAMBERS}
 
 
 def _first_line(exc):
@@ -78,7 +86,21 @@ def _messages(path, reader, typestore, topic):
         yield message
 
 
-def _joint_rows(path, reader, typestore, topic, names, field_names):
+def _actuator_topic(reader, topic):
+    """
+    Return (topic to read, its name in an error) for the actuator's `topic`.
+
+    `topic` if the bag holds it, else the shared topic a recording from before the actuator had
+    topics of its own used, where the bag holds that one.
+    """
+    held = {connection.topic for connection in reader.connections}
+    older = ACTUATOR_FALLBACK[topic]
+    if topic not in held and older in held:
+        return older, f'{topic} (nor, as recorded before it existed, on {older})'
+    return topic, topic
+
+
+def _joint_rows(path, reader, typestore, topic, names, field_names, named=None):
     """Stamps and values of `names` (each field of field_names) from messages that contain them."""
     stamps, rows = [], []
     for msg in _messages(path, reader, typestore, topic):
@@ -96,7 +118,7 @@ def _joint_rows(path, reader, typestore, topic, names, field_names):
         stamps.append(_stamp(msg))
         rows.append(row)
     if not stamps:
-        raise DataError(path, f"no messages on {topic} with joint(s) {', '.join(names)}")
+        raise DataError(path, f"no messages on {named or topic} with joint(s) {', '.join(names)}")
     return np.array(stamps, dtype=np.int64), np.array(rows, dtype=float)
 
 
@@ -168,10 +190,13 @@ def read_bag_table(path, system):
                        'p2': pressures[:, 1],
                        'tau_ext': _hold(stamps, wrench_stamps, torque)[:, 0]}
         elif system == 'actuator':
-            stamps, joints = _joint_rows(path, reader, typestore, JOINT_STATES,
-                                         list(interfaces.ACTUATOR_JOINTS), ('position',))
-            chamber_stamps, pressure = _joint_rows(path, reader, typestore, CHAMBERS,
-                                                   [interfaces.ACTUATOR_CHAMBER], ('effort',))
+            topic, named = _actuator_topic(reader, ACTUATOR_JOINT_STATES)
+            stamps, joints = _joint_rows(path, reader, typestore, topic,
+                                         list(interfaces.ACTUATOR_JOINTS), ('position',), named)
+            topic, named = _actuator_topic(reader, ACTUATOR_CHAMBERS)
+            chamber_stamps, pressure = _joint_rows(path, reader, typestore, topic,
+                                                   [interfaces.ACTUATOR_CHAMBER], ('effort',),
+                                                   named)
             wrench_stamps, force = _wrench_rows(path, reader, typestore, interfaces.ACTUATOR_FRAME,
                                                 ('force', 'z'))
             columns = {'x_c': joints[:, 0], 'x_s': joints[:, 1],

@@ -24,9 +24,13 @@ absolute on purpose, as ROS defines them: `/diagnostics` (one aggregator reads e
 status) and `/clock` (one time source); and `/bellows/estop`, one stop for every driver.
 
 Message conventions:
-- `joint_states` and `bellows/chambers` carry one message per sample per device group (the arm's
-  segments in one message, the actuator's `air_chamber`/`spring` in another), both halves of a
-  sample with the same stamp;
+- each device group has sample topics of its own, one message per sample, both halves of a
+  sample with the same stamp: the arm's segments on `joint_states` and `bellows/chambers`, the
+  actuator's `air_chamber`/`spring` and its chamber on `actuator/joint_states` and
+  `actuator/chambers`; so a 1 kHz node of one group never receives (decodes, then drops) the
+  other's samples. Subscribers still filter by joint name: another publisher may share a topic.
+  Recordings from before the split (the actuator on `joint_states` and `bellows/chambers`) are
+  still read (`bellows_ros.bag`);
 - `bellows/wrench`: `header.frame_id` names the sensor's device group. For an arm segment
   (`frame_id` `segment_<i>`) the measured external torque tau_ext is `wrench.torque.z` (z along the
   segment's bending axis, positive in the direction of positive Psi); for the actuator
@@ -75,9 +79,13 @@ class Topic:
 
 
 JOINT_STATES = Topic('joint_states', 'sensor_msgs/msg/JointState', SAMPLE_DEPTH,
-                     'arm: segment angles and rates; actuator: compressions x_c, x_s')
+                     'arm: segment angles and rates')
 CHAMBERS = Topic('bellows/chambers', 'sensor_msgs/msg/JointState', SAMPLE_DEPTH,
-                 'chamber pressures, Pa abs, in effort')
+                 'arm: chain pressures, Pa abs, in effort')
+ACTUATOR_JOINT_STATES = Topic('actuator/joint_states', 'sensor_msgs/msg/JointState',
+                              SAMPLE_DEPTH, 'actuator: compressions x_c, x_s')
+ACTUATOR_CHAMBERS = Topic('actuator/chambers', 'sensor_msgs/msg/JointState', SAMPLE_DEPTH,
+                          'actuator: chamber pressure, Pa abs, in effort')
 WRENCH = Topic('bellows/wrench', 'geometry_msgs/msg/WrenchStamped', SAMPLE_DEPTH,
                'external force/torque sensor: the actuator spring force, a segment torque')
 DRIVING_TORQUE = Topic('bellows/driving_torque', 'sensor_msgs/msg/JointState', SAMPLE_DEPTH,
@@ -112,9 +120,10 @@ CLOCK = Topic('/clock', 'rosgraph_msgs/msg/Clock', COMMAND_DEPTH,
 ESTOP = Topic('/bellows/estop', 'std_msgs/msg/Bool', 1,
               'True: every driver vents and refuses commands until released', latched=True)
 
-TOPICS = (JOINT_STATES, CHAMBERS, WRENCH, DRIVING_TORQUE, EXTERNAL_TORQUE, PRESSURE_COMMAND,
-          STIFFNESS_SETPOINT, STIFFNESS, MOTOR_COMMAND, PSI_SETPOINT, JOINT_TRAJECTORY,
-          TRAJECTORY_STATE, DIAGNOSTICS, CLOCK, ESTOP)
+TOPICS = (JOINT_STATES, CHAMBERS, ACTUATOR_JOINT_STATES, ACTUATOR_CHAMBERS, WRENCH,
+          DRIVING_TORQUE, EXTERNAL_TORQUE, PRESSURE_COMMAND, STIFFNESS_SETPOINT, STIFFNESS,
+          MOTOR_COMMAND, PSI_SETPOINT, JOINT_TRAJECTORY, TRAJECTORY_STATE, DIAGNOSTICS, CLOCK,
+          ESTOP)
 
 
 def by_name(namespace='/'):

@@ -12,7 +12,8 @@
 # graph is stopped. With --no-scenario the graph runs until Ctrl-C. With --namespace NS every node
 # runs in /NS (its topics under /NS/...), so graphs in different namespaces run side by side,
 # each with its own pty and CAN group. With --record BAG, `bellows record` writes the devices'
-# samples (/joint_states, /bellows/chambers, /bellows/wrench) to the rosbag2 directory BAG while
+# samples (/joint_states, /bellows/chambers, /actuator/joint_states, /actuator/chambers,
+# /bellows/wrench) to the rosbag2 directory BAG while
 # the graph runs (root namespace only; docs/workflow.md). With --actuator-only the arm's nodes
 # (sim_arm_node, model_node, arm_controller_node) are left out and the actuator path runs
 # SCHED_FIFO as the arm's does (a lighter graph whose recording keeps every sample on a busy
@@ -121,7 +122,7 @@ start stiffness_controller_node
 [ "$arm" = 1 ] && start arm_controller_node
 if [ -n "$record" ]; then
   "$bin/bellows" record --output "$record" --topics /joint_states /bellows/chambers \
-    /bellows/wrench >"$node_logs/record.log" 2>&1 &
+    /actuator/joint_states /actuator/chambers /bellows/wrench >"$node_logs/record.log" 2>&1 &
   pids+=($!)
   echo "launch_sim: bellows record -> $record (pid $!)" >&2
 fi

@@ -57,16 +57,23 @@ def _wrench(ns, force_z):
     return STORE.types[WRENCH](header=_header(ns, 'actuator'), wrench=body)
 
 
+# The actuator's sample topics: its own, or (a bag recorded before they existed) the arm's.
+ACTUATOR_TOPICS = {'own': ('/actuator/joint_states', '/actuator/chambers'),
+                   'shared': ('/joint_states', '/bellows/chambers')}
+
+
 def write_actuator_bag(path, rows, storage=StoragePlugin.SQLITE3, joint_type=JOINT_STATE,
-                       log_time=lambda k, ns: ns):
+                       log_time=lambda k, ns: ns, layout='own'):
     """
     rows: (stamp ns, x_c, x_s, p, f) -> the actuator's three topics, a message each per row.
 
-    Messages are logged at `log_time(row index, stamp)` (the header stamp by default).
+    Messages are logged at `log_time(row index, stamp)` (the header stamp by default); `layout`
+    is a key of ACTUATOR_TOPICS.
     """
+    joint_topic, chamber_topic = ACTUATOR_TOPICS[layout]
     with Writer(path, version=8, storage_plugin=storage) as writer:
-        joints = writer.add_connection('/joint_states', joint_type, typestore=STORE)
-        chambers = writer.add_connection('/bellows/chambers', JOINT_STATE, typestore=STORE)
+        joints = writer.add_connection(joint_topic, joint_type, typestore=STORE)
+        chambers = writer.add_connection(chamber_topic, JOINT_STATE, typestore=STORE)
         forces = writer.add_connection('/bellows/wrench', WRENCH, typestore=STORE)
         for k, (ns, x_c, x_s, p, f) in enumerate(rows):
             joint_message = (_joints(ns, ('air_chamber', 'spring'), position=(x_c, x_s))
@@ -153,9 +160,22 @@ def test_a_truncated_storage_file_is_one_line(tmp_path, storage):
 
 def test_a_topic_of_the_wrong_type_is_named(tmp_path):
     write_actuator_bag(tmp_path / 'bag', actuator_rows(), joint_type=WRENCH)
-    with pytest.raises(DataError, match='/joint_states holds geometry_msgs/msg/WrenchStamped, '
-                                        'expected sensor_msgs/msg/JointState'):
+    with pytest.raises(DataError, match='/actuator/joint_states holds geometry_msgs/msg/'
+                                        'WrenchStamped, expected sensor_msgs/msg/JointState'):
         data.read_table(tmp_path / 'bag', 'actuator')
+
+
+def test_a_bag_from_before_the_actuator_topics_exports_the_same(tmp_path, capsys):
+    """The actuator's samples on /joint_states, /bellows/chambers (an older bag): read alike."""
+    rows = actuator_rows(50)
+    for layout in ACTUATOR_TOPICS:
+        write_actuator_bag(tmp_path / layout, rows, layout=layout)
+        status, err = run_cli(['export', 'actuator', str(tmp_path / layout), '--output',
+                               str(tmp_path / f'{layout}.csv')], capsys)
+        assert status == 0 and '50 rows' in err, err
+    assert (tmp_path / 'own.csv').read_text() == (tmp_path / 'shared.csv').read_text()
+    table = data.read_table(tmp_path / 'shared.csv', 'actuator')
+    np.testing.assert_allclose(table['p'], [row[3] for row in rows])
 
 
 @pytest.mark.parametrize('bad', [math.nan, math.inf, -math.inf])

@@ -61,8 +61,8 @@ def wrench(t, force_z):
 
 def write_actuator_bag(path, record, every=4):
     with Writer(path, version=8) as writer:
-        joints = writer.add_connection('/joint_states', JOINT_STATE, typestore=STORE)
-        chambers = writer.add_connection('/bellows/chambers', JOINT_STATE, typestore=STORE)
+        joints = writer.add_connection('/actuator/joint_states', JOINT_STATE, typestore=STORE)
+        chambers = writer.add_connection('/actuator/chambers', JOINT_STATE, typestore=STORE)
         forces = writer.add_connection('/bellows/wrench', WRENCH, typestore=STORE)
         for k in range(0, len(record['t']), every):
             t = float(record['t'][k])

@@ -27,7 +27,7 @@ import time
 import pytest
 
 from bellows_ros import params
-from bellows_ros.bench import graph, Result
+from bellows_ros.bench import graph, graph_actuator, Result
 from bellows_ros.cli import main
 from bellows_ros.cli.bench import format_table
 from bellows_ros.runtime import realtime
@@ -136,3 +136,9 @@ def test_graph_bench_reports_every_figure_for_each_variant(capsys):
     for name in ('graph.platform.wakeup_lateness_no_latency_limit', 'graph.no_latency_limit.rate'):
         assert results[name]['extra']['cpu_latency_requested'] < 0, name
     assert latency_requests_held() == []
+    # bench/graph_actuator.py (its module name holds 'graph'): the whole graph, every node worked.
+    for prefix in ('graph_actuator',) + (() if rclpy_missing else ('graph_actuator.rclpy',)):
+        assert 0.0 < results[f'{prefix}.rate']['value'] <= 1100.0
+        assert results[f'{prefix}.rate']['extra']['stiffness_control_hz'] > 0.0
+        for name in graph_actuator.NODES:
+            assert results[f'{prefix}.cpu.{name}']['value'] > 0.01, name

@@ -60,7 +60,7 @@ def test_a_board_killed_under_the_driver_is_reported_and_survived(
         probe.create_subscription(
             msg.DiagnosticArray, '/diagnostics',
             lambda a: status.update({s.name: (s.level, s.message) for s in a.status}), 50)
-        probe.create_subscription(msg.JointState, '/joint_states',
+        probe.create_subscription(msg.JointState, '/actuator/joint_states',
                                   lambda m: samples.append(time.monotonic()), 1000)
 
         def spin_until(condition, seconds):

@@ -22,7 +22,10 @@ Processes: sim_arm_node (udp_multicast CAN), sim_actuator_node (pty), driver_nod
 independent plain-Cyclone subscriber (no bellows_ros import, its own IDL definitions with ROS 2
 type names) must see /joint_states and /bellows/driving_torque. Then the driver is stopped and its
 final count of published arm samples must equal the model node's count of evaluated samples.
+The probe counts the sample topics by joint names: the arm's topics carry no actuator message
+(the arm's 1 kHz subscribers never decode one), the actuator's carry the actuator's only.
 """
+from collections import Counter
 import math
 import os
 import random
@@ -35,7 +38,7 @@ from plain_cyclone import JOINT_STATE_SUBSCRIBER
 import pytest
 from runtimes import launch, logs, node_env, override, SIM_CONFIG
 
-from bellows_ros import params
+from bellows_ros import interfaces, params
 from bellows_ros.runtime import dds_node, realtime
 from bellows_ros.runtime.messages import msg
 
@@ -135,6 +138,15 @@ def graph(runtime, tmp_path, monkeypatch):
         for status in array.status:
             final[status.name] = {kv.key: kv.value for kv in status.values}
     probe.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
+    # Every message on the four sample topics, by the names it carries (subscribed before the
+    # driver starts: it waits for a subscriber on each).
+    seen = {topic.resolved(): Counter() for topic in (
+        interfaces.JOINT_STATES, interfaces.CHAMBERS, interfaces.ACTUATOR_JOINT_STATES,
+        interfaces.ACTUATOR_CHAMBERS)}
+    for name, counter in seen.items():
+        probe.create_subscription(msg.JointState, name,
+                                  lambda m, counter=counter: counter.update([tuple(m.name)]),
+                                  interfaces.SAMPLE_DEPTH)
     # One scheduling class for the whole path: config/nodes_sim.yaml runs the simulated arm and
     # the driver SCHED_FIFO above a model node at normal priority, which on a loaded machine then
     # falls behind and drops samples, and this test counts every sample through the model.
@@ -163,7 +175,7 @@ def graph(runtime, tmp_path, monkeypatch):
             ('wait_for_subscribers', 20.0))]
         processes['driver_node'] = launch('driver_node', sum(driver, []) + normal['driver_node'],
                                           env, tmp_path)
-        yield processes, domain, tmp_path, probe, final
+        yield processes, domain, tmp_path, probe, final, seen
     finally:
         for process in processes.values():
             stop(process)
@@ -171,7 +183,7 @@ def graph(runtime, tmp_path, monkeypatch):
 
 
 def test_graph_publishes_and_every_sample_is_evaluated(graph):
-    processes, domain, tmp_path, node, final = graph
+    processes, domain, tmp_path, node, final, seen = graph
     plain = subprocess.run([sys.executable, '-c', PLAIN_SUBSCRIBER, domain, '/joint_states',
                             '/bellows/driving_torque'], capture_output=True, text=True, timeout=60,
                            env={k: v for k, v in os.environ.items() if k != 'PYTHONPATH'},
@@ -207,6 +219,15 @@ def test_graph_publishes_and_every_sample_is_evaluated(graph):
     assert int(model['evaluated']) == published, f'driver {driver}\nmodel {model}'
     assert model['rejected'] == '0' and model['unmatched_dropped'] == '0'
     assert int(final['driver_node: actuator']['published']) > 500
+    # Each group on its own topics: no actuator message reaches an arm subscriber (#22 point 4).
+    arm = {'/joint_states': {('segment_1', 'segment_2')},
+           '/bellows/chambers': {('segment_1/chain_1', 'segment_1/chain_2', 'segment_2/chain_1',
+                                  'segment_2/chain_2')},
+           '/actuator/joint_states': {interfaces.ACTUATOR_JOINTS},
+           '/actuator/chambers': {(interfaces.ACTUATOR_CHAMBER,)}}
+    for topic, names in arm.items():
+        assert set(seen[topic]) == names, (topic, seen[topic])
+        assert sum(seen[topic].values()) > 500, (topic, seen[topic])
 
     # The CPU latency limit the config asks for was in force while the nodes ran (each reports
     # the limit in force on /diagnostics), where the nodes could request it.

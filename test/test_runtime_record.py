@@ -108,21 +108,31 @@ def write_bag(path, messages, storage='sqlite3'):
                          STORE.serialize_cdr(to_typestore(message), ros_type))
 
 
-def test_actuator_zero_order_hold_on_sqlite3(tmp_path):
+# The actuator's sample topics: its own, or shared with the arm's (recorded before the split).
+LAYOUTS = {'own': ('/actuator/joint_states', '/actuator/chambers'),
+           'shared': ('/joint_states', '/bellows/chambers')}
+
+
+@pytest.mark.parametrize('layout', sorted(LAYOUTS))
+def test_actuator_zero_order_hold_on_sqlite3(tmp_path, layout):
+    joint_topic, chamber_topic = LAYOUTS[layout]
     base = 10 * 1_000_000_000
     messages = []
     for k in range(10):  # joints at 1 kHz, pressure at 500 Hz, force at 250 Hz
         joints = msg.JointState(name=['air_chamber', 'spring'], position=[0.02, 0.001 * k])
         joints.header.stamp = stamp(base + k * 1_000_000)
-        messages.append(('/joint_states', joints))
-        # The arm's messages on the same topics must be ignored for the actuator table.
+        messages.append((joint_topic, joints))
+        # The arm's messages (on the same topics, in an older bag) are no part of the table.
         arm = msg.JointState(name=['segment_1'], position=[9.0])
         arm.header.stamp = stamp(base + k * 1_000_000 + 10)
-        messages.append(('/joint_states', arm))
+        arm_chambers = msg.JointState(name=['segment_1/chain_1', 'segment_1/chain_2'],
+                                      effort=[3e5, 3e5])
+        arm_chambers.header.stamp = arm.header.stamp
+        messages += [('/joint_states', arm), ('/bellows/chambers', arm_chambers)]
         if k % 2 == 0:
             chambers = msg.JointState(name=['actuator'], effort=[1e5 + k])
             chambers.header.stamp = stamp(base + k * 1_000_000)
-            messages.append(('/bellows/chambers', chambers))
+            messages.append((chamber_topic, chambers))
         if k % 4 == 1:
             wrench = msg.WrenchStamped()
             wrench.header.frame_id, wrench.wrench.force.z = 'actuator', float(k)
@@ -140,12 +150,20 @@ def test_actuator_zero_order_hold_on_sqlite3(tmp_path):
 def test_missing_topic_is_a_clear_error(tmp_path):
     joints = msg.JointState(name=['air_chamber', 'spring'], position=[0.0, 0.0])
     chambers = msg.JointState(name=['actuator'], effort=[1e5])
-    write_bag(tmp_path / 'bag', [('/joint_states', joints), ('/bellows/chambers', chambers)])
+    write_bag(tmp_path / 'bag', [('/actuator/joint_states', joints),
+                                 ('/actuator/chambers', chambers)])
     with pytest.raises(DataError, match="no messages on /bellows/wrench with frame_id 'actuator'"):
         read_table(tmp_path / 'bag', 'actuator')
     with pytest.raises(DataError,
                        match='no messages on /joint_states with joint\\(s\\) segment_1'):
         read_table(tmp_path / 'bag', 'segment')
+    # Only the arm's topics: the actuator's are named, and the older shared one looked at.
+    arm = msg.JointState(name=['segment_1'], position=[0.0])
+    write_bag(tmp_path / 'arm', [('/joint_states', arm)])
+    with pytest.raises(DataError, match='no messages on /actuator/joint_states \\(nor, as '
+                       'recorded before it existed, on /joint_states\\) with joint\\(s\\) '
+                       'air_chamber, spring'):
+        read_table(tmp_path / 'arm', 'actuator')
 
 
 @pytest.mark.slow

@@ -116,8 +116,8 @@ def run_scenario(env, out, device, controller_params, k_low, k_high, step_time, 
         processes.append(launch('driver_node', override('driver_node', 'arm.enabled', 'false')
                                 + override('driver_node', 'actuator.port', port), env, out))
         recorder = subprocess.Popen(
-            [str(BIN / 'bellows'), 'record', '--output', str(bag), '--topics', '/joint_states',
-             '/bellows/chambers', '/bellows/wrench'], env=env,
+            [str(BIN / 'bellows'), 'record', '--output', str(bag), '--topics',
+             '/actuator/joint_states', '/actuator/chambers', '/bellows/wrench'], env=env,
             stdout=open(out / 'record.log', 'w'), stderr=subprocess.STDOUT)
         processes.append(recorder)
         time.sleep(2.0)

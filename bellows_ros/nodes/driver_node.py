@@ -15,8 +15,10 @@
 """
 driver_node: the arm on CAN and/or the actuator on serial, wired to the topic contract.
 
-One message per device sample and group (docs/interfaces.md): `/joint_states`, `/bellows/chambers`,
-and for the actuator's load cell `/bellows/wrench` (frame `actuator`, force.z = spring force). The
+One message per device sample and group (docs/interfaces.md), each group on topics of its own: the
+arm on `/joint_states` and `/bellows/chambers`, the actuator on `/actuator/joint_states` and
+`/actuator/chambers` (so that no 1 kHz node decodes the other group's samples), and the actuator's
+load cell on `/bellows/wrench` (frame `actuator`, force.z = spring force). The
 devices' 1 kHz sampling is the clock: messages go out from the drivers' reader threads as each
 sample arrives, stamped with the node clock at arrival (the actuator's: at the time the board
 took it, from the board's clock mapped onto the node clock, `sample_delivery.DeviceClock`, so a
@@ -43,10 +45,11 @@ Parameters (config/nodes_*.yaml, section `driver_node`):
       `unconfigured` for `ros2 lifecycle set` (the launch files send the transitions).
   shutdown_timeout (s), ambient_tolerance (Pa): shutdown waits up to shutdown_timeout for every
       chamber to read within ambient_tolerance of ambient (the segment's p0).
-  wait_for_subscribers (s): before opening the devices, wait up to this long for `/joint_states`
-      and `/bellows/chambers` to have a subscriber (like `ros2 topic pub
-      --wait-matching-subscriptions`), so that a consumer started first sees every sample; 0 = no
-      wait (the default: a robot's driver publishes whoever listens).
+  wait_for_subscribers (s): before opening the devices, wait up to this long for the sample
+      topics of every enabled group (`/joint_states` and `/bellows/chambers` for the arm,
+      `/actuator/joint_states` and `/actuator/chambers` for the actuator) to have a subscriber
+      (like `ros2 topic pub --wait-matching-subscriptions`), so that a consumer started first
+      sees every sample; 0 = no wait (the default: a robot's driver publishes whoever listens).
   realtime_priority (int): SCHED_FIFO priority for the node's threads, 1-99; 0 = normal
       scheduling (runtime/realtime.py).
   cpu_latency_limit (s): CPU wake-up latency held while the node runs, 0 = idle CPUs poll;
@@ -181,8 +184,15 @@ class DriverNode(Node):
         if not (self.use_arm or self.use_actuator):
             raise BellowsError('driver_node: neither arm.enabled nor actuator.enabled is set')
 
-        self.state_pub = self.publisher(interfaces.JOINT_STATES)
-        self.chamber_pub = self.publisher(interfaces.CHAMBERS)
+        # Each device group on its own sample topics: only the enabled groups' are advertised.
+        self.state_pub = self.chamber_pub = None
+        self.actuator_state_pub = self.actuator_chamber_pub = None
+        if self.use_arm:
+            self.state_pub = self.publisher(interfaces.JOINT_STATES)
+            self.chamber_pub = self.publisher(interfaces.CHAMBERS)
+        if self.use_actuator:
+            self.actuator_state_pub = self.publisher(interfaces.ACTUATOR_JOINT_STATES)
+            self.actuator_chamber_pub = self.publisher(interfaces.ACTUATOR_CHAMBERS)
         self.wrench_pub = self.publisher(interfaces.WRENCH)
         self._publish_lock = threading.Lock()  # both reader threads publish
         self.arm = self.actuator = None
@@ -359,17 +369,24 @@ class DriverNode(Node):
 
     def _wait_for_subscribers(self, timeout):
         end = time.monotonic() + timeout
-        publishers = (self.state_pub, self.chamber_pub)
+        publishers = self._sample_publishers()
         while not all(p.get_subscription_count() for p in publishers):
             if time.monotonic() > end:
-                self.get_logger().warn(f'no subscriber on /joint_states and /bellows/chambers '
-                                       f'after {timeout:g} s: publishing anyway')
+                alone = ', '.join(p.topic_name for p in publishers
+                                  if not p.get_subscription_count())
+                self.get_logger().warn(f'no subscriber on {alone} after {timeout:g} s: '
+                                       'publishing anyway')
                 return
             time.sleep(0.01)
         # Our writers have matched the readers; each reader matches our writers only when it has
         # processed our announcement, and drops what arrives before (seen: the first 8-17 samples
         # lost, half of some, under load). Give the other side the same chance.
         time.sleep(_DISCOVERY_SETTLE)
+
+    def _sample_publishers(self):
+        """Return the enabled groups' sample publishers (joint states, chambers)."""
+        return [p for p in (self.state_pub, self.chamber_pub, self.actuator_state_pub,
+                            self.actuator_chamber_pub) if p is not None]
 
     def close(self):
         """End of the process: shut down (vent, wait for ambient) from wherever it is."""
@@ -391,7 +408,7 @@ class DriverNode(Node):
             # Samples still being repaired (a packet lost under load) must reach the readers
             # before the participant goes; bounded, so a reader that died cannot hold it up.
             end = time.monotonic() + 1.0
-            for publisher in (self.state_pub, self.chamber_pub, self.wrench_pub,
+            for publisher in (*self._sample_publishers(), self.wrench_pub,
                               self.diagnostics.publisher):
                 left = max(0.0, end - time.monotonic())
                 publisher.wait_for_all_acked(self.runtime.Duration(seconds=left))
@@ -417,8 +434,8 @@ class DriverNode(Node):
         wrench = self._header(self.msg.WrenchStamped(), stamp, interfaces.ACTUATOR_FRAME)
         wrench.wrench.force.z = sample.f
         with self._publish_lock:
-            self.state_pub.publish(state)
-            self.chamber_pub.publish(chambers)
+            self.actuator_state_pub.publish(state)
+            self.actuator_chamber_pub.publish(chambers)
             self.wrench_pub.publish(wrench)
             self.published['actuator'] += 1
         self.actuator_clock.tick(sample.index, sample.t_receive, time.monotonic() - start)

@@ -21,9 +21,10 @@ scenario_node: a short scripted scenario on the running graph, printed and plott
    `trajectory` (`sweep`: ±0.7 rad with holds) through the arm controller (arm_controller_node,
    paper A's model as feedforward), the set-points published on /arm/psi_setpoint at 50 Hz.
 
-What comes back is recorded: /actuator/stiffness, /joint_states (segment_1 Ψ, air_chamber x_c),
-/bellows/chambers (segment_1 pressures), /bellows/driving_torque (segment_1 τ_drive). At the end it
-prints a summary (step settling time and overshoot, tracking error) and writes
+What comes back is recorded: /actuator/stiffness, /joint_states (segment_1 Ψ),
+/actuator/joint_states (air_chamber x_c), /bellows/chambers (segment_1 pressures),
+/bellows/driving_torque (segment_1 τ_drive). At the end it prints a summary (step settling time
+and overshoot, tracking error) and writes
 `output_dir/scenario.csv` and `output_dir/scenario.png`. For comparison the plot also shows the
 angle of a feedback-only controller (same gains, no model) on the same trajectory, run in process
 on the simulated segment (`control.closed_loop`, as `bellows bench --only arm_control`).
@@ -98,6 +99,7 @@ class ScenarioNode(Node):
         # that does not acknowledge makes them block) and may miss samples when it falls behind.
         sensor = self.runtime.SENSOR_DATA
         for topic, callback in ((interfaces.JOINT_STATES, self.on_joint_states),
+                                (interfaces.ACTUATOR_JOINT_STATES, self.on_actuator_states),
                                 (interfaces.CHAMBERS, self.on_chambers),
                                 (interfaces.DRIVING_TORQUE, self.on_torque)):
             self.create_subscription(getattr(self.msg, topic.message), topic.name, callback,
@@ -120,6 +122,8 @@ class ScenarioNode(Node):
     def on_joint_states(self, msg):
         if SEGMENT in msg.name:
             self._add('psi', msg.position[msg.name.index(SEGMENT)], msg.header.stamp)
+
+    def on_actuator_states(self, msg):
         if AIR_CHAMBER in msg.name:
             self._add('x_c', msg.position[msg.name.index(AIR_CHAMBER)], msg.header.stamp)
 

@@ -19,7 +19,7 @@ Wiring only; the logic is in `control.stiffness` (set-point, gas-amount correcti
 measured pressure) and `control.pd` (PD on the encoder position).
 
   /actuator/stiffness_setpoint (Float64, N/m) -> target compression x_c*
-  /joint_states (air_chamber, spring) + /bellows/chambers (actuator pressure), every
+  /actuator/joint_states (air_chamber, spring) + /actuator/chambers (its pressure), every
       `control_every`-th sample (200 Hz by default: the lead screw moves 2.3 mm/s at most, so a
       faster loop gains nothing and costs a DDS message per sample):
       PD(x_c*, x_c) -> /actuator/motor_command (Float64, duty -1..1)
@@ -31,14 +31,15 @@ the rising branch (`models.stiffness_map`), logs it and its range at start, refu
 outside the range (error, previous target kept) and warns when a leak pushes the held set-point
 out of it; /diagnostics carries branch, range and warning.
 
-The doctor live (docs/doctor.md, `bellows_ros.live`): every sample (x_c, x_s from /joint_states,
-the pressure, the spring force from /bellows/wrench) goes into a ring buffer; once a second the
-residuals of the model at its identified gas amount (measured pressure and force minus (17),
-(7)-(12)) are compared with their noise floors, taken from the first `model_health.calibration`
-seconds, and reported as `model_health` on /diagnostics. When they leave the floor, the doctor
-diagnoses the last `model_health.diagnosis_window` seconds in a separate process (one at a time,
-killed after `model_health.time_bound` s) and the status turns WARN naming the cause and its
-fitted size. The sample callback only appends a row; its cost is counted (`cost_per_sample_us`).
+The doctor live (docs/doctor.md, `bellows_ros.live`): every sample (x_c, x_s from
+/actuator/joint_states, the pressure, the spring force from /bellows/wrench) goes into a ring
+buffer; once a second the residuals of the model at its identified gas amount (measured pressure
+and force minus (17), (7)-(12)) are compared with their noise floors, taken from the first
+`model_health.calibration` seconds, and reported as `model_health` on /diagnostics. When they leave
+the floor, the doctor diagnoses the last `model_health.diagnosis_window` seconds in a separate
+process (one at a time, killed after `model_health.time_bound` s) and the status turns WARN naming
+the cause and its fitted size. The sample callback only appends a row; its cost is counted
+(`cost_per_sample_us`).
 
 Parameters: actuator_params (str: YAML over config/actuator.yaml), pd.kp (1/m), pd.kd (s/m),
 pd.velocity_cutoff (Hz), pd.duty_max, pd.deadband (m), gas_time_constant (s),
@@ -147,8 +148,9 @@ class StiffnessControllerNode(Node):
         self.motor_pub = self.publisher(interfaces.MOTOR_COMMAND)
         self.stiffness_pub = self.publisher(interfaces.STIFFNESS)
         self.subscription(interfaces.STIFFNESS_SETPOINT, self.on_setpoint)
-        self.subscription(interfaces.CHAMBERS, self.on_chambers)
-        self.subscription(interfaces.JOINT_STATES, self.on_joint_states)
+        # The actuator's own sample topics: the arm's 1 kHz samples never reach this node.
+        self.subscription(interfaces.ACTUATOR_CHAMBERS, self.on_chambers)
+        self.subscription(interfaces.ACTUATOR_JOINT_STATES, self.on_joint_states)
         self.subscription(interfaces.WRENCH, self.on_wrench)
         self.diagnostics = diagnostics.Updater(self)
         self.diagnostics.setHardwareID('none')  # software: the driver reports the devices
@@ -240,7 +242,7 @@ class StiffnessControllerNode(Node):
         stat.update(values)
         if rate == 0.0:
             stat.summary(diagnostics.STALE, 'no samples since the last report (no driver '
-                         'publishing the actuator on /joint_states?): not controlling')
+                         'publishing /actuator/joint_states?): not controlling')
         elif self.setpoint.warning:
             stat.summary(diagnostics.WARN, f'set-point out of reach: {self.setpoint.warning}')
         else:
