@@ -66,6 +66,7 @@ Nothing here asserts a time. A node that exits is an error (BellowsError with it
 import os
 from pathlib import Path
 import random
+import signal
 import statistics
 import subprocess
 import sys
@@ -165,14 +166,9 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
                              'autostart': 'true'},
              'model_node': {'segments': list(range(1, segments + 1)), 'latency_budget': 0.002}}
     binary = Path(sys.executable).parent
-    logs = tempfile.TemporaryDirectory()
-    processes = {}
     windows, final = [], {}
-    previous_env = {name: os.environ.get(name)
-                    for name in ('ROS_DOMAIN_ID', *dds_node.LOOPBACK_ENVIRONMENT)}
-    os.environ.update(ROS_DOMAIN_ID=domain, **dds_node.LOOPBACK_ENVIRONMENT)
-    try:
-        dds_node.init([])
+    with GraphRun(dds_node, domain) as graph:
+        processes = graph.processes
         node = dds_node.Node('bench_graph')
 
         def on_diagnostics(array):
@@ -196,18 +192,16 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
                                    str(CONFIG), *overrides['model_node'],
                                    *overrides['driver_node']]}
         for name, command in commands.items():
-            log = open(Path(logs.name) / f'{name}.log', 'w')
-            processes[name] = subprocess.Popen(command, env=env, stdout=log,
-                                               stderr=subprocess.STDOUT)
+            graph.start(name, command, env)
             if name in ('model_node', COMPOSED):
                 # The driver publishes from its first sample on: the model must listen by then
                 # (and the driver waits until it has matched it).
                 end = time.monotonic() + 60.0
                 while 'model_node: driving torque' not in final and time.monotonic() < end:
                     dds_node.spin_once(node, timeout_sec=0.05)
-                    _check_alive(processes, logs.name)
+                    graph.check_alive()
         _spin(dds_node, node, 4.0)  # start-up and discovery
-        _check_alive(processes, logs.name)
+        graph.check_alive()
         cpu0 = {name: _cpu_seconds(p.pid) for name, p in processes.items()}
         counts0 = _counts(final)
         windows.clear()
@@ -217,7 +211,7 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
         _spin(dds_node, node, window)
         elapsed = time.monotonic() - start
         stolen = _steal_fraction(times, _cpu_times())
-        _check_alive(processes, logs.name)
+        graph.check_alive()
         cpu = {name: (_cpu_seconds(p.pid) - cpu0[name]) / elapsed
                for name, p in processes.items()}
         measured = list(windows)
@@ -226,22 +220,6 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
             processes['driver_node'].send_signal(2)
             processes['driver_node'].wait(timeout=10)
             _spin(dds_node, node, 2.5)  # the model's next report carries its final count
-    finally:
-        for process in processes.values():
-            if process.poll() is None:
-                process.send_signal(2)
-        for process in processes.values():
-            try:
-                process.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                process.kill()
-        dds_node.shutdown()
-        for name, value in previous_env.items():
-            if value is None:
-                os.environ.pop(name, None)
-            else:
-                os.environ[name] = value
-        logs.cleanup()
     driver = final.get('driver_node: arm', {})
     model = final.get('model_node: driving torque', {})
     published = int(driver.get('published', 0))
@@ -372,12 +350,72 @@ def _steal_fraction(start, end):
     return delta[7] / sum(delta) if sum(delta) else float('nan')
 
 
-def _check_alive(processes, log_dir):
-    for name, process in processes.items():
-        if process.poll() is not None:
-            log = (Path(log_dir) / f'{name}.log').read_text().strip().splitlines()
-            raise BellowsError(f'bench graph: {name} exited with status {process.returncode}'
-                               + (f' ({log[-1]})' if log else ''))
+class GraphRun:
+    """
+    The bench's side of one node graph, shared by the graph benches (this one, graph_actuator).
+
+    `with GraphRun(dds_node, domain) as graph:` joins `domain` on loopback (the bench's own DDS
+    participant: init it, make its node), `graph.start(name, command, env)` starts a node process
+    logging to `graph.logs/<name>.log`, `graph.check_alive()` raises if one has exited. On exit
+    every process is sent SIGINT (killed after 10 s), the participant leaves, ROS_DOMAIN_ID and
+    the loopback settings are restored, the logs are removed.
+    """
+
+    def __init__(self, dds_node, domain):
+        self.dds_node, self.domain = dds_node, domain
+        self.processes = {}
+        self._logs = tempfile.TemporaryDirectory()
+        self.logs = Path(self._logs.name)
+        self._files = []
+        self._previous = {}
+
+    def __enter__(self):
+        names = ('ROS_DOMAIN_ID', *self.dds_node.LOOPBACK_ENVIRONMENT)
+        self._previous = {name: os.environ.get(name) for name in names}
+        os.environ.update(ROS_DOMAIN_ID=self.domain, **self.dds_node.LOOPBACK_ENVIRONMENT)
+        try:
+            self.dds_node.init([])
+        except BaseException:
+            self._restore()
+            raise
+        return self
+
+    def start(self, name, command, env):
+        """Start node process `name` (`command`, in `env`), its output in logs/<name>.log."""
+        log = open(self.logs / f'{name}.log', 'w')
+        self._files.append(log)
+        self.processes[name] = subprocess.Popen(command, env=env, stdout=log,
+                                                stderr=subprocess.STDOUT)
+
+    def check_alive(self):
+        """Raise BellowsError naming a node process that has exited, with its last log line."""
+        for name, process in self.processes.items():
+            if process.poll() is not None:
+                log = (self.logs / f'{name}.log').read_text().strip().splitlines()
+                raise BellowsError(f'bench graph: {name} exited with status '
+                                   f'{process.returncode}' + (f' ({log[-1]})' if log else ''))
+
+    def __exit__(self, *exc):
+        for process in self.processes.values():
+            if process.poll() is None:
+                process.send_signal(signal.SIGINT)
+        for process in self.processes.values():
+            try:
+                process.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                process.kill()
+        self.dds_node.shutdown()
+        self._restore()
+        for log in self._files:
+            log.close()
+        self._logs.cleanup()
+
+    def _restore(self):
+        for name, value in self._previous.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
 
 
 def _spin(dds_node, node, seconds):

@@ -32,15 +32,13 @@ import os
 from pathlib import Path
 import random
 import statistics
-import subprocess
 import sys
-import tempfile
 import time
 
 from bellows_ros import params
 from bellows_ros.bench import Result
-from bellows_ros.bench.graph import _check_alive, _cpu_seconds, _cpu_times, _spin, \
-    _steal_fraction
+from bellows_ros.bench.graph import _cpu_seconds, _cpu_times, _spin, _steal_fraction, \
+    GraphRun
 from bellows_ros.runtime.node import rclpy_unavailable
 
 CONFIG = params.default_file('nodes_sim')
@@ -70,8 +68,8 @@ def _measure(prefix, runtime, window):
 
     domain = str(random.randint(40, 59))
     group = f'239.74.168.{random.randint(2, 250)}'
-    logs = tempfile.TemporaryDirectory()
-    port = str(Path(logs.name) / 'actuator')
+    graph = GraphRun(dds_node, domain)
+    port = str(graph.logs / 'actuator')
     env = dict(os.environ, ROS_DOMAIN_ID=domain, BELLOWS_RUNTIME=runtime,
                **dds_node.LOOPBACK_ENVIRONMENT)
     given = {'sim_arm_node': {'can.channel': group},
@@ -80,12 +78,8 @@ def _measure(prefix, runtime, window):
                              'wait_for_subscribers': 20.0, 'autostart': 'true'},
              'model_node': {}, 'arm_controller_node': {}, 'stiffness_controller_node': {}}
     binary = Path(sys.executable).parent
-    processes, reports, final = {}, {}, {}
-    previous_env = {name: os.environ.get(name)
-                    for name in ('ROS_DOMAIN_ID', *dds_node.LOOPBACK_ENVIRONMENT)}
-    os.environ.update(ROS_DOMAIN_ID=domain, **dds_node.LOOPBACK_ENVIRONMENT)
-    try:
-        dds_node.init([])
+    processes, reports, final = graph.processes, {}, {}
+    with graph:
         node = dds_node.Node('bench_graph_actuator')
 
         def on_diagnostics(array):
@@ -102,20 +96,18 @@ def _measure(prefix, runtime, window):
                 end = time.monotonic() + 60.0
                 while not all(c in final for c in CONSUMERS) and time.monotonic() < end:
                     dds_node.spin_once(node, timeout_sec=0.05)
-                    _check_alive(processes, logs.name)
-            log = open(Path(logs.name) / f'{name}.log', 'w')
-            processes[name] = subprocess.Popen(
-                [str(binary / name), '--ros-args', '--params-file', str(CONFIG), *arguments],
-                env=env, stdout=log, stderr=subprocess.STDOUT)
+                    graph.check_alive()
+            graph.start(name, [str(binary / name), '--ros-args', '--params-file', str(CONFIG),
+                               *arguments], env)
         # The driver publishes once every consumer has matched (wait_for_subscribers).
         end = time.monotonic() + 60.0
         while time.monotonic() < end and not all(
                 int(final.get(f'driver_node: {group}', {}).get('published', 0)) > 0
                 for group in ('arm', 'actuator')):
             dds_node.spin_once(node, timeout_sec=0.05)
-            _check_alive(processes, logs.name)
+            graph.check_alive()
         _spin(dds_node, node, 3.0)  # settle
-        _check_alive(processes, logs.name)
+        graph.check_alive()
         cpu0 = {name: _cpu_seconds(p.pid) for name, p in processes.items()}
         reports.clear()
         times = _cpu_times()
@@ -123,25 +115,9 @@ def _measure(prefix, runtime, window):
         _spin(dds_node, node, window)
         elapsed = time.monotonic() - start
         stolen = _steal_fraction(times, _cpu_times())
-        _check_alive(processes, logs.name)
+        graph.check_alive()
         cpu = {name: (_cpu_seconds(p.pid) - cpu0[name]) / elapsed
                for name, p in processes.items()}
-    finally:
-        for process in processes.values():
-            if process.poll() is None:
-                process.send_signal(2)
-        for process in processes.values():
-            try:
-                process.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                process.kill()
-        dds_node.shutdown()
-        for name, value in previous_env.items():
-            if value is None:
-                os.environ.pop(name, None)
-            else:
-                os.environ[name] = value
-        logs.cleanup()
     model = reports.get('model_node: driving torque', [])
     control = reports.get('stiffness_controller_node: control', [])
     scheduling = {name.split(':')[0]: values['scheduling'] for name, values in final.items()

@@ -417,3 +417,17 @@ def loop_summary(stat, rate, new_misses):
     else:
         stat.summary(OK, f'running at {rate:.0f} Hz')
     return stat
+
+
+def add_model_health(stat, values, cost_us, update_ms):
+    """
+    Add a model-health report's numbers to `stat` (the model node's and the controller's).
+
+    `values`: `live.ModelHealth.values()`; `cost_us`: (mean, max) of the sample path's part, µs,
+    since the last report; `update_ms`: this report's comparison, ms.
+    """
+    for key, value in values.items():
+        stat.add(key, value if isinstance(value, str) else f'{value:.6g}')
+    stat.add('cost_per_sample_us', f'{cost_us[0]:.2f}')
+    stat.add('cost_per_sample_max_us', f'{cost_us[1]:.1f}')
+    stat.add('update_ms', f'{update_ms:.2f}')

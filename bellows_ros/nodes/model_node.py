@@ -227,12 +227,8 @@ class ModelNode(Node):
         health = self.health
         state = health.update(rows)
         self._health_update_ms = (time.perf_counter() - started) * 1e3
-        mean_us, max_us = self.health_cost.take()
-        for key, value in health.values().items():
-            stat.add(key, value if isinstance(value, str) else f'{value:.6g}')
-        stat.add('cost_per_sample_us', f'{mean_us:.2f}')
-        stat.add('cost_per_sample_max_us', f'{max_us:.1f}')
-        stat.add('update_ms', f'{self._health_update_ms:.2f}')
+        diagnostics.add_model_health(stat, health.values(), self.health_cost.take(),
+                                     self._health_update_ms)
         if self.health_buffer.count == 0:
             stat.summary(diagnostics.STALE, 'no samples evaluated (no driver publishing '
                          '/joint_states and /bellows/chambers?): not comparing')

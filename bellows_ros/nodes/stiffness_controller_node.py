@@ -255,16 +255,12 @@ class StiffnessControllerNode(Node):
         health = self.live.health
         state = self.live.update()
         self._health_update_ms = (time.perf_counter() - started) * 1e3
-        mean_us, max_us = self.live.cost_us()
-        for key, value in health.values().items():
-            stat.add(key, value if isinstance(value, str) else f'{value:.6g}')
+        diagnostics.add_model_health(stat, health.values(), self.live.cost_us(),
+                                     self._health_update_ms)
         verdict = self.live.verdict
         stat.add('diagnosis', live.describe(verdict) if health.out_of_floor else 'none')
         stat.add('diagnosis_s', f"{verdict['seconds']:.2f}" if verdict else 'nan')
         stat.add('diagnoses', self.live.diagnoses)
-        stat.add('cost_per_sample_us', f'{mean_us:.2f}')
-        stat.add('cost_per_sample_max_us', f'{max_us:.1f}')
-        stat.add('update_ms', f'{self._health_update_ms:.2f}')
         stat.add('samples_without_force', self.counts['samples_without_force'])
         stat.add('unpaired', self.live.unpaired)
         if self.live.buffer.count == 0:
