@@ -67,7 +67,7 @@ import numpy as np
 # imported where they are first needed: the actuator's `ModelHealth` at its construction (the
 # node's start, not its 1 Hz update), `diagnose_window` in the worker process. The model node,
 # which needs neither, starts without them.
-from bellows_ros.doctor.scoring import noise_floor_local
+from bellows_ros.doctor.scoring import guarded_floor, noise_floor_local
 from bellows_ros.models.actuator import evaluate_array
 from bellows_ros.table import COLUMNS as TABLE_COLUMNS
 
@@ -134,11 +134,10 @@ def local_floors(names, rows):
     """
     Return {name: `scoring.noise_floor_local` of the column} (the module docstring says why).
 
-    A noise-free column (simulated) gets a floor of 1e-6 of its span, as the doctor's do
-    (`actuator_causes.noise_floors`), so that dividing by it stays finite.
+    A noise-free column (simulated) gets a floor of 1e-6 of its span (`scoring.guarded_floor`), as
+    the doctor's do.
     """
-    return {name: max(noise_floor_local(rows[name]), 1e-6 * float(np.ptp(rows[name])), 1e-12)
-            for name in names}
+    return {name: guarded_floor(noise_floor_local(rows[name]), rows[name]) for name in names}
 
 
 class ModelHealth:

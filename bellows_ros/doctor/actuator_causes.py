@@ -51,7 +51,7 @@ import numpy as np
 
 from bellows_ros.config.actuator import params_to_flat
 from bellows_ros.doctor.filters import lag, play, recurrence, relax
-from bellows_ros.doctor.scoring import Model, noise_floor, noise_floor_ramps
+from bellows_ros.doctor.scoring import guarded_floor, Model, noise_floor, noise_floor_ramps
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.actuator import (air_force, Buckling, buckling_force, force_error,
                                          gas_amount, material_terms, pressure_of_amount,
@@ -273,12 +273,10 @@ def noise_floors(record):
     Return the white-noise floor of each output at the record's rate: {column: sigma}.
 
     The force is ramped fast by the test machine, so its floor comes from second differences. A
-    noise-free column (simulated) gets a floor of 1e-6 of its span, so that dividing by it stays
-    finite.
+    noise-free column (simulated) gets a floor of 1e-6 of its span (`scoring.guarded_floor`).
     """
     floors = {'p': noise_floor(record['p']), 'f': noise_floor_ramps(record['f'])}
-    return {name: max(value, 1e-6 * float(np.ptp(record[name])), 1e-12)
-            for name, value in floors.items()}
+    return {name: guarded_floor(value, record[name]) for name, value in floors.items()}
 
 
 def measured(record, scales):

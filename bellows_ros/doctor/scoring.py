@@ -308,6 +308,15 @@ def noise_floor_local(signal, n=25):
     return float(np.sqrt(np.mean((centre - mean) ** 2) * n / (n - 1)))
 
 
+def guarded_floor(value, signal):
+    """
+    Return the noise floor `value` of `signal`, at least 1e-6 of its span (and 1e-12).
+
+    A noise-free column (simulated) would give a floor of zero; this keeps dividing by it finite.
+    """
+    return max(value, 1e-6 * float(np.ptp(signal)), 1e-12)
+
+
 def noise_floor_ramps(signal):
     """
     Estimate `noise_floor` from second differences.

@@ -231,7 +231,8 @@ class ModelNode(Node):
                                      self._health_update_ms)
         if self.health_buffer.count == 0:
             stat.summary(diagnostics.STALE, 'no samples evaluated (no driver publishing '
-                         '/joint_states and /bellows/chambers?): not comparing')
+                         f'{interfaces.JOINT_STATES.name} and {interfaces.CHAMBERS.name}?): '
+                         'not comparing')
         elif state == 'calibrating':
             stat.summary(diagnostics.OK, 'calibrating: taking the noise floors of the first '
                          f'{health.calibration:g} s')

@@ -265,7 +265,7 @@ class StiffnessControllerNode(Node):
         stat.add('unpaired', self.live.unpaired)
         if self.live.buffer.count == 0:
             stat.summary(diagnostics.STALE, 'no samples with pressure and spring force (no '
-                         'driver publishing /bellows/wrench?): not comparing')
+                         f'driver publishing {interfaces.WRENCH.name}?): not comparing')
         elif state == 'calibrating':
             stat.summary(diagnostics.OK, 'calibrating: taking the noise floors of the first '
                          f'{health.calibration:g} s')
