@@ -44,6 +44,9 @@ from dataclasses import dataclass
 # doctor refuses (test_runtime_record: a recorder stopped 2.5 s). 5000 samples of 4 segments is
 # about 1 MB per topic, held only while a reader lags.
 SAMPLE_DEPTH = 5000
+# s: the devices' sample period (their 1 kHz clock); a sample's stamp is on that time base, so a
+# stamp gap of n periods means n - 1 samples its reader never got.
+SAMPLE_PERIOD = 1e-3
 # Depth for commands, set-points and status: only the newest few matter.
 COMMAND_DEPTH = 10
 # s: the longest gap between pressure commands after which a driver may vent the arm (its

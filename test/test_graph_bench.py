@@ -83,15 +83,13 @@ def test_graph_bench_reports_every_figure_for_each_variant(capsys):
     results = {r['name']: r for r in json.loads(capsys.readouterr().out)}
     assert 'graph.platform.wakeup_lateness' in results
     assert 'graph.platform.wakeup_lateness_no_latency_limit' in results
-    variants = {'graph': 'dds', 'graph.composed': 'dds', 'graph.normal': 'dds',
-                'graph.no_latency_limit': 'dds'}
     rclpy_missing = rclpy_unavailable()
     if rclpy_missing:
         assert results['graph.rclpy.rate']['extra']['skipped'].endswith(rclpy_missing)
-    else:
-        variants.update(dict.fromkeys(('graph.rclpy', 'graph.rclpy.composed',
-                                       'graph.rclpy.normal', 'graph.rclpy.sim_above'), 'rclpy'))
-    for prefix, runtime in variants.items():
+    grid = graph.variants(rclpy_missing)
+    # The whole grid, each variant once: runtimes x privileges x processes x segment counts.
+    assert len({prefix for prefix, *_ in grid}) == len(grid) == (4 if rclpy_missing else 8) * 2
+    for prefix, runtime, _, composed, _ in grid:
         evaluated = results[f'{prefix}.fraction_evaluated']
         # samples flowed (3 s window; the rate is host-bound)
         assert evaluated['extra']['published'] > 100
@@ -100,7 +98,7 @@ def test_graph_bench_reports_every_figure_for_each_variant(capsys):
         # A fraction (how near 1 depends on the host, which the bench reports, not the test);
         # the composed count comes from reports up to a second apart: it may pass 1 a little.
         assert evaluated['extra']['evaluated'] > 0
-        assert 0.0 < evaluated['value'] <= (1.1 if prefix.endswith('.composed') else 1.0)
+        assert 0.0 < evaluated['value'] <= (1.1 if composed else 1.0)
         rate = results[f'{prefix}.rate']
         assert rate['extra']['runtime'] == runtime
         assert set(rate['extra']['scheduling']) == set(graph.NODES)
@@ -111,30 +109,30 @@ def test_graph_bench_reports_every_figure_for_each_variant(capsys):
         p99 = results[f'{prefix}.latency_p99']['value']
         assert 0.0 < p50 <= p99
         assert 0.0 <= results[f'{prefix}.late_fraction']['value'] <= 1.0
-        processes = (('sim_arm_node', graph.COMPOSED) if prefix.endswith('.composed')
-                     else graph.NODES)
+        processes = ('sim_arm_node', graph.COMPOSED) if composed else graph.NODES
         for name in processes:
             assert results[f'{prefix}.cpu.{name}']['value'] > 0.01    # every process worked
-    scheduling = results['graph.rate']['extra']['scheduling']
-    if scheduling['model_node'].startswith('SCHED_FIFO'):    # granted on this machine
-        # The stand-in for the arm at the host nodes' priority: neither preempts the other.
-        assert scheduling['sim_arm_node'] == scheduling['model_node']
-        if not rclpy_missing:
-            host = int(scheduling['model_node'].split()[1])
-            above = results['graph.rclpy.sim_above.rate']['extra']['scheduling']
-            assert above['sim_arm_node'] == f'SCHED_FIFO {host + 10}'
-            assert above['model_node'] == scheduling['model_node']
-    for prefix in [p for p in variants if p.endswith(('.normal', '.no_latency_limit'))]:
-        assert all(v.startswith('SCHED_OTHER')
-                   for v in results[f'{prefix}.rate']['extra']['scheduling'].values())
-    # What the bench controls: the limit each variant asked for (the limit in force on the host
-    # is the least of every process's request, so a held request bounds it from above).
-    for name in ('graph.platform.wakeup_lateness', 'graph.rate', 'graph.normal.rate'):
-        assert results[name]['extra']['cpu_latency_requested'] == configured, name
-        if os.access(realtime.CPU_LATENCY_DEVICE, os.W_OK):    # the nodes could hold it
-            assert results[name]['extra']['cpu_latency_limit'] <= configured, name
-    for name in ('graph.platform.wakeup_lateness_no_latency_limit', 'graph.no_latency_limit.rate'):
-        assert results[name]['extra']['cpu_latency_requested'] < 0, name
+    for prefix, runtime, privilege, composed, segments in grid:
+        rate = results[f'{prefix}.rate']
+        reference = results[f'{prefix}.latency_p50']['reference']
+        assert reference == f'graph.model_step_inprocess_{segments}seg'
+        scheduling = rate['extra']['scheduling']
+        if privilege == 'user':
+            # What an ordinary user's nodes get: normal scheduling, no latency request.
+            assert all(v.startswith('SCHED_OTHER') for v in scheduling.values()), prefix
+            assert rate['extra']['cpu_latency_requested'] < 0, prefix
+        else:
+            assert rate['extra']['cpu_latency_requested'] == configured, prefix
+            if os.access(realtime.CPU_LATENCY_DEVICE, os.W_OK):    # the nodes could hold it
+                assert rate['extra']['cpu_latency_limit'] <= configured, prefix
+            if scheduling['model_node'].startswith('SCHED_FIFO'):    # granted on this machine
+                # The stand-in for the arm at the host nodes' priority: neither preempts.
+                assert scheduling['sim_arm_node'] == scheduling['model_node'], prefix
+    assert results['graph.platform.wakeup_lateness']['extra']['cpu_latency_requested'] == \
+        configured
+    user_loop = results['graph.platform.wakeup_lateness_no_latency_limit']['extra']
+    assert user_loop['cpu_latency_requested'] < 0
+    assert user_loop['scheduling'] == 'SCHED_OTHER'
     assert latency_requests_held() == []
     # bench/graph_actuator.py (its module name holds 'graph'): the whole graph, every node worked.
     for prefix in ('graph_actuator',) + (() if rclpy_missing else ('graph_actuator.rclpy',)):

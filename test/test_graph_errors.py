@@ -19,8 +19,10 @@ It prints one line on stderr naming the problem, the same line on rclpy and on t
 """
 from pathlib import Path
 import random
+import signal
 import subprocess
 import sys
+import time
 
 import pytest
 from runtimes import node_env
@@ -54,6 +56,43 @@ def test_missing_serial_device(run, tmp_path):
     result = run('driver_node', ['-p', 'autostart:=true', '-p', 'actuator.enabled:=true',
                                  '-p', f'actuator.port:={port}'])
     check(result, 'driver_node: error:', f'actuator board port {port} does not exist')
+
+
+def test_a_port_that_appears_within_startup_timeout_is_opened(runtime, tmp_path):
+    """
+    A board's port made a moment after the driver starts is waited for, not refused.
+
+    A launch starts a simulated board beside the driver, a USB board enumerates: the driver waits
+    up to `startup_timeout` for the port.
+    """
+    port = tmp_path / 'board'
+    env = node_env(runtime, ROS_DOMAIN_ID=str(random.randint(181, 200)))
+    driver = subprocess.Popen([str(BIN / 'driver_node'), '--ros-args', '-p', 'autostart:=true',
+                               '-p', 'actuator.enabled:=true', '-p', f'actuator.port:={port}',
+                               '-p', 'startup_timeout:=20.0'], env=env, cwd=tmp_path,
+                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    board = None
+    try:
+        time.sleep(1.0)    # the driver is waiting for the port: it must not have exited
+        assert driver.poll() is None, driver.stdout.read()
+        board = subprocess.Popen([str(BIN / 'sim_actuator_node'), '--ros-args', '-p',
+                                  f'port:={port}'], env=env, cwd=tmp_path,
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        lines = []
+        for line in driver.stdout:    # activate logs 'driving <devices>'; a refusal 'error'
+            lines.append(line)
+            if 'driving' in line or 'error' in line:
+                break
+        assert any('driving' in line for line in lines), ''.join(lines)
+        assert driver.poll() is None, ''.join(lines)
+    finally:
+        for process in (driver, board):
+            if process is not None and process.poll() is None:
+                process.send_signal(signal.SIGINT)
+                try:
+                    process.wait(timeout=15)
+                except subprocess.TimeoutExpired:
+                    process.kill()
 
 
 def test_silent_can_bus(run):

@@ -34,7 +34,7 @@ from bellows_ros.interfaces import SAMPLE_DEPTH
 from bellows_ros.models.derivatives import rate
 from bellows_ros.models.segment import external_torque, SegmentModel
 from bellows_ros.nodes import diagnostics
-from bellows_ros.nodes.model_node import ModelNode
+from bellows_ros.nodes.model_node import MAX_MISSED_GAP, ModelNode
 from bellows_ros.runtime import dds_node
 
 DOMAIN = '194'
@@ -63,8 +63,8 @@ def _stream(count, seed=3):
         yield 1_700_000_000_000_000_000 + k * 1_000_000, psi, psi_dot, pressures
 
 
-def test_the_topics_carry_the_models_torques_sample_by_sample(feeder):
-    node, peer, params_file = feeder
+def _feed(node, peer, stream):
+    """Publish `stream`'s samples to `node` from `peer`; return what node published, by topic."""
     msg = dds_node.msg
     received = {'/bellows/driving_torque': [], '/bellows/external_torque': []}
     for topic, out in received.items():
@@ -76,7 +76,6 @@ def test_the_topics_carry_the_models_torques_sample_by_sample(feeder):
            or node.drive_pub.get_subscription_count() < 1) and time.monotonic() < end:
         dds_node.spin_once(peer, timeout_sec=0.05)
 
-    stream = list(_stream(200))
     names = ['segment_1', 'segment_2']
     chains = [f'{n}/chain_{c}' for n in names for c in (1, 2)]
     for stamp, psi, psi_dot, pressures in stream:
@@ -92,6 +91,14 @@ def test_the_topics_carry_the_models_torques_sample_by_sample(feeder):
     while min(len(v) for v in received.values()) < len(stream) and time.monotonic() < end:
         dds_node.spin_once(node, timeout_sec=0.01)
         dds_node.spin_once(peer, timeout_sec=0.01)
+    return received
+
+
+def test_the_topics_carry_the_models_torques_sample_by_sample(feeder):
+    node, peer, params_file = feeder
+    stream = list(_stream(200))
+    names = ['segment_1', 'segment_2']
+    received = _feed(node, peer, stream)
     assert [len(v) for v in received.values()] == [len(stream)] * 2
     assert node.counts['evaluated'] == len(stream)
 
@@ -127,6 +134,7 @@ def test_the_topics_carry_the_models_torques_sample_by_sample(feeder):
     assert (evaluation.level, evaluation.hardware_id) == (diagnostics.OK, 'none')
     assert evaluation.message.startswith('evaluating') and evaluation.get('evaluated') == '200'
     assert evaluation.get('rejected') == '0' and evaluation.get('unmatched_dropped') == '0'
+    assert evaluation.get('missed') == '0'
     assert (latency.level, latency.message) == (diagnostics.ERROR,
                                                 'Timestamps too far in past seen.')
     silent = report()
@@ -134,3 +142,24 @@ def test_the_topics_carry_the_models_torques_sample_by_sample(feeder):
     assert silent['driving torque'].message.startswith('no samples since the last report')
     assert (silent['latency'].level, silent['latency'].message) == (
         diagnostics.WARN, 'No data since last update.')
+
+
+def test_samples_that_never_arrived_are_counted_from_the_stamp_gaps(feeder):
+    """
+    A gap of n sample periods in the stamps is n - 1 samples lost before the node.
+
+    It counts them and warns; a pause longer than a queue could hold is not a loss.
+    """
+    node, peer, _ = feeder
+    stream = list(_stream(300))
+    lost = set(range(50, 53)) | {120} | set(range(200, 210))    # 3 + 1 + 10 samples
+    kept = [sample for k, sample in enumerate(stream) if k not in lost]
+    pause = int(2 * MAX_MISSED_GAP * 1e9)    # the driver stopped, then went on
+    kept += [(stamp + pause, *rest) for stamp, *rest in _stream(20, seed=4)]
+    received = _feed(node, peer, kept)
+    assert [len(v) for v in received.values()] == [len(kept)] * 2
+    assert node.counts['missed'] == len(lost)
+    evaluation = {s.name: s for s in node.diagnostics.force_update()}['driving torque']
+    assert evaluation.get('missed') == str(len(lost))
+    assert evaluation.level == diagnostics.WARN
+    assert f'{len(lost)} samples never arrived' in evaluation.message

@@ -15,24 +15,23 @@
 """
 Benchmark of the node graph over real DDS: sim_arm_node -> driver_node -> model_node.
 
-Measured in one run (separate processes, CAN over udp_multicast), on the DDS runtime and, where
-rclpy imports, on rclpy (`graph.rclpy.*`):
-- `graph.*`: the host nodes at the SCHED_FIFO priority config/nodes_hw.yaml gives them on a robot,
-  the simulated arm at the same priority. A real arm has a processor of its own: it neither delays
-  the host nor waits for it. On one machine its stand-in can be kept from one of the two only. At
-  equal SCHED_FIFO priority no thread preempts another: each runs until it blocks;
-- `graph.rclpy.sim_above.*` (rclpy only): the simulated arm 10 above the host nodes, so it preempts
-  them at every tick as a real arm never would. This was the bench's setting until that cost was
-  measured: each tick of the stand-in, about 0.4 ms of CPU on this machine, then lands on the
-  host path (docs/bench_log.md, 2026-11-24, "where rclpy's tail came from");
-- `graph.normal.*`: every node at normal scheduling (config/nodes_sim.yaml, or a machine that does
-  not grant real-time priority);
-- `graph.no_latency_limit.*`: normal scheduling, and no node holding the CPU latency limit the
-  configs ask for (`cpu_latency_limit`, runtime/realtime.py): what the limit buys on this machine;
-- `graph.composed.*`, `graph.rclpy.composed.*`: as `graph.*`, the driver and the model node
-  composed in one process (runtime.run with both classes, as nodes/arm_graph.py composes them):
-  what composition saves against separate processes (`cpu.driver_node+model_node` against the
-  sum of the two).
+Measured in one run, over the grid of where a user runs it (`variants`): each runtime (the DDS
+runtime, and rclpy where it imports) x each privilege x separate or composed processes x 4 or 1
+segments, named `graph[.rclpy][.user][.composed][.1seg].*`:
+- privileges: as root (no mark), the host nodes run at the SCHED_FIFO priority
+  config/nodes_hw.yaml gives them on a robot and hold the CPU latency limit the configs ask for
+  (`cpu_latency_limit`, runtime/realtime.py); `.user` is what an ordinary user's nodes get, every
+  node at normal scheduling and no latency limit (each node falls back to exactly that, with one
+  warning, when the kernel refuses: runtime/realtime.py);
+- the simulated arm runs at the host nodes' priority. A real arm has a processor of its own: it
+  neither delays the host nor waits for it. On one machine its stand-in can be kept from one of
+  the two only. At equal SCHED_FIFO priority no thread preempts another: each runs until it
+  blocks (above them, each tick of the stand-in lands on the host path: docs/bench_log.md,
+  2026-11-24, "where rclpy's tail came from");
+- `.composed`: the driver and the model node in one process (runtime.run with both classes, as
+  nodes/arm_graph.py composes them): what composition saves against separate processes
+  (`cpu.driver_node+model_node` against the sum of the two);
+- `.1seg`: one simulated segment (the default launch's), against the arm's four.
 Figures:
 - achieved rate: arm samples per second the model node evaluated (target 1000 Hz);
 - fraction of the samples the driver published that the model node evaluated (target >= 0.99),
@@ -52,7 +51,8 @@ References, measured in the same run:
   latency ratio is against it;
 - `graph.platform.wakeup_lateness`: how late a lone 1 kHz sleeping loop wakes on the idle machine,
   at the model node's SCHED_FIFO priority and under the configured CPU latency limit (p99 in
-  `value`); `graph.platform.wakeup_lateness_no_latency_limit`: the same loop without the limit.
+  `value`); `graph.platform.wakeup_lateness_no_latency_limit`: the same loop at normal
+  scheduling without the limit, as an ordinary user's loop runs.
   One wake-up is the least any hop of the graph pays, so this is the floor under the graph's p99
   on this machine at this time: on a virtual machine whose host is busy it reaches milliseconds,
   whatever the graph does.
@@ -113,32 +113,44 @@ def _model_reference(segments):
     return timing(f'graph.model_step_inprocess_{segments}seg', step_all, 5000)
 
 
-def run(quick=False, segments=4):
+SEGMENTS = (4, 1)     # the arm's four; the default launch's one
+PRIVILEGES = ('root', 'user')
+
+
+def variants(rclpy_missing):
+    """Return the grid measured, (prefix, runtime, privilege, composed, segments) per variant."""
+    grid = []
+    for runtime in ('dds',) if rclpy_missing else ('dds', 'rclpy'):
+        for privilege in PRIVILEGES:
+            for composed in (False, True):
+                for segments in SEGMENTS:
+                    marks = [mark for mark, on in (('rclpy', runtime == 'rclpy'),
+                                                   ('user', privilege == 'user'),
+                                                   ('composed', composed),
+                                                   (f'{segments}seg', segments != 4)) if on]
+                    grid.append(('.'.join(['graph', *marks]), runtime, privilege, composed,
+                                 segments))
+    return grid
+
+
+def run(quick=False):
     window = 3.0 if quick else 10.0
-    reference = _model_reference(segments)
-    results = [reference]
+    references = {segments: _model_reference(segments) for segments in SEGMENTS}
+    results = list(references.values())
     host = {name: params.read_file(ROBOT_CONFIG, name)['realtime_priority']
             for name in ('driver_node', 'model_node')}
-    fifo = dict(host, sim_arm_node=max(host.values()))
-    sim_above = dict(host, sim_arm_node=max(host.values()) + 10)
-    normal = dict.fromkeys(NODES, 0)
+    scheduling = {'root': dict(host, sim_arm_node=max(host.values())),
+                  'user': dict.fromkeys(NODES, 0)}
     limit = params.read_file(CONFIG, 'model_node')['cpu_latency_limit']
+    latency = {'root': limit, 'user': -1.0}
     results.append(_wakeup_reference('graph.platform.wakeup_lateness', window,
                                      host['model_node'], limit))
     results.append(_wakeup_reference('graph.platform.wakeup_lateness_no_latency_limit', window,
-                                     host['model_node'], -1.0))
-    variants = [('graph', 'dds', fifo, limit), ('graph.composed', 'dds', fifo, limit),
-                ('graph.normal', 'dds', normal, limit),
-                ('graph.no_latency_limit', 'dds', normal, -1.0)]
+                                     0, -1.0))
     rclpy_missing = rclpy_unavailable()
-    if not rclpy_missing:
-        variants += [('graph.rclpy', 'rclpy', fifo, limit),
-                     ('graph.rclpy.composed', 'rclpy', fifo, limit),
-                     ('graph.rclpy.normal', 'rclpy', normal, limit),
-                     ('graph.rclpy.sim_above', 'rclpy', sim_above, limit)]
-    for prefix, runtime, priorities, latency in variants:
-        results += _measure(prefix, runtime, window, segments, priorities, latency, reference,
-                            composed=prefix.endswith('.composed'))
+    for prefix, runtime, privilege, composed, segments in variants(rclpy_missing):
+        results += _measure(prefix, runtime, window, segments, scheduling[privilege],
+                            latency[privilege], references[segments], composed=composed)
     if rclpy_missing:
         results.append(Result('graph.rclpy.rate', float('nan'), 'Hz', 0,
                               extra={'skipped': f'rclpy not importable: {rclpy_missing}'}))
@@ -278,8 +290,8 @@ def _wakeup_reference(name, seconds, priority, latency_limit):
     """
     Measure the lateness of a lone 1 kHz sleeping loop (PeriodicLoop, as the simulated devices).
 
-    The loop runs on a thread at SCHED_FIFO `priority` when granted, for `seconds` s, with this
-    process holding `latency_limit` (s; negative = none) as a node would.
+    The loop runs on a thread at SCHED_FIFO `priority` when granted (0: normal scheduling), for
+    `seconds` s, with this process holding `latency_limit` (s; negative = none) as a node would.
     """
     stats = LoopStats(window=int(seconds * 1000) + 1000)
     stop = threading.Event()
@@ -287,8 +299,9 @@ def _wakeup_reference(name, seconds, priority, latency_limit):
 
     def loop():
         try:
-            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))  # this thread only
-            granted.append(True)
+            if priority > 0:
+                os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))  # this thread
+                granted.append(True)
         except (AttributeError, PermissionError):
             pass
         for _ in PeriodicLoop(1e-3, stats).ticks(stop):

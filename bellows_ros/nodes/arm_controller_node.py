@@ -76,7 +76,7 @@ from bellows_ros.runtime import Node, realtime, run
 from bellows_ros.runtime.node import stamp_ns
 from bellows_ros.runtime.parameters import Spec
 
-SAMPLE_PERIOD = 1e-3  # s, the arm's sampling (the devices' 1 kHz clock)
+SAMPLE_PERIOD = interfaces.SAMPLE_PERIOD  # s, the arm's sampling (the devices' 1 kHz clock)
 STATE_PERIOD = 0.02   # s of sample time between ~/state messages (50 Hz)
 
 

@@ -39,8 +39,8 @@ Parameters (config/nodes_*.yaml, section `driver_node`):
   actuator.port (str): serial port ('' = hardware.actuator_board.port).
   arm.interface, arm.channel (str): python-can bus ('' = hardware.arm_bus.*).
   arm.n_segments (int): segments on the bus (0 = hardware.arm_bus.n_segments).
-  startup_timeout (s): a device with no sample by then fails `configure` (with autostart: exit
-      status 2).
+  startup_timeout (s): a device whose port is still absent, or that sent no sample, by then
+      fails `configure` (with autostart: exit status 2).
   autostart (bool): configure and activate at start, as launch_sim.sh asks; false = wait in
       `unconfigured` for `ros2 lifecycle set` (the launch files send the transitions).
   shutdown_timeout (s), ambient_tolerance (Pa): shutdown waits up to shutdown_timeout for every
@@ -157,8 +157,8 @@ PARAMETERS = (
     Spec('arm.channel', '', "python-can channel ('' = hardware.yaml's)"),
     Spec('arm.n_segments', 0, "segments on the bus, as the DBC defines them (0 = hardware.yaml's)",
          low=0, high=dbc_segments()),
-    Spec('startup_timeout', 2.0, 'a device with no sample by then is an error, s', low=0.01,
-         high=600.0),
+    Spec('startup_timeout', 2.0, 'a device whose port is absent or that sent no sample by then '
+         'is an error, s', low=0.01, high=600.0),
     Spec('wait_for_subscribers', 0.0, 'wait this long for a subscriber before opening the '
          'devices, s (0 = no wait)', low=0.0, high=600.0),
     Spec('autostart', False, 'configure and activate at start (false: wait for ros2 lifecycle)'),
@@ -319,10 +319,17 @@ class DriverNode(Node):
     def _open_actuator(self, config, port):
         if port:
             config = dataclasses.replace(config, port=port)
+        # A port may appear a moment after the driver starts (a USB board being enumerated, a
+        # simulated board started beside the driver by a launch file): wait for it as for the
+        # first sample.
+        end = time.monotonic() + self.startup_timeout
+        while not os.path.exists(config.port) and time.monotonic() < end:
+            time.sleep(0.01)
         if not os.path.exists(config.port):
             raise BellowsError(f'driver_node: actuator board port {config.port} does not exist '
-                               '(device absent? set actuator.port)')
-        self.actuator_clock = SampleClock(1e-3)
+                               f'after {self.startup_timeout:g} s (device absent? set '
+                               'actuator.port)')
+        self.actuator_clock = SampleClock(interfaces.SAMPLE_PERIOD)
         self.actuator_stamps = DeviceClock()
         self.reports['actuator'] = diagnostics.LoopReport(self.actuator_clock.stats)
         self.diagnostics.add('actuator', lambda stat: self.diagnose_device('actuator', stat))
@@ -340,7 +347,7 @@ class DriverNode(Node):
         self.arm_names = [interfaces.segment_joint(i + 1) for i in range(config.n_segments)]
         self.chain_names = [interfaces.chain_chamber(i + 1, j)
                             for i in range(config.n_segments) for j in (1, 2)]
-        self.arm_clock = SampleClock(1e-3)
+        self.arm_clock = SampleClock(interfaces.SAMPLE_PERIOD)
         self.reports['arm'] = diagnostics.LoopReport(self.arm_clock.stats)
         self.diagnostics.add('arm', lambda stat: self.diagnose_device('arm', stat))
         self._last_arm = None

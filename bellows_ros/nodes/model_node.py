@@ -31,7 +31,9 @@ latency_budget (s: a torque published later than this after its sample's stamp i
 realtime_priority (int: SCHED_FIFO priority 1-99 for the node's threads, 0 = normal scheduling),
 cpu_latency_limit (s: CPU wake-up latency held while the node runs, 0 = idle CPUs poll, negative =
 off; runtime/realtime.py).
-A sample with a non-finite value or a pressure outside [0, 2 p_max] is rejected and counted.
+A sample with a non-finite value or a pressure outside [0, 2 p_max] is rejected and counted; a
+sample late by more than latency_budget is evaluated and counted `late`; samples that never
+arrived (a gap in the stamps, which are on the devices' 1 ms time base) are counted `missed`.
 
 Model health (docs/doctor.md, "The doctor live"; `live.segment_health`): the arm has no torque
 sensor, so with no load on it τ_ext is the model's residual (model error plus noise). Every
@@ -75,6 +77,9 @@ PARAMETERS = (
 # The ring buffer between the sample path and the 1 Hz comparison: this many seconds of samples
 # at up to HEALTH_RATE Hz (samples older than that at an update are not compared).
 HEALTH_BUFFER_S = 10.0
+# s: a longer stamp gap is a pause of the samples (a driver stopped or restarted), not samples
+# lost: the longest a queue of the contract's depth could have held and dropped.
+MAX_MISSED_GAP = interfaces.SAMPLE_DEPTH * interfaces.SAMPLE_PERIOD
 HEALTH_RATE = 2000.0
 
 
@@ -102,12 +107,12 @@ class ModelNode(Node):
         self.health_cost = live.SampleCost()
         self._health_read = 0
         self._health_update_ms = float('nan')
-        self.counts = dict.fromkeys(['evaluated', 'rejected', 'late'], 0)
+        self.counts = dict.fromkeys(['evaluated', 'rejected', 'late', 'missed'], 0)
         self.stats = LoopStats()
         self.report = diagnostics.LoopReport(self.stats)
         self.latency = []
         self.latency_budget_ns = round(latency_budget * 1e9)
-        self.reported = dict.fromkeys(['rejected', 'unmatched_dropped'], 0)
+        self.reported = dict.fromkeys(['rejected', 'unmatched_dropped', 'missed'], 0)
         self._last_stamp = None
         self._p_limit = 2.0 * self.params.p_max
 
@@ -172,6 +177,10 @@ class ModelNode(Node):
         self.counts['evaluated'] += 1
         dt = None if self._last_stamp is None else (stamp - self._last_stamp) * 1e-9
         self._last_stamp = stamp
+        if dt is not None and 1.5 * interfaces.SAMPLE_PERIOD < dt <= MAX_MISSED_GAP:
+            # Samples this node never got (lost before it, or dropped by a queue that overflowed):
+            # the strain memory steps over them (docs/nodes.md, "When the CPU is short").
+            self.counts['missed'] += round(dt / interfaces.SAMPLE_PERIOD) - 1
         external = self.publish_external(joints.header, inputs, drive, dt or 0.0)
         started = time.perf_counter()
         self.health_buffer.append((stamp * 1e-9, *external))
@@ -205,8 +214,9 @@ class ModelNode(Node):
         stat.update(values)
         rejected = self.counts['rejected'] - self.reported['rejected']
         dropped = self.pairs.dropped - self.reported['unmatched_dropped']
+        missed = self.counts['missed'] - self.reported['missed']
         self.reported.update(rejected=self.counts['rejected'],
-                             unmatched_dropped=self.pairs.dropped)
+                             unmatched_dropped=self.pairs.dropped, missed=self.counts['missed'])
         if rate == 0.0:
             stat.summary(diagnostics.STALE, 'no samples since the last report (no driver '
                          'publishing /joint_states and /bellows/chambers?)')
@@ -218,6 +228,9 @@ class ModelNode(Node):
         if dropped:
             stat.mergeSummary(diagnostics.WARN, f'{dropped} half-samples dropped without their '
                               'other half (max_pending)')
+        if missed:
+            stat.mergeSummary(diagnostics.WARN, f'{missed} samples never arrived (gaps in the '
+                              'stamps)')
         return stat
 
     def diagnose_model_health(self, stat):
