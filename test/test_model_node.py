@@ -63,8 +63,12 @@ def _stream(count, seed=3):
         yield 1_700_000_000_000_000_000 + k * 1_000_000, psi, psi_dot, pressures
 
 
-def _feed(node, peer, stream):
-    """Publish `stream`'s samples to `node` from `peer`; return what node published, by topic."""
+def _feed(node, peer, stream, expected=None):
+    """
+    Publish `stream`'s samples to `node` from `peer`; return what node published, by topic.
+
+    Waits until `expected` torques (default: one per sample) have come back, or 10 s.
+    """
     msg = dds_node.msg
     received = {'/bellows/driving_torque': [], '/bellows/external_torque': []}
     for topic, out in received.items():
@@ -88,7 +92,8 @@ def _feed(node, peer, stream):
         chambers.publish(chamber)
         dds_node.spin_once(node, timeout_sec=0.0)   # the node serves as it would spinning
     end = time.monotonic() + 10.0
-    while min(len(v) for v in received.values()) < len(stream) and time.monotonic() < end:
+    expected = len(stream) if expected is None else expected
+    while min(len(v) for v in received.values()) < expected and time.monotonic() < end:
         dds_node.spin_once(node, timeout_sec=0.01)
         dds_node.spin_once(peer, timeout_sec=0.01)
     return received
@@ -154,11 +159,15 @@ def test_samples_that_never_arrived_are_counted_from_the_stamp_gaps(feeder):
     stream = list(_stream(300))
     lost = set(range(50, 53)) | {120} | set(range(200, 210))    # 3 + 1 + 10 samples
     kept = [sample for k, sample in enumerate(stream) if k not in lost]
+    # A sample that arrives but is rejected (a pressure of NaN) is not missed: it is counted once.
+    stamp, psi, psi_dot, pressures = kept[150]
+    kept[150] = (stamp, psi, psi_dot, [math.nan, *pressures[1:]])
     pause = int(2 * MAX_MISSED_GAP * 1e9)    # the driver stopped, then went on
     kept += [(stamp + pause, *rest) for stamp, *rest in _stream(20, seed=4)]
-    received = _feed(node, peer, kept)
-    assert [len(v) for v in received.values()] == [len(kept)] * 2
+    received = _feed(node, peer, kept, expected=len(kept) - 1)
+    assert [len(v) for v in received.values()] == [len(kept) - 1] * 2
     assert node.counts['missed'] == len(lost)
+    assert node.counts['rejected'] == 1
     evaluation = {s.name: s for s in node.diagnostics.force_update()}['driving torque']
     assert evaluation.get('missed') == str(len(lost))
     assert evaluation.level == diagnostics.WARN

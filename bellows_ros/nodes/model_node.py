@@ -77,10 +77,10 @@ PARAMETERS = (
 # The ring buffer between the sample path and the 1 Hz comparison: this many seconds of samples
 # at up to HEALTH_RATE Hz (samples older than that at an update are not compared).
 HEALTH_BUFFER_S = 10.0
+HEALTH_RATE = 2000.0
 # s: a longer stamp gap is a pause of the samples (a driver stopped or restarted), not samples
 # lost: the longest a queue of the contract's depth could have held and dropped.
 MAX_MISSED_GAP = interfaces.SAMPLE_DEPTH * interfaces.SAMPLE_PERIOD
-HEALTH_RATE = 2000.0
 
 
 class ModelNode(Node):
@@ -113,7 +113,8 @@ class ModelNode(Node):
         self.latency = []
         self.latency_budget_ns = round(latency_budget * 1e9)
         self.reported = dict.fromkeys(['rejected', 'unmatched_dropped', 'missed'], 0)
-        self._last_stamp = None
+        self._last_stamp = None    # of the last evaluated sample (Ψ̈'s time step)
+        self._last_paired = None   # of the last paired sample, evaluated or rejected
         self._p_limit = 2.0 * self.params.p_max
 
         self.drive_pub = self.publisher(interfaces.DRIVING_TORQUE)
@@ -156,6 +157,7 @@ class ModelNode(Node):
     # ---------------------------------------------------------------------------------
     def evaluate(self, stamp, joints, chambers):
         start = time.perf_counter()
+        self._count_missed(stamp)
         inputs = segment_rows(joints, chambers, zip(self.names, self.chains), self._p_limit)
         if inputs is None:
             self.counts['rejected'] += 1
@@ -177,15 +179,24 @@ class ModelNode(Node):
         self.counts['evaluated'] += 1
         dt = None if self._last_stamp is None else (stamp - self._last_stamp) * 1e-9
         self._last_stamp = stamp
-        if dt is not None and 1.5 * interfaces.SAMPLE_PERIOD < dt <= MAX_MISSED_GAP:
-            # Samples this node never got (lost before it, or dropped by a queue that overflowed):
-            # the strain memory steps over them (docs/nodes.md, "When the CPU is short").
-            self.counts['missed'] += round(dt / interfaces.SAMPLE_PERIOD) - 1
         external = self.publish_external(joints.header, inputs, drive, dt or 0.0)
         started = time.perf_counter()
         self.health_buffer.append((stamp * 1e-9, *external))
         self.health_cost.add(time.perf_counter() - started)
         self.stats.record(dt or 0.0, 0.0, time.perf_counter() - start)
+
+    def _count_missed(self, stamp):
+        """
+        Count the samples between the previous paired one and `stamp` that never arrived.
+
+        Lost before this node, or dropped by a queue that overflowed: the strain memory steps
+        over them (docs/nodes.md, "When the CPU is short"). A rejected sample arrived.
+        """
+        if self._last_paired is not None:
+            gap = (stamp - self._last_paired) * 1e-9
+            if 1.5 * interfaces.SAMPLE_PERIOD < gap <= MAX_MISSED_GAP:
+                self.counts['missed'] += round(gap / interfaces.SAMPLE_PERIOD) - 1
+        self._last_paired = stamp
 
     def publish_external(self, header, inputs, drive, dt):
         """Publish τ_ext (2) per segment on /bellows/external_torque, return it; Ψ̈ from Ψ̇'s."""
