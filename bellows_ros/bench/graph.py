@@ -180,7 +180,6 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
     binary = Path(sys.executable).parent
     windows, final = [], {}
     with GraphRun(dds_node, domain) as graph:
-        processes = graph.processes
         node = dds_node.Node('bench_graph')
 
         def on_diagnostics(array):
@@ -214,23 +213,15 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
                     graph.check_alive()
         _spin(dds_node, node, 4.0)  # start-up and discovery
         graph.check_alive()
-        cpu0 = {name: _cpu_seconds(p.pid) for name, p in processes.items()}
         counts0 = _counts(final)
         windows.clear()
-        times = _cpu_times()
-        start = time.monotonic()
         limit_in_force = realtime.cpu_latency_in_force()
-        _spin(dds_node, node, window)
-        elapsed = time.monotonic() - start
-        stolen = _steal_fraction(times, _cpu_times())
-        graph.check_alive()
-        cpu = {name: (_cpu_seconds(p.pid) - cpu0[name]) / elapsed
-               for name, p in processes.items()}
+        cpu, stolen = graph.cpu_window(node, window)
         measured = list(windows)
         counts1 = _counts(final)
         if not composed:  # composed, the driver's last count and the model's come together
-            processes['driver_node'].send_signal(2)
-            processes['driver_node'].wait(timeout=10)
+            graph.processes['driver_node'].send_signal(signal.SIGINT)
+            graph.processes['driver_node'].wait(timeout=10)
             _spin(dds_node, node, 2.5)  # the model's next report carries its final count
     driver = final.get('driver_node: arm', {})
     model = final.get('model_node: driving torque', {})
@@ -399,6 +390,23 @@ class GraphRun:
         self._files.append(log)
         self.processes[name] = subprocess.Popen(command, env=env, stdout=log,
                                                 stderr=subprocess.STDOUT)
+
+    def cpu_window(self, node, seconds):
+        """
+        Spin `node` for `seconds` s; return (CPU of each node process, steal).
+
+        CPU: utime + stime over the window, as a fraction of one core; steal: the share of all
+        CPU time the hypervisor took meanwhile. Raises if a node process exited.
+        """
+        cpu0 = {name: _cpu_seconds(p.pid) for name, p in self.processes.items()}
+        times = _cpu_times()
+        start = time.monotonic()
+        _spin(self.dds_node, node, seconds)
+        elapsed = time.monotonic() - start
+        stolen = _steal_fraction(times, _cpu_times())
+        self.check_alive()
+        return {name: (_cpu_seconds(p.pid) - cpu0[name]) / elapsed
+                for name, p in self.processes.items()}, stolen
 
     def check_alive(self):
         """Raise BellowsError naming a node process that has exited, with its last log line."""

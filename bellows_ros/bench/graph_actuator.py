@@ -37,8 +37,7 @@ import time
 
 from bellows_ros import params
 from bellows_ros.bench import Result
-from bellows_ros.bench.graph import _cpu_seconds, _cpu_times, _spin, _steal_fraction, \
-    GraphRun
+from bellows_ros.bench.graph import _spin, GraphRun
 from bellows_ros.runtime.node import rclpy_unavailable
 
 CONFIG = params.default_file('nodes_sim')
@@ -78,7 +77,7 @@ def _measure(prefix, runtime, window):
                              'wait_for_subscribers': 20.0, 'autostart': 'true'},
              'model_node': {}, 'arm_controller_node': {}, 'stiffness_controller_node': {}}
     binary = Path(sys.executable).parent
-    processes, reports, final = graph.processes, {}, {}
+    reports, final = {}, {}
     with graph:
         node = dds_node.Node('bench_graph_actuator')
 
@@ -108,16 +107,8 @@ def _measure(prefix, runtime, window):
             graph.check_alive()
         _spin(dds_node, node, 3.0)  # settle
         graph.check_alive()
-        cpu0 = {name: _cpu_seconds(p.pid) for name, p in processes.items()}
         reports.clear()
-        times = _cpu_times()
-        start = time.monotonic()
-        _spin(dds_node, node, window)
-        elapsed = time.monotonic() - start
-        stolen = _steal_fraction(times, _cpu_times())
-        graph.check_alive()
-        cpu = {name: (_cpu_seconds(p.pid) - cpu0[name]) / elapsed
-               for name, p in processes.items()}
+        cpu, stolen = graph.cpu_window(node, window)
     model = reports.get('model_node: driving torque', [])
     control = reports.get('stiffness_controller_node: control', [])
     scheduling = {name.split(':')[0]: values['scheduling'] for name, values in final.items()
