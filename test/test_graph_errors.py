@@ -19,13 +19,12 @@ It prints one line on stderr naming the problem, the same line on rclpy and on t
 """
 from pathlib import Path
 import random
-import signal
 import subprocess
 import sys
 import time
 
 import pytest
-from runtimes import node_env
+from runtimes import node_env, stop_all
 
 pytestmark = pytest.mark.slow  # each test starts a node process (1-3 s)
 
@@ -86,13 +85,7 @@ def test_a_port_that_appears_within_startup_timeout_is_opened(runtime, tmp_path)
         assert any('driving' in line for line in lines), ''.join(lines)
         assert driver.poll() is None, ''.join(lines)
     finally:
-        for process in (driver, board):
-            if process is not None and process.poll() is None:
-                process.send_signal(signal.SIGINT)
-                try:
-                    process.wait(timeout=15)
-                except subprocess.TimeoutExpired:
-                    process.kill()
+        stop_all([p for p in (driver, board) if p is not None], timeout=15.0)
 
 
 def test_silent_can_bus(run):

@@ -402,7 +402,7 @@ class ArmControllerTask(diagnostics.DiagnosticTaskGroup):
                 stat.add('trajectory_remaining_s', f'{max(0.0, loop.path.end - now):.3f}')
             if rate == 0.0:
                 stat.summary(diagnostics.STALE, 'no samples since the last report (no driver '
-                             'publishing /joint_states?): not controlling')
+                             f'publishing {interfaces.JOINT_STATES.name}?): not controlling')
             else:
                 stat.summary(diagnostics.OK, f'tracking {stat.get("source")}, error RMS '
                              f'{rms:.4f} rad')

@@ -230,7 +230,8 @@ class ModelNode(Node):
                              unmatched_dropped=self.pairs.dropped, missed=self.counts['missed'])
         if rate == 0.0:
             stat.summary(diagnostics.STALE, 'no samples since the last report (no driver '
-                         'publishing /joint_states and /bellows/chambers?)')
+                         f'publishing {interfaces.JOINT_STATES.name} and '
+                         f'{interfaces.CHAMBERS.name}?)')
             return stat
         stat.summary(diagnostics.OK, f'evaluating {rate:.0f} samples/s')
         if rejected:

@@ -242,7 +242,8 @@ class StiffnessControllerNode(Node):
         stat.update(values)
         if rate == 0.0:
             stat.summary(diagnostics.STALE, 'no samples since the last report (no driver '
-                         'publishing /actuator/joint_states?): not controlling')
+                         f'publishing {interfaces.ACTUATOR_JOINT_STATES.name}?): not '
+                         'controlling')
         elif self.setpoint.warning:
             stat.summary(diagnostics.WARN, f'set-point out of reach: {self.setpoint.warning}')
         else:
