@@ -237,3 +237,44 @@ def test_graph_publishes_and_every_sample_is_evaluated(graph):
                     for name, values in final.items() if 'cpu_latency_limit_us' in values}
         assert set(reported) == {'sim_arm_node', 'sim_actuator_node', 'driver_node', 'model_node'}
         assert set(reported.values()) == {f'{limit * 1e6:.0f}'}, reported
+
+
+def test_a_driver_stopped_for_half_a_second_stamps_its_backlog_on_the_arms_clock(graph):
+    """
+    The samples a driver reads late from its socket keep the times the arm took them.
+
+    SIGSTOP stands for a driver the machine does not schedule; the arm's frames wait in the
+    socket meanwhile. Stamped when read, the backlog went out as fresh samples: a hole in the
+    stamps, then a burst stamped at the same instant, each sample's age hidden from the arm
+    controller's `max_sample_age` (docs/bench_log.md, 2026-11-26).
+    """
+    processes, domain, tmp_path, probe, final, seen = graph
+    stamps = []
+    probe.create_subscription(
+        msg.JointState, interfaces.JOINT_STATES.resolved(),
+        lambda m: stamps.append(m.header.stamp.sec * 10**9 + m.header.stamp.nanosec),
+        interfaces.SAMPLE_DEPTH)
+
+    def spin(seconds):
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            dds_node.spin_once(probe, timeout_sec=0.05)
+    end = time.monotonic() + 30.0
+    while len(stamps) < 1000 and time.monotonic() < end:
+        spin(0.1)
+    assert len(stamps) >= 1000, logs(tmp_path)
+    driver = processes['driver_node']
+    before = len(stamps)
+    driver.send_signal(19)  # SIGSTOP
+    time.sleep(0.5)
+    driver.send_signal(18)  # SIGCONT
+    spin(3.0)
+    after = stamps[before - 100:]
+    assert len(after) > 1500, len(after)
+    gaps = [b - a for a, b in zip(after, after[1:])]
+    # The stop is not a hole in the arm's time base (the simulated arm sent every sample) ...
+    assert max(gaps) < 50 * 10**6, f'largest stamp gap {max(gaps) / 1e6:.1f} ms'
+    # ... and the backlog is not bunched at the moment it was read: stamps keep the sample period
+    # (DeviceClock; a gap shortens only where a less-delayed arrival corrects its offset).
+    bunched = sum(gap < 0.1 * interfaces.SAMPLE_PERIOD * 1e9 for gap in gaps)
+    assert bunched <= len(gaps) // 100, f'{bunched} of {len(gaps)} stamps bunched'

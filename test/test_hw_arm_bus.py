@@ -322,3 +322,40 @@ def test_a_bus_hears_only_its_own_multicast_group():
     finally:
         for bus in (talker, listener, other):
             bus.shutdown()
+
+
+def test_a_reader_that_falls_behind_knows_when_its_frames_arrived():
+    """
+    A sample read late from the socket carries the time its frames arrived, not when it was read.
+
+    The driver stamps from it (`sample_delivery.arrival_ns`): stamped when read, a backlog of
+    0.5-1.5 s behind a starved reader went out as fresh samples and the arm controller acted on
+    them (docs/bench_log.md, 2026-11-26).
+    """
+    port = 45000 + random.randint(0, 999)
+    group = '239.74.166.13'
+    read = []
+    stall = 0.3
+
+    def on_sample(sample):
+        read.append((time.time(), sample))
+        if len(read) == 200:
+            time.sleep(stall)  # the reader is not scheduled: frames wait in the kernel's buffer
+    sim = SimArmBus(open_can('udp_multicast', group, port=port), Pattern(), N)
+    arm = ArmBus(dataclasses.replace(CONFIG, interface='udp_multicast', channel=group),
+                 bus=open_can('udp_multicast', group, port=port), on_sample=on_sample)
+    sim.start()
+    try:
+        assert wait_for(lambda: len(read) > 600, timeout=60.0), f'{len(read)} samples'
+    finally:
+        sim.close()
+        arm.close()
+    assert all(s.t_arrival is not None for _, s in read)  # udp_multicast: kernel timestamps
+    # Frames never arrive after they are read, and the first read after the stall waited the
+    # stall in the socket (less the sample period it was taken in).
+    assert all(s.t_arrival <= t for t, s in read)
+    assert read[200][0] - read[200][1].t_arrival >= stall - 0.05, read[200]
+    # Their arrivals keep the pace the arm sent them at (not bunched at the read): the backlog's
+    # first 100 samples arrived over at least 50 ms.
+    assert read[300][1].t_arrival - read[200][1].t_arrival >= 0.05
+    assert check_stream([s for _, s in read]) == 0

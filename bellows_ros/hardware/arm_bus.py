@@ -78,11 +78,14 @@ class ArmSample:
     """
     One sampling instant of every segment.
 
-    t_receive: time.monotonic() when the last frame of the instant arrived, s; index: the unwrapped
-    frame counter (starts at the first counter received; exact unless more than 255 instants in a
-    row are lost, counted in `resyncs`); t_device: index x sample period, s (nominal); psi: segment
-    angles, rad; pressures: chain pressures, Pa abs, order (seg1 chain1, seg1 chain2, seg2 chain1,
-    ...).
+    t_receive: time.monotonic() when the reader took the last frame of the instant, s; index: the
+    unwrapped frame counter (starts at the first counter received; exact unless more than 255
+    instants in a row are lost, counted in `resyncs`); t_device: index x sample period, s
+    (nominal); psi: segment angles, rad; pressures: chain pressures, Pa abs, order (seg1 chain1,
+    seg1 chain2, seg2 chain1, ...); t_arrival: the bus's receive timestamp of that frame, s on the
+    system clock (`time.time()`: SocketCAN's and udp_multicast's kernel timestamp), or None when
+    the bus gives none. Unlike t_receive it does not grow while frames wait in the socket for a
+    reader that is not scheduled: the driver stamps from it (`sample_delivery.arrival_ns`).
     """
 
     t_receive: float
@@ -90,6 +93,7 @@ class ArmSample:
     t_device: float
     psi: tuple
     pressures: tuple
+    t_arrival: float = None
 
 
 class ArmBus:
@@ -238,11 +242,11 @@ class ArmBus:
             message, values = checked
             segment = self._segment_ids.get(message.frame_id)
             if segment is not None:
-                self._collect(segment, values, now, stamp)
+                self._collect(segment, values, now, stamp, frame.timestamp or None)
             elif message.frame_id == self._status_id:
                 self.arm_status = values
 
-    def _collect(self, segment, values, now, stamp):
+    def _collect(self, segment, values, now, stamp, arrival):
         counter = values['Counter']
         parts = self._pending.setdefault(counter, {})
         parts[segment] = values
@@ -276,7 +280,8 @@ class ArmBus:
         sample = ArmSample(
             t_receive=now, index=self._index, t_device=self._index * self._sample_period,
             psi=tuple(parts[i]['Psi'] for i in range(n)),
-            pressures=tuple(p for i in range(n) for p in (parts[i]['P1'], parts[i]['P2'])))
+            pressures=tuple(p for i in range(n) for p in (parts[i]['P1'], parts[i]['P2'])),
+            t_arrival=arrival)
         self._latest = sample
         self._counts['samples'] += 1
         deliver(self._on_sample, sample, self._counts, log, 'arm bus')

@@ -27,6 +27,22 @@ def fresh(sample, stale_timeout):
     return sample
 
 
+def arrival_ns(now_ns, bus_timestamp=None):
+    """
+    When a sample reached the host, ns on the clock that read `now_ns` (the node clock).
+
+    `bus_timestamp` is the interface's receive timestamp, s on the system clock (SocketCAN and
+    python-can's udp_multicast take it in the kernel, SO_TIMESTAMPNS). The time the frame then
+    waited in the socket, for a reader the machine did not schedule, is taken off `now_ns`; so a
+    reader that has fallen behind does not stamp old samples as new. Without a timestamp (None, 0)
+    the arrival is `now_ns`.
+    """
+    if not bus_timestamp:
+        return now_ns
+    waited = time.time_ns() - int(bus_timestamp * 1e9)
+    return now_ns - max(0, waited)
+
+
 def deliver(on_sample, sample, counts, log, device):
     """
     Call `on_sample(sample)` (if any) from the reader thread.

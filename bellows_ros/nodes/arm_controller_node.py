@@ -372,13 +372,14 @@ class ArmControllerTask(diagnostics.DiagnosticTaskGroup):
     def __init__(self, node):
         super().__init__('segments')
         self.node = node
-        self.reported_rejected = 0
+        self.reported_rejected = self.reported_stale = 0
 
     def statuses(self):
         node = self.node
         values, rate, _ = node.report.values()
         values.update({k: str(v) for k, v in node.counts.items()})
         values['unmatched_dropped'] = str(node.pairs.dropped)
+        p50 = math.nan
         if node.ages:  # how late the samples reach the controller (latency and backlog)
             ages = np.array(node.ages)
             p50, p99 = np.percentile(ages, [50, 99])
@@ -390,6 +391,8 @@ class ArmControllerTask(diagnostics.DiagnosticTaskGroup):
         now = node.last_stamp * 1e-9 if node.last_stamp is not None else -math.inf
         rejected = node.counts['rejected_samples'] - self.reported_rejected
         self.reported_rejected = node.counts['rejected_samples']
+        stale = node.counts['stale_skipped'] - self.reported_stale
+        self.reported_stale = node.counts['stale_skipped']
         out = []
         for loop in node.loops:
             stat = diagnostics.DiagnosticStatusWrapper(name=loop.name)
@@ -400,7 +403,12 @@ class ArmControllerTask(diagnostics.DiagnosticTaskGroup):
                          'source': loop.source(now)})
             if loop.path is not None:  # progress: how long until the trajectory's end
                 stat.add('trajectory_remaining_s', f'{max(0.0, loop.path.end - now):.3f}')
-            if rate == 0.0:
+            if rate == 0.0 and stale:
+                # Samples come, but too late to act on: the driver's watchdog vents the arm.
+                stat.summary(diagnostics.ERROR, f'every sample too old to act on ({stale} '
+                             f'skipped, age p50 {p50 * 1e3:.1f} ms > max_sample_age): not '
+                             'controlling')
+            elif rate == 0.0:
                 stat.summary(diagnostics.STALE, 'no samples since the last report (no driver '
                              f'publishing {interfaces.JOINT_STATES.name}?): not controlling')
             else:

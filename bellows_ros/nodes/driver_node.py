@@ -20,9 +20,11 @@ arm on `/joint_states` and `/bellows/chambers`, the actuator on `/actuator/joint
 `/actuator/chambers` (so that no 1 kHz node decodes the other group's samples), and the actuator's
 load cell on `/bellows/wrench` (frame `actuator`, force.z = spring force). The
 devices' 1 kHz sampling is the clock: messages go out from the drivers' reader threads as each
-sample arrives, stamped with the node clock at arrival (the actuator's: at the time the board
-took it, from the board's clock mapped onto the node clock, `sample_delivery.DeviceClock`, so a
-burst read after a stall keeps its 1 ms spacing); there is no ROS timer at 1 kHz.
+sample arrives, stamped with the time the device took it: the device's clock mapped onto the node
+clock (`sample_delivery.DeviceClock`), so a burst read after a stall keeps its 1 ms spacing. For
+the arm the arrival that anchors that mapping is the bus's receive timestamp
+(`sample_delivery.arrival_ns`), so samples a starved reader takes late from the socket carry their
+true age; there is no ROS timer at 1 kHz.
 Commands (`/bellows/pressure_command`, `/actuator/motor_command`) pass through the hardware layer's
 safety limits (clamping, end stops, watchdogs).
 
@@ -68,7 +70,7 @@ from bellows_ros.errors import BellowsError
 from bellows_ros.hardware import actuator_board, arm_bus
 from bellows_ros.hardware.can_protocol import dbc_segments
 from bellows_ros.hardware.loop_timing import LoopStats
-from bellows_ros.hardware.sample_delivery import DeviceClock
+from bellows_ros.hardware.sample_delivery import arrival_ns, DeviceClock
 from bellows_ros.models.derivatives import rate
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime, run
@@ -348,6 +350,7 @@ class DriverNode(Node):
         self.chain_names = [interfaces.chain_chamber(i + 1, j)
                             for i in range(config.n_segments) for j in (1, 2)]
         self.arm_clock = SampleClock(interfaces.SAMPLE_PERIOD)
+        self.arm_stamps = DeviceClock()
         self.reports['arm'] = diagnostics.LoopReport(self.arm_clock.stats)
         self.diagnostics.add('arm', lambda stat: self.diagnose_device('arm', stat))
         self._last_arm = None
@@ -449,7 +452,12 @@ class DriverNode(Node):
 
     def on_arm_sample(self, sample):
         start = time.monotonic()
-        stamp = self.get_clock().now().to_msg()
+        # The arm's clock mapped onto the node clock, from when each frame reached the host (the
+        # bus's timestamp): stamped when this thread got to it, a backlog read 0.5-1.5 s late by
+        # a starved reader went out as fresh samples, and the arm controller acted on them.
+        arrival = arrival_ns(self.get_clock().now().nanoseconds, sample.t_arrival)
+        stamp = self.runtime.Time(nanoseconds=self.arm_stamps.stamp(
+            int(round(sample.t_device * 1e9)), arrival)).to_msg()
         previous = self._last_arm
         if previous is not None:
             # The encoder-less arm has no Ψ̇ sensor: the project's rate estimator (derivatives).
