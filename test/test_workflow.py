@@ -296,3 +296,34 @@ def test_device_clock_stamps_a_burst_at_the_times_the_board_took_it():
     # ... a restarted device (its clock back at 0) starts again, and stamps never go backwards.
     assert clock.stamp(0, stamps[-1] + 7 * ms) == stamps[-1] + 7 * ms
     assert clock.stamp(ms, stamps[-1] + 7 * ms) > stamps[-1] + 7 * ms
+
+
+def test_device_clock_on_timed_arrivals_follows_a_time_base_that_moved():
+    """
+    The arm's clock (`driver_node.ARRIVALS_TIMED`): arrivals timed by the bus, not by the reader.
+
+    An outage the arm's 8-bit frame counter could not count leaves its time base behind by the
+    outage: the clock takes the new base after `settle`. A simulated arm that paused and sent its
+    backlog at once keeps its base: those samples are as old as they are.
+    """
+    from bellows_ros.nodes.driver_node import ARRIVALS_TIMED
+    ms, settle = 1_000_000, int(ARRIVALS_TIMED['settle'] * 1e9)
+    clock = DeviceClock(**ARRIVALS_TIMED)
+    assert [clock.stamp(k * ms, k * ms + 5 * ms) for k in range(100)][-1] == 104 * ms
+    # 1.3 s without frames, counted as one instant: the device's time goes on from 100 ms.
+    device = [(100 + k) * ms for k in range(2000)]
+    arrivals = [(1400 + k) * ms + 5 * ms for k in range(2000)]
+    stamps = [clock.stamp(d, a) for d, a in zip(device, arrivals)]
+    # at first the old base (+ 100 ppm of drift): these look 1.3 s old
+    assert abs(stamps[0] - (device[0] + 5 * ms)) <= 1_000
+    moved = next(k for k, (s, a) in enumerate(zip(stamps, arrivals)) if s == a)
+    assert device[moved] - device[0] == settle  # after `settle` of device time, the new base
+    assert stamps[moved:] == arrivals[moved:]
+    # A pause of 0.5 s, then its 500 samples at once and on time again: the base does not move.
+    clock = DeviceClock(**ARRIVALS_TIMED)
+    for k in range(100):
+        clock.stamp(k * ms, k * ms + 5 * ms)
+    burst = [clock.stamp(k * ms, 605 * ms + k * 10_000) for k in range(100, 600)]
+    after = [clock.stamp(k * ms, k * ms + 5 * ms) for k in range(600, 3000)]
+    expected = [k * ms + 5 * ms for k in range(100, 3000)]
+    assert max(abs(a - b) for a, b in zip(burst + after, expected)) <= 0.1 * ms

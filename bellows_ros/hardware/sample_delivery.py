@@ -71,22 +71,39 @@ class DeviceClock:
     offset between the clocks, and the least-delayed arrival seen bounds that offset from above:
     `stamp(t_device, t_arrival)` keeps the smallest t_arrival - t_device, lets it rise by at most
     `drift` s per s of device time (so a device clock that runs slow is followed) and starts again
-    when an arrival is more than `resync` s later than the offset predicts (the device restarted,
-    its clock was reset, during a silence). A reader stalled for less than `resync` keeps the
-    device's time base: with 1 s, a 1.2 s stall on a loaded machine would stamp the backlog after
-    a hole. Stamps never go backwards. Times in ns (int).
+    when arrivals come more than `resync` s later than the offset predicts for `settle` s of device
+    time (the device restarted, its clock was reset, during a silence; or, for the arm, its 8-bit
+    frame counter could not count the instants of an outage). It then takes the least-delayed
+    arrival of that stretch. A reader stalled for less than `resync` keeps the device's time base:
+    with 1 s, a 1.2 s stall on a loaded machine would stamp the backlog after a hole. Stamps never
+    go backwards. Times in ns (int).
+
+    With arrivals timed where the frames reached the host (the arm's kernel timestamps,
+    `arrival_ns`), no reader delay is in them, and `resync` can be short: `settle` then tells a
+    device that paused and sent its backlog in a burst (arrivals late at first, back on time by
+    the burst's end) from a time base that really moved.
     """
 
-    def __init__(self, drift=1e-4, resync=10.0):
-        self.drift, self.resync_ns = drift, int(resync * 1e9)
+    def __init__(self, drift=1e-4, resync=10.0, settle=0.0):
+        self.drift, self.resync_ns, self.settle_ns = drift, int(resync * 1e9), int(settle * 1e9)
         self.offset = self._last_device = self._last_stamp = None
+        self._late = None  # (device time, least lag) since arrivals came later than `resync`
 
     def stamp(self, t_device, t_arrival):
         """Return the host-clock stamp, ns, of a sample taken at `t_device` that arrived then."""
         lag = t_arrival - t_device
         restarted = self._last_device is not None and t_device < self._last_device
-        if self.offset is None or restarted or lag - self.offset > self.resync_ns:
+        late = self.offset is not None and lag - self.offset > self.resync_ns
+        if not late:
+            self._late = None
+        elif self._late is None:
+            self._late = (t_device, lag)
+        else:
+            self._late = (self._late[0], min(self._late[1], lag))
+        if self.offset is None or restarted:
             self.offset = lag
+        elif late and t_device - self._late[0] >= self.settle_ns:
+            self.offset, self._late = self._late[1], None
         else:
             allowed = self.offset + int(self.drift * (t_device - self._last_device))
             self.offset = min(lag, allowed)

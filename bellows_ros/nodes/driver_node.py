@@ -149,6 +149,12 @@ def _port_problem(port):
     return ''
 
 
+# The arm's clock from arrivals the bus timed (its kernel timestamps: no reader delay in them,
+# jitter far under 50 ms): arrivals 50 ms later than the arm's time base predicts for a second of
+# samples mean the base moved (an outage longer than the 8-bit frame counter can count); a
+# simulated arm that paused and then sent its backlog is back on time within its pause.
+ARRIVALS_TIMED = {'resync': 0.05, 'settle': 1.0}
+
 PARAMETERS = (
     Spec('arm.enabled', False, 'drive the arm on CAN'),
     Spec('actuator.enabled', False, 'drive the actuator board on serial'),
@@ -350,7 +356,7 @@ class DriverNode(Node):
         self.chain_names = [interfaces.chain_chamber(i + 1, j)
                             for i in range(config.n_segments) for j in (1, 2)]
         self.arm_clock = SampleClock(interfaces.SAMPLE_PERIOD)
-        self.arm_stamps = DeviceClock()
+        self.arm_stamps = None  # made at the first sample: does the bus time its arrivals?
         self.reports['arm'] = diagnostics.LoopReport(self.arm_clock.stats)
         self.diagnostics.add('arm', lambda stat: self.diagnose_device('arm', stat))
         self._last_arm = None
@@ -456,6 +462,8 @@ class DriverNode(Node):
         # bus's timestamp): stamped when this thread got to it, a backlog read 0.5-1.5 s late by
         # a starved reader went out as fresh samples, and the arm controller acted on them.
         arrival = arrival_ns(self.get_clock().now().nanoseconds, sample.t_arrival)
+        if self.arm_stamps is None:
+            self.arm_stamps = DeviceClock(**(ARRIVALS_TIMED if sample.t_arrival else {}))
         stamp = self.runtime.Time(nanoseconds=self.arm_stamps.stamp(
             int(round(sample.t_device * 1e9)), arrival)).to_msg()
         previous = self._last_arm
