@@ -19,6 +19,8 @@ The samples are handed to the node's own callbacks, stamped in the past or now o
 clock; what it publishes is read back by a peer node.
 """
 from array import array
+import math
+import time
 
 import pytest
 
@@ -44,9 +46,9 @@ def controller(monkeypatch):
     dds_node.shutdown()
 
 
-def feed(node, stamps):
+def feed(node, stamps, psi=0.1):
     """
-    Hand `node` one held sample of segment 1 per stamp (ns), both halves.
+    Hand `node` one sample of segment 1 at angle `psi` rad per stamp (ns), both halves.
 
     A stamp of None is the node clock's present: a sample as young as it can be, however slowly a
     loaded machine runs this loop.
@@ -54,7 +56,7 @@ def feed(node, stamps):
     p0 = load_segment_params().p0
     for stamp in stamps:
         stamp = node.get_clock().now().nanoseconds if stamp is None else stamp
-        state = dds_node.msg.JointState(name=['segment_1'], position=array('d', [0.1]),
+        state = dds_node.msg.JointState(name=['segment_1'], position=array('d', [psi]),
                                         velocity=array('d', [0.0]))
         chambers = dds_node.msg.JointState(name=['segment_1/chain_1', 'segment_1/chain_2'],
                                            effort=array('d', [p0 + 1e5, p0 + 1e5]))
@@ -88,3 +90,40 @@ def test_samples_older_than_max_sample_age_get_no_command_and_say_so(controller)
     assert len(commands) == node.counts['commands']
     [status] = task.statuses()
     assert status.level != diagnostics.ERROR, status.message
+
+
+def test_after_a_vent_the_set_point_moves_back_from_where_the_segment_fell(controller):
+    """
+    The resumption is not a step: from the measured angle, a half-cosine at `resume_speed`.
+
+    A step of 0.7 rad overshot by 0.37-0.73 rad on drawn segments, a move at 0.5 rad/s peak by
+    0.006-0.034 rad (docs/bench_log.md, 2026-11-26).
+    """
+    node, peer, commands = controller
+    [loop] = node.loops
+    speed = node.get_parameter('resume_speed').value
+    feed(node, [None] * 20)  # holds the first sample's angle, 0.1 rad
+    assert node.counts['commands'] == 4 and loop.setpoint[0] == pytest.approx(0.1)
+    time.sleep(1.5 * interfaces.COMMAND_WATCHDOG)  # no command: the driver vents, the arm falls
+    feed(node, [None] * 5, psi=-0.3)
+    assert node.counts['restarts'] == 1
+    assert loop.setpoint[0] == pytest.approx(-0.3, abs=1e-3)  # where it fell, not 0.4 rad away
+    # The move back, on the samples' time (1 ms apart, or later if this loop runs slower: never
+    # stale): each command's set-point is the half-cosine from -0.3 to 0.1 rad at its stamp.
+    start, offset, duration = loop.resume
+    assert offset == pytest.approx(-0.4, abs=1e-3)
+    assert duration == pytest.approx(abs(offset) * math.pi / (2 * speed))
+    seen, stamp, k = [], round(start * 1e9), 0
+    while stamp * 1e-9 < start + 1.2 * duration:
+        k += 1
+        stamp = max(node.get_clock().now().nanoseconds, round((start + k * 1e-3) * 1e9))
+        before = node.counts['commands']
+        feed(node, [stamp], psi=-0.3)
+        if node.counts['commands'] > before:
+            seen.append((stamp * 1e-9, loop.setpoint))
+    for t, (psi_d, psi_dot_d, _) in seen:
+        phase = math.pi * min(1.0, (t - start) / duration)
+        assert psi_d == pytest.approx(0.1 + offset * 0.5 * (1 + math.cos(phase)), abs=1e-6)
+        assert 0.0 <= psi_dot_d <= speed * (1 + 1e-9)
+    assert max(v for _, (_, v, _) in seen) > 0.9 * speed  # the peak speed is reached ...
+    assert seen[-1][1][:2] == (pytest.approx(0.1), 0.0) and loop.resume is None  # ... and done

@@ -51,10 +51,12 @@ feedforward_lead (s: the valves' lag the feedforward anticipates, 0 = none), co_
 above ambient on both chains), control_every (samples per command), params_file (str: YAML over
 config/segment.yaml, e.g. identified parameters and the arm's segment.dynamics), max_pending
 (unmatched half-samples kept), max_sample_age (s: no command from a sample older than this),
-realtime_priority, cpu_latency_limit (runtime/realtime.py). The gains (pid.*), feedforward,
-feedforward_lead, co_contraction and max_sample_age are live: `ros2 param set` takes effect at
-the next command, with the integral and the contact memory kept (`AngleTracker.retune`); a
-co-contraction that would lift the base pressure above p_max is refused with the reason.
+resume_speed (rad/s: after the driver vented, the set-point moves back from the measured angle
+at this peak speed), realtime_priority, cpu_latency_limit (runtime/realtime.py). The gains
+(pid.*), feedforward, feedforward_lead, co_contraction, max_sample_age and resume_speed are live:
+`ros2 param set` takes effect at the next command, with the integral and the contact memory kept
+(`AngleTracker.retune`); a co-contraction that would lift the base pressure above p_max is refused
+with the reason.
 """
 from collections import deque
 import math
@@ -108,6 +110,8 @@ PARAMETERS = (
          low=1, high=interfaces.SAMPLE_DEPTH),
     Spec('max_sample_age', 0.02, 'no command from a sample older than this, s', low=1e-3,
          high=1.0, read_only=False),
+    Spec('resume_speed', 0.5, 'peak speed of the move back to the set-point after a vent, rad/s',
+         low=0.01, high=10.0, read_only=False),
 )
 
 
@@ -127,10 +131,46 @@ class SegmentLoop:
         self.measured = (math.nan, math.nan)  # Ψ, Ψ̇ of the latest command's sample
         self.tau = math.nan         # N·m, the torque the latest command asked for
         self.squares, self.count, self.largest, self.saturated = 0.0, 0, 0.0, 0
+        self.resume = None          # (start s, offset rad, duration s) of the move back
 
     def desired(self, now, later=0.0):
         """
         Return (Ψ_d, Ψ̇_d, Ψ̈_d) at sample time `now` s, or `later` s after it.
+
+        The source's set-point (`source_setpoint`), plus, while the segment resumes after a vent,
+        the offset from where it was then, fading out along a half-cosine (`begin_resume`).
+        """
+        psi, psi_dot, psi_ddot = self.source_setpoint(now, later)
+        if self.resume is not None:
+            start, offset, duration = self.resume
+            x = (now + later - start) / duration
+            if x < 1.0:
+                w = math.pi / duration
+                phase = math.pi * max(x, 0.0)
+                psi += 0.5 * offset * (1.0 + math.cos(phase))
+                psi_dot -= 0.5 * offset * w * math.sin(phase)
+                psi_ddot -= 0.5 * offset * w * w * math.cos(phase)
+            elif later == 0.0:
+                self.resume = None
+        return psi, psi_dot, psi_ddot
+
+    def begin_resume(self, now, psi, speed):
+        """
+        Start from the measured angle `psi` rad at sample time `now` s, back to the source's.
+
+        After a vent the segment rests wherever it fell; the set-point it should be at is a step
+        away, and the gains' step response overshoots by more than half the step
+        (docs/bench_log.md, 2026-11-26). So the set-point starts at `psi` and the offset fades out
+        in a half-cosine whose peak speed is `speed` rad/s, as the built-in trajectory's moves do
+        and as joint_trajectory_controller starts from the present state.
+        """
+        offset = psi - self.source_setpoint(now)[0]
+        duration = abs(offset) * math.pi / (2.0 * speed)
+        self.resume = (now, offset, duration) if duration > 0.0 else None
+
+    def source_setpoint(self, now, later=0.0):
+        """
+        Return (Ψ_d, Ψ̇_d, Ψ̈_d) of the set-point source at sample time `now` s, or `later` after.
 
         A joint trajectory from its start on; before it (or without one) the topic set-point,
         extrapolated with its velocity, else the built-in trajectory, else the held angle.
@@ -175,6 +215,7 @@ class ArmControllerNode(Node):
         self.feedforward = feedforward
         self.pairs = SamplePairs(max_pending)
         self.max_age_ns = round(max_age * 1e9)
+        self.resume_speed = given['resume_speed']
         self.samples = 0
         self.first_stamp = self.last_stamp = None
         self.counts = dict.fromkeys(['commands', 'stale_skipped', 'restarts', 'rejected_samples',
@@ -221,6 +262,7 @@ class ArmControllerNode(Node):
         gains = self._gains(self.parameters)
         self.lead, self.feedforward = gains.lead, self.parameters['feedforward']
         self.max_age_ns = round(self.parameters['max_sample_age'] * 1e9)
+        self.resume_speed = self.parameters['resume_speed']
         for loop in self.loops:
             loop.tracker.retune(gains, self.feedforward)
 
@@ -309,12 +351,13 @@ class ArmControllerNode(Node):
         if now - stamp > self.max_age_ns:
             self.counts['stale_skipped'] += 1
             return
+        t = stamp * 1e-9
         if self.last_command is not None and now - self.last_command > self.watchdog_ns:
             self.counts['restarts'] += 1  # the driver has vented meanwhile
-            for loop in self.loops:
+            for loop, row in zip(self.loops, inputs):
                 loop.tracker.restart()
+                loop.begin_resume(t, row[0], self.resume_speed)
         self.last_command = now
-        t = stamp * 1e-9
         names, efforts = [], []
         for loop, row in zip(self.loops, inputs):
             psi_d, psi_dot_d, psi_ddot_d = loop.setpoint = loop.desired(t)
