@@ -127,3 +127,24 @@ def test_after_a_vent_the_set_point_moves_back_from_where_the_segment_fell(contr
         assert 0.0 <= psi_dot_d <= speed * (1 + 1e-9)
     assert max(v for _, (_, v, _) in seen) > 0.9 * speed  # the peak speed is reached ...
     assert seen[-1][1][:2] == (pytest.approx(0.1), 0.0) and loop.resume is None  # ... and done
+
+
+def test_a_joint_trajectory_taken_while_resuming_does_not_jump(controller):
+    """A trajectory spliced in during the move back keeps the set-point continuous."""
+    node, peer, commands = controller
+    [loop] = node.loops
+    feed(node, [None] * 20)
+    time.sleep(1.5 * interfaces.COMMAND_WATCHDOG)
+    feed(node, [None] * 5, psi=-0.3)
+    assert loop.resume is not None
+    before = loop.desired(node.last_stamp * 1e-9)[0]
+    msg = dds_node.msg
+    node.on_trajectory(msg.JointTrajectory(joint_names=['segment_1'], points=[
+        msg.JointTrajectoryPoint(positions=[0.5], velocities=[0.0],
+                                 time_from_start=msg.Duration(sec=2, nanosec=0))]))
+    assert node.counts['trajectories'] == 1
+    after = loop.desired(node.last_stamp * 1e-9)[0]
+    assert after == pytest.approx(before, abs=1e-9)  # the set-point where it was, -0.3 rad
+    assert before == pytest.approx(-0.3, abs=1e-3)
+    # ... and the trajectory's end is still reached: offset faded, path at its last point.
+    assert loop.desired(node.last_stamp * 1e-9 + 5.0)[0] == pytest.approx(0.5)

@@ -306,8 +306,10 @@ class ArmControllerNode(Node):
                                             points[-1].time_from_start)
         for loop in self.loops:
             if loop.name in knots:
-                loop.path = joint_trajectory.splice(knots[loop.name], start, now, loop.desired,
-                                                    loop.path)
+                # From the source's set-point: a resumption's fading offset stays on top of the
+                # new path as it was on the old one, so the set-point does not jump.
+                loop.path = joint_trajectory.splice(knots[loop.name], start, now,
+                                                    loop.source_setpoint, loop.path)
         self.trajectory_start = start
         return list(knots)
 
