@@ -66,6 +66,20 @@ def feed(node, stamps, psi=0.1):
         node.on_chambers(chambers)
 
 
+def vent_and_resume(node, psi):
+    """
+    Hold 0.1 rad, let the driver vent, then resume on a segment fallen to `psi` rad.
+
+    Young samples at 0.1 rad (the held angle: 4 commands), no command for longer than the
+    command watchdog (the driver vents), then young samples at `psi`: the controller resumes.
+    """
+    feed(node, [None] * 20)  # holds the first sample's angle, 0.1 rad
+    assert node.counts['commands'] == 4 and node.loops[0].setpoint[0] == pytest.approx(0.1)
+    time.sleep(1.5 * interfaces.COMMAND_WATCHDOG)  # no command: the driver vents, the arm falls
+    feed(node, [None] * 5, psi=psi)
+    assert node.counts['restarts'] == 1
+
+
 def test_samples_older_than_max_sample_age_get_no_command_and_say_so(controller):
     node, peer, commands = controller
     task = ArmControllerTask(node)
@@ -102,11 +116,7 @@ def test_after_a_vent_the_set_point_moves_back_from_where_the_segment_fell(contr
     node, peer, commands = controller
     [loop] = node.loops
     speed = node.get_parameter('resume_speed').value
-    feed(node, [None] * 20)  # holds the first sample's angle, 0.1 rad
-    assert node.counts['commands'] == 4 and loop.setpoint[0] == pytest.approx(0.1)
-    time.sleep(1.5 * interfaces.COMMAND_WATCHDOG)  # no command: the driver vents, the arm falls
-    feed(node, [None] * 5, psi=-0.3)
-    assert node.counts['restarts'] == 1
+    vent_and_resume(node, psi=-0.3)
     assert loop.setpoint[0] == pytest.approx(-0.3, abs=1e-3)  # where it fell, not 0.4 rad away
     # The move back, on the samples' time (1 ms apart, or later if this loop runs slower: never
     # stale): each command's set-point is the half-cosine from -0.3 to 0.1 rad at its stamp.
@@ -133,9 +143,7 @@ def test_a_joint_trajectory_taken_while_resuming_does_not_jump(controller):
     """A trajectory spliced in during the move back keeps the set-point continuous."""
     node, peer, commands = controller
     [loop] = node.loops
-    feed(node, [None] * 20)
-    time.sleep(1.5 * interfaces.COMMAND_WATCHDOG)
-    feed(node, [None] * 5, psi=-0.3)
+    vent_and_resume(node, psi=-0.3)
     assert loop.resume is not None
     before = loop.desired(node.last_stamp * 1e-9)[0]
     msg = dds_node.msg

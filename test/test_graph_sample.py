@@ -29,6 +29,7 @@ from collections import Counter
 import math
 import os
 import random
+import signal
 import subprocess
 import sys
 import textwrap
@@ -265,9 +266,9 @@ def test_a_driver_stopped_for_half_a_second_stamps_its_backlog_on_the_arms_clock
     assert len(stamps) >= 1000, logs(tmp_path)
     driver = processes['driver_node']
     before = len(stamps)
-    driver.send_signal(19)  # SIGSTOP
+    driver.send_signal(signal.SIGSTOP)
     time.sleep(0.5)
-    driver.send_signal(18)  # SIGCONT
+    driver.send_signal(signal.SIGCONT)
     spin(3.0)
     after = stamps[before - 100:]
     assert len(after) > 1500, len(after)
