@@ -24,6 +24,8 @@ import re
 import pytest
 
 from bellows_ros.bench import devices, doctor_devices as bench
+from bellows_ros.cli.bench import chosen_modules
+from bellows_ros.errors import BellowsError
 
 
 def test_drawn_devices_differ_repeat_and_keep_their_physics_with_an_effect():
@@ -41,12 +43,38 @@ def test_a_null_device_and_a_buckling_device():
     rows = [bench.diagnose_device(bench.draw(0, None)),
             bench.diagnose_device(bench.draw(1, 'buckling'))]
     null, buckled = rows
-    assert null['named'] == [] and null['size'] == 0.0
+    assert null['named'] == [] and null['size'] == null['raw_size'] == 0.0
     assert buckled['size'] > bench.DUE          # this draw's buckling shows in its record
     assert buckled['named'] == ['buckling']
     results = {r.name: r for r in bench.summarise(rows, ('buckling',))}
     assert results['doctor_devices.buckling.named'].value == 1.0
     assert results['doctor_devices.none.false_names'].value == 0.0
+
+
+def test_an_effect_the_baselines_own_parameters_take_up_is_not_due():
+    """
+    A play whose chamber never reverses is a constant offset, which the encoder's zero is.
+
+    Backlash device 0 (seed 7100): the lead screw travels down the whole record. Its raw change is
+    above DUE, but the baseline's encoder zero takes nearly all of it. On device 3 the chamber
+    reverses and the play shows at every reversal: the size stays near the raw change.
+    """
+    monotone, reversing = bench.draw(0, 'backlash'), bench.draw(3, 'backlash')
+    size, raw = bench.effect_size(monotone)
+    assert raw > bench.DUE and size < 0.3 * raw
+    size, raw = bench.effect_size(reversing)
+    assert size > bench.DUE and size > 0.8 * raw
+    assert bench.effect_size(bench.draw(0, None)) == (0.0, 0.0)
+
+
+def test_one_seeded_run_takes_this_bench_and_the_arm_control_rows():
+    """Issue 21's run: `bellows bench --only doctor_devices,arm_control`, any order or spaces."""
+    both = ['arm_control', 'arm_control_devices', 'doctor_devices']
+    assert chosen_modules('doctor_devices,arm_control') == both
+    assert chosen_modules(' arm_control , doctor_devices') == both
+    assert 'graph' in chosen_modules(None) and 'graph' not in both
+    with pytest.raises(BellowsError, match="'arm_cntrl'"):
+        chosen_modules('doctor_device,arm_cntrl')
 
 
 @pytest.mark.slow  # one device per cause and a null device: 7 diagnoses, a few minutes

@@ -101,6 +101,8 @@ CASES = [
     ('reindex missing', 'missing'),
     ('reindex r.csv', 'r.csv'),
     ('bench --only no_such_bench', 'no_such_bench'),
+    ('bench --only segment,no_such_bench', 'no_such_bench'),
+    ('bench --only segment,', "''"),
     ('export actuator r.csv', '--output'),
     ('export actuator r.csv --output r.csv', 'input of this command'),
     ('export actuator missing --output o.csv', 'missing'),

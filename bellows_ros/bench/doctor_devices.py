@@ -23,8 +23,10 @@ config/actuator.yaml and the device's geometry (geometry is measured, the rest i
 find). The doctor gets only the record.
 
 The effect's size on a device is the RMS change it makes in the noise-free record (the same
-device and programme without it), over the sensor's noise, the larger of pressure and force: a
-cause is *due* on a device where that exceeds DUE (3 noise floors). Per cause:
+device and programme without it) beyond what the doctor's baseline absorbs with its own
+parameters (`effect_size`), over the sensor's noise, the larger of pressure and force: a cause is
+*due* on a device where that exceeds DUE (3 noise floors). The raw change (without the baseline's
+share taken out) is reported beside it. Per cause:
 - naming rate on the devices where it is due (target >= 90 %);
 - false-name rate: how often it is named on the null devices, and on the devices of the other
   causes (target <= 5 % each);
@@ -58,19 +60,40 @@ def doctor_config(device):
     return config._replace(model=model)
 
 
-def effect_size(device, record_without=None):
+def effect_size(device):
     """
-    RMS change the device's effect makes in its noise-free record, over the sensor noise.
+    Return (size, raw): the change the device's effect makes in its noise-free record.
 
-    The larger of pressure and force (noise floors); 0 for a device without an effect.
+    Both are RMS over the sensor's noise floor, the larger of pressure and force; (0, 0) for a
+    device without an effect. `raw` is the change itself (the same device and programme without
+    the effect). `size` is what is left of it beyond what the doctor's baseline takes up with its
+    own parameters: the force's linear terms refitted as the doctor refits them, then the
+    baseline's directions in p_ref, V_tube and the encoder's zero projected out
+    (`actuator_causes.baseline_directions`, linearised at the baseline's start). A play in a
+    chamber that never reverses is a constant offset, which the encoder's zero is: no record can
+    tell the two apart, and `size` is then small while `raw` is not.
     """
     if not device.effects:
-        return 0.0
-    clean = devices.actuator_device_record(device, noise=False)
-    without = devices.actuator_device_record(device, effects={}, noise=False)
+        return 0.0, 0.0
+    from bellows_ros.doctor import actuator_causes, checks
     sensors = device.plant.sensors
-    return max(float(np.sqrt(np.mean((clean['p'] - without['p']) ** 2))) / sensors.pressure_noise,
-               float(np.sqrt(np.mean((clean['f'] - without['f']) ** 2))) / sensors.force_noise)
+    scales = {'p': sensors.pressure_noise, 'f': sensors.force_noise}
+    params = doctor_config(device).model
+    clean, without = (checks.checked_record(checks.as_table(
+        devices.actuator_device_record(device, effects=effects, noise=False), 'actuator',
+        f'device {device.seed}'), 'actuator') for effects in (None, {}))
+    rows = len(without)
+    everything = np.ones(rows, bool)
+    with_base = actuator_causes.build_model(clean, params, (), scales=scales)
+    base = actuator_causes.build_model(without, params, (), scales=scales)
+    y0, jacobian = actuator_causes.baseline_directions(base, rows)
+    change = np.vstack([(clean[name] - without[name]) / scales[name] for name in ('p', 'f')])
+    raw = float(np.max(np.sqrt(np.mean(change ** 2, axis=1))))
+    # The two models differ only in the force the linear terms were refitted to: their
+    # predictions differ by the share of the change those terms take.
+    change = change.ravel() - (with_base.predict(base.x0, everything)[0].ravel() - y0)
+    left = actuator_causes.beyond_baseline(change, jacobian).reshape(2, rows)
+    return float(np.max(np.sqrt(np.mean(left ** 2, axis=1)))), raw
 
 
 def diagnose_device(device):
@@ -84,7 +107,8 @@ def diagnose_device(device):
     out = {'seed': device.seed, 'cause': cause, 'named': list(found.causes),
            'gain': found.gain, 'unexplained': found.unexplained,
            'rate': device.rate, 'duration': device.duration,
-           'size': effect_size(device), 'seconds': time.perf_counter() - started}
+           'seconds': time.perf_counter() - started}
+    out['size'], out['raw_size'] = effect_size(device)
     if cause is not None and cause not in found.causes:
         out['why'] = miss_reason(found, cause)
     return out
@@ -133,7 +157,8 @@ def run_devices(count, causes=CAUSES, progress=True, workers=1, null=True):
             rows.append(row)
             if progress:
                 print(f"  {cause or 'none'} #{index} ({row['rate']:.0f} Hz, "
-                      f"{row['duration']:.0f} s, size {row['size']:.1f}): named "
+                      f"{row['duration']:.0f} s, size {row['size']:.1f}, "
+                      f"raw {row['raw_size']:.1f}): named "
                       f"{'+'.join(row['named']) or 'none'}, gain {100 * row['gain']:.0f} %"
                       f"{', ' + row['why'] if 'why' in row else ''} "
                       f"[{row['seconds']:.0f} s]", file=sys.stderr, flush=True)
@@ -147,6 +172,7 @@ def summarise(rows, causes=CAUSES):
     for cause in causes:
         own = [r for r in rows if r['cause'] == cause]
         due = [r for r in own if r['size'] > DUE]
+        raw_due = [r for r in own if r['raw_size'] > DUE]
         named = [r for r in due if cause in r['named']]
         others = [r for r in rows if r['cause'] not in (None, cause)]
         false_null = sum(cause in r['named'] for r in null) / max(len(null), 1)
@@ -159,6 +185,9 @@ def summarise(rows, causes=CAUSES):
             'named_where_due': f'{len(named)} of {len(due)}',
             'named_below_due': f'{sum(cause in r["named"] for r in own if r["size"] <= DUE)} '
                                f'of {len(own) - len(due)}',
+            # What the rate would be with the raw change as the size (the baseline's share in).
+            'named_where_raw_size_due': f'{sum(cause in r["named"] for r in raw_due)} of '
+                                        f'{len(raw_due)}',
             'false_name_rate_null': false_null, 'false_name_rate_other_causes': false_other,
             'median_heldout_gain': float(np.median(gains)) if gains else float('nan'),
             'misses': '; '.join(f"seed {r['seed']} (size {r['size']:.1f}): {r['why']}"

@@ -24,20 +24,16 @@ from bellows_ros.errors import BellowsError
 
 def add_arguments(parser):
     parser.add_argument('--json', action='store_true', help='print results as JSON')
-    parser.add_argument('--only', metavar='TEXT',
-                        help='run only benchmark modules whose name contains TEXT')
+    parser.add_argument('--only', metavar='TEXT[,TEXT...]',
+                        help='run only benchmark modules whose name contains TEXT (any of '
+                             'several, comma-separated: one seeded run of several benches)')
     parser.add_argument('--quick', action='store_true',
                         help='fewer calls (a smoke run, less precise)')
 
 
 def run(args):
     results = []
-    names = sorted(info.name for info in pkgutil.iter_modules(bench_package.__path__))
-    chosen = [name for name in names if not args.only or args.only in name]
-    if not chosen:
-        raise BellowsError(f"--only {args.only!r}: no benchmark module's name contains it "
-                           f"(modules: {', '.join(names)})")
-    for name in chosen:
+    for name in chosen_modules(args.only):
         print(f'bench: {name} ...', file=sys.stderr)
         module = importlib.import_module(f'bellows_ros.bench.{name}')
         results.extend(module.run(quick=args.quick))
@@ -46,6 +42,22 @@ def run(args):
     else:
         print(format_table(results))
     return 0
+
+
+def chosen_modules(only):
+    """
+    Return the benchmark modules `--only` selects, in name order: every one if `only` is empty.
+
+    `only`: comma-separated texts; a module is chosen if its name contains any of them. A text
+    that no module's name contains is an error (a typo would otherwise run nothing of it).
+    """
+    names = sorted(info.name for info in pkgutil.iter_modules(bench_package.__path__))
+    wanted = [text.strip() for text in only.split(',')] if only else []
+    for text in wanted:
+        if not text or not any(text in name for name in names):
+            raise BellowsError(f"--only {only!r}: no benchmark module's name contains {text!r} "
+                               f"(modules: {', '.join(names)})")
+    return [name for name in names if not wanted or any(text in name for text in wanted)]
 
 
 def _show(value, unit):

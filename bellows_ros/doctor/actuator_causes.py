@@ -243,14 +243,7 @@ def _detectable(record, params, scales, cause):
     base = build_model(record, params, (), scales=scales)
     extended = build_model(record, params, (cause,), scales=scales)
     theta = np.asarray(base.x0, float)
-    y0 = base.predict(theta, everything)[0].ravel()
-    columns = []
-    for k, (low, high) in enumerate(zip(base.lower, base.upper)):
-        step = 1e-3 * (high - low)
-        shifted = theta.copy()
-        shifted[k] += step
-        columns.append((base.predict(shifted, everything)[0].ravel() - y0) / step)
-    jacobian = np.column_stack(columns)
+    y0, jacobian = baseline_directions(base, len(record))
     best, where = 0.0, ''
     start = [spec[1] for spec in SPECS[cause]]
     for k, (name, _, low, high) in enumerate(SPECS[cause]):
@@ -260,12 +253,38 @@ def _detectable(record, params, scales, cause):
             prediction = extended.predict(np.concatenate([theta, trial]), everything)[0].ravel()
             if not np.all(np.abs(prediction) < 1e8):
                 continue    # no pressure root at this extreme: says nothing about the record
-            change = prediction - y0
-            coef, *_ = np.linalg.lstsq(jacobian, change, rcond=None)
-            size = float(np.linalg.norm(change - jacobian @ coef))
+            size = float(np.linalg.norm(beyond_baseline(prediction - y0, jacobian)))
             if size > best:
                 best, where = size, f'{name} {value:.3g}'
     return best, where
+
+
+def baseline_directions(base, rows):
+    """
+    Return the baseline's prediction at its start and its Jacobian in its own parameters.
+
+    `base`: `build_model(record, params, ())` on a record of `rows` rows (the force's linear
+    terms refitted on all of them). Returns (y0, jacobian): y0 the flattened outputs
+    (noise floors), one Jacobian column per baseline parameter (p_ref, V_tube, the encoder's
+    zero; the force's linear terms are refitted inside every prediction), by forward differences
+    of 1e-3 of each parameter's range.
+    """
+    everything = np.ones(rows, bool)
+    theta = np.asarray(base.x0, float)
+    y0 = base.predict(theta, everything)[0].ravel()
+    columns = []
+    for k, (low, high) in enumerate(zip(base.lower, base.upper)):
+        step = 1e-3 * (high - low)
+        shifted = theta.copy()
+        shifted[k] += step
+        columns.append((base.predict(shifted, everything)[0].ravel() - y0) / step)
+    return y0, np.column_stack(columns)
+
+
+def beyond_baseline(change, jacobian):
+    """Return what is left of `change` (flattened outputs) beyond the baseline's `jacobian`."""
+    coef, *_ = np.linalg.lstsq(jacobian, change, rcond=None)
+    return change - jacobian @ coef
 
 
 def noise_floors(record):
