@@ -121,7 +121,7 @@ def miss_reason(found, cause):
     if not candidate.identifiable:
         reason = f'not identifiable: {candidate.reason}'
     elif candidate.score is None:
-        reason = 'not tried (baseline score broken)' if found.failure else 'not tried'
+        reason = f'not tried: the baseline, {found.failure}' if found.failure else 'not tried'
     elif candidate.note:
         reason = candidate.note
     else:

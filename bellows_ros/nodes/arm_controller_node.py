@@ -150,8 +150,6 @@ class SegmentLoop:
                 psi += 0.5 * offset * (1.0 + math.cos(phase))
                 psi_dot -= 0.5 * offset * w * math.sin(phase)
                 psi_ddot -= 0.5 * offset * w * w * math.cos(phase)
-            elif later == 0.0:
-                self.resume = None
         return psi, psi_dot, psi_ddot
 
     def begin_resume(self, now, psi, speed):
