@@ -122,11 +122,16 @@ CLOCK = Topic('/clock', 'rosgraph_msgs/msg/Clock', COMMAND_DEPTH,
 # a driver that starts (or restarts) while it is held is stopped from its first moment.
 ESTOP = Topic('/bellows/estop', 'std_msgs/msg/Bool', 1,
               'True: every driver vents and refuses commands until released', latched=True)
+# The driver's side of the stop: a controller that kept computing while its commands were refused
+# (a latched vent) has a set-point and an integral from before the segment fell.
+VENTED = Topic('bellows/vented', 'std_msgs/msg/Bool', 1,
+               'arm: True while the driver holds its chambers vented (not active, a latched vent, '
+               'the emergency stop, the command watchdog), sent on each change', latched=True)
 
 TOPICS = (JOINT_STATES, CHAMBERS, ACTUATOR_JOINT_STATES, ACTUATOR_CHAMBERS, WRENCH,
           DRIVING_TORQUE, EXTERNAL_TORQUE, PRESSURE_COMMAND, STIFFNESS_SETPOINT, STIFFNESS,
           MOTOR_COMMAND, PSI_SETPOINT, JOINT_TRAJECTORY, TRAJECTORY_STATE, DIAGNOSTICS, CLOCK,
-          ESTOP)
+          ESTOP, VENTED)
 
 
 def by_name(namespace='/'):

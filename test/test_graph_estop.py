@@ -21,7 +21,8 @@ the driver runs on rclpy). The chambers must fall to ambient and stay there whil
 keep coming; `False` alone must not release them, and `~/release` is refused while the stop is
 held. Then `~/vent` and `~/release` (std_srvs/Trigger, called with the real `ros2 service call`
 of ROS 2: across runtimes when the driver runs on the DDS runtime) vent and release it.
-The driver's /diagnostics say it is vented.
+The driver's /diagnostics say it is vented, and its `bellows/vented` says when it starts and
+stops holding the chambers vented.
 """
 import random
 import subprocess
@@ -66,7 +67,9 @@ def test_estop_vents_under_a_command_flood_and_false_does_not_release(
     dds_node.init([])
     try:
         probe = dds_node.Node('estop_probe')
-        pressures, status = [], {}
+        pressures, status, vented = [], {}, []
+        probe.create_subscription(msg.Bool, interfaces.VENTED.resolved(),
+                                  lambda m: vented.append(m.data), dds_node.LATCHED)
         probe.create_subscription(msg.JointState, interfaces.CHAMBERS.resolved(),
                                   lambda m: pressures.append((time.monotonic(), max(m.effort))),
                                   1000)
@@ -92,6 +95,8 @@ def test_estop_vents_under_a_command_flood_and_false_does_not_release(
         while (not pressures or pressures[-1][1] < 0.9 * COMMAND) and time.monotonic() < deadline:
             flood(0.2)
         assert pressures and pressures[-1][1] > 0.9 * COMMAND, logs(tmp_path)
+        assert vented[-1] is False, vented   # bellows/vented: the commands took
+        mark = len(vented)
         estop.publish(msg.Bool(data=True))
         stopped = time.monotonic()
         flood(3.0)
@@ -103,6 +108,7 @@ def test_estop_vents_under_a_command_flood_and_false_does_not_release(
         assert held and max(held) < AMBIENT + 0.05 * (COMMAND - AMBIENT)
         arm = status.get('driver_node: arm', {})
         assert arm.get('vented') == 'True' and int(arm['refused_while_vented']) > 100, arm
+        assert vented[mark:] == [True], vented   # said once, held under the command flood
         estop.publish(msg.Bool(data=True))
         flood(0.3)
         assert 'success=False' in call('release', env), 'released while the stop is held'
@@ -111,11 +117,13 @@ def test_estop_vents_under_a_command_flood_and_false_does_not_release(
         assert 'success=True' in call('release', env)
         flood(3.0)
         assert max(p for t, p in pressures[-200:]) > 0.9 * COMMAND   # commands act again
+        assert vented[-1] is False, vented
         assert 'success=True' in call('vent', env)
-        vented = time.monotonic()
+        vented_at = time.monotonic()
         flood(3.0)
-        after = [p for t, p in pressures if t > vented + 1.5]
+        after = [p for t, p in pressures if t > vented_at + 1.5]
         assert after and max(after) < AMBIENT + 0.05 * (COMMAND - AMBIENT)
+        assert vented[-1] is True, vented
     finally:
         for process in processes:
             if process.poll() is None:

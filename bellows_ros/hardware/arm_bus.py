@@ -141,6 +141,11 @@ class ArmBus:
     def latest(self):
         return fresh(self._latest, self.config.stale_timeout)
 
+    @property
+    def vented(self):
+        """True while the chambers are held vented: latched, or no set-point since the watchdog."""
+        return self._vented or self.latched
+
     def counters(self):
         out = dict(self._counts)
         out.update(self._checker.counters())

@@ -27,6 +27,16 @@ def fresh(sample, stale_timeout):
     return sample
 
 
+# s: a receive timestamp further than this from the system clock is on another clock (some
+# python-can interfaces count from the adapter's start) and says nothing about the wait.
+ON_HOST_CLOCK = 3600.0
+
+
+def on_host_clock(bus_timestamp):
+    """Tell whether `bus_timestamp` (s) is a receive time on the system clock (`arrival_ns`)."""
+    return bool(bus_timestamp) and abs(time.time() - bus_timestamp) < ON_HOST_CLOCK
+
+
 def arrival_ns(now_ns, bus_timestamp=None):
     """
     When a sample reached the host, ns on the clock that read `now_ns` (the node clock).
@@ -34,10 +44,10 @@ def arrival_ns(now_ns, bus_timestamp=None):
     `bus_timestamp` is the interface's receive timestamp, s on the system clock (SocketCAN and
     python-can's udp_multicast take it in the kernel, SO_TIMESTAMPNS). The time the frame then
     waited in the socket, for a reader the machine did not schedule, is taken off `now_ns`; so a
-    reader that has fallen behind does not stamp old samples as new. Without a timestamp (None, 0)
-    the arrival is `now_ns`.
+    reader that has fallen behind does not stamp old samples as new. Without a timestamp on the
+    system clock (None, 0, or one `on_host_clock` refuses) the arrival is `now_ns`.
     """
-    if not bus_timestamp:
+    if not on_host_clock(bus_timestamp):
         return now_ns
     waited = time.time_ns() - int(bus_timestamp * 1e9)
     return now_ns - max(0, waited)
@@ -70,7 +80,8 @@ class DeviceClock:
     stamps each sample itself (`t_device`); the host time of a sample is its device time plus the
     offset between the clocks, and the least-delayed arrival seen bounds that offset from above:
     `stamp(t_device, t_arrival)` keeps the smallest t_arrival - t_device, lets it rise by at most
-    `drift` s per s of device time (so a device clock that runs slow is followed) and starts again
+    `drift` s per s of device time (so a device clock that runs slow is followed; not while
+    arrivals are more than `resync` late) and starts again
     when arrivals come more than `resync` s later than the offset predicts for `settle` s of device
     time (the device restarted, its clock was reset, during a silence; or, for the arm, its 8-bit
     frame counter could not count the instants of an outage). It then takes the least-delayed
@@ -104,6 +115,8 @@ class DeviceClock:
             self.offset = lag
         elif late and t_device - self._late[0] >= self.settle_ns:
             self.offset, self._late = self._late[1], None
+        elif late:
+            pass    # a backlog, or a base that moved (then after `settle`): no drift either way
         else:
             allowed = self.offset + int(self.drift * (t_device - self._last_device))
             self.offset = min(lag, allowed)

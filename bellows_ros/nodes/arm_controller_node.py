@@ -35,6 +35,10 @@ allocation of `control.pressure_allocation`) and `control.angle_trajectory` (bui
       the samples' clock (ROS time); a header.stamp of zero means the latest sample's stamp.
   ~/state (control_msgs/JointTrajectoryControllerState, every STATE_PERIOD s of samples): per
       segment the reference (Ψ_d, Ψ̇_d, Ψ̈_d), the measured Ψ, Ψ̇, the error, the torque asked for.
+  /bellows/vented (Bool, latched, from the driver): while True the chambers are held vented and
+      commands may not take; every command then restarts the trackers from the measured angle,
+      so the move back after the vent (`resume_speed`) starts where the segment fell. A gap in
+      this node's own commands longer than the watchdog counts as a vent too (`restarts`).
   /diagnostics: per segment the tracking error (RMS and largest since the last report), the
       set-point, saturated commands, plus the loop timing and the age of the samples when a
       command is due (`sample_age_*_us`: their latency plus any backlog).
@@ -51,10 +55,11 @@ feedforward_lead (s: the valves' lag the feedforward anticipates, 0 = none), co_
 above ambient on both chains), control_every (samples per command), params_file (str: YAML over
 config/segment.yaml, e.g. identified parameters and the arm's segment.dynamics), max_pending
 (unmatched half-samples kept), max_sample_age (s: no command from a sample older than this),
-resume_speed (rad/s: after the driver vented, the set-point moves back from the measured angle
-at this peak speed), realtime_priority, cpu_latency_limit (runtime/realtime.py). The gains
-(pid.*), feedforward, feedforward_lead, co_contraction, max_sample_age and resume_speed are live:
-`ros2 param set` takes effect at the next command, with the integral and the contact memory kept
+resume_speed (rad/s: after a vent, the set-point moves back from the measured angle at this
+peak speed), realtime_priority, cpu_latency_limit (runtime/realtime.py). The gains (pid.*),
+feedforward, feedforward_lead, co_contraction, max_sample_age and resume_speed are live:
+`ros2 param set` takes effect at the next command (resume_speed: at the next move back; one under
+way keeps its speed), with the integral and the contact memory kept
 (`AngleTracker.retune`); a co-contraction that would lift the base pressure above p_max is refused
 with the reason.
 """
@@ -222,6 +227,8 @@ class ArmControllerNode(Node):
         self.trajectory_start = None  # s, start of the latest joint trajectory (its progress)
         self.last_state = None        # ns, stamp of the latest ~/state
         self.last_command = None
+        self.driver_vented = False   # bellows/vented: the driver holds the chambers vented
+        self.restarting = False      # the last command restarted the trackers (a vent lasts)
         self.stats = LoopStats()
         self.ages = deque(maxlen=1000)  # s, age of the sample at each command (or skip)
         self.report = diagnostics.LoopReport(self.stats)
@@ -233,6 +240,7 @@ class ArmControllerNode(Node):
         self.subscription(interfaces.CHAMBERS, self.on_chambers)
         self.subscription(interfaces.PSI_SETPOINT, self.on_setpoint)
         self.subscription(interfaces.JOINT_TRAJECTORY, self.on_trajectory)
+        self.subscription(interfaces.VENTED, self.on_vented)
         self.diagnostics = diagnostics.Updater(self)
         self.diagnostics.setHardwareID('none')  # software: the driver reports the devices
         self.diagnostics.add(ArmControllerTask(self))
@@ -277,6 +285,9 @@ class ArmControllerNode(Node):
                 continue
             loop.topic_setpoint = (psi, psi_dot)
             loop.path = None  # the newest command decides
+
+    def on_vented(self, msg):
+        self.driver_vented = bool(msg.data)
 
     def on_trajectory(self, msg):
         try:
@@ -352,11 +363,18 @@ class ArmControllerNode(Node):
             self.counts['stale_skipped'] += 1
             return
         t = stamp * 1e-9
-        if self.last_command is not None and now - self.last_command > self.watchdog_ns:
-            self.counts['restarts'] += 1  # the driver has vented meanwhile
+        # Vented (the driver says so, or this node's commands stopped for longer than the
+        # driver's watchdog waits): the segment rests where it fell. Start again from there,
+        # at every command for as long as the vent lasts, so that none of the integral or the
+        # set-point from before it is left when the driver takes commands again.
+        vented = self.driver_vented or (self.last_command is not None
+                                        and now - self.last_command > self.watchdog_ns)
+        if vented:
+            self.counts['restarts'] += not self.restarting
             for loop, row in zip(self.loops, inputs):
                 loop.tracker.restart()
                 loop.begin_resume(t, row[0], self.resume_speed)
+        self.restarting = vented
         self.last_command = now
         names, efforts = [], []
         for loop, row in zip(self.loops, inputs):

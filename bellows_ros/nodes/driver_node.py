@@ -70,7 +70,7 @@ from bellows_ros.errors import BellowsError
 from bellows_ros.hardware import actuator_board, arm_bus
 from bellows_ros.hardware.can_protocol import dbc_segments
 from bellows_ros.hardware.loop_timing import LoopStats
-from bellows_ros.hardware.sample_delivery import arrival_ns, DeviceClock
+from bellows_ros.hardware.sample_delivery import arrival_ns, DeviceClock, on_host_clock
 from bellows_ros.models.derivatives import rate
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime, run
@@ -149,11 +149,20 @@ def _port_problem(port):
     return ''
 
 
-# The arm's clock from arrivals the bus timed (its kernel timestamps: no reader delay in them,
-# jitter far under 50 ms): arrivals 50 ms later than the arm's time base predicts for a second of
-# samples mean the base moved (an outage longer than the 8-bit frame counter can count); a
-# simulated arm that paused and then sent its backlog is back on time within its pause.
-ARRIVALS_TIMED = {'resync': 0.05, 'settle': 1.0}
+# The arm's clock (`DeviceClock`), by whether the bus times the frames' arrivals on the system
+# clock (`sample_delivery.on_host_clock`). An outage longer than the 8-bit frame counter can count
+# leaves the arm's time base behind by multiples of 256 ms; without a new base every later sample
+# would look too old to act on, and the arm would stay vented.
+# - Timed (kernel timestamps: no reader delay, jitter far under 50 ms): arrivals 50 ms later than
+#   the base predicts for a second of samples mean the base moved; a simulated arm that paused and
+#   then sent its backlog is back on time within its pause. The offset may rise by 1 % of device
+#   time: the arm's time is its sample count times the nominal period, so its oscillator's error
+#   (and a host clock being slewed) shows as drift, and 100 ppm would let its samples age past
+#   `max_sample_age` (20 ms) within minutes; with timed arrivals a delayed frame cannot raise it.
+# - Untimed (read times): a reader stalled for up to 2 s keeps the base and its backlog its age;
+#   a base 250 ms or more behind for longer is taken as moved.
+ARM_CLOCK = {True: {'drift': 1e-2, 'resync': 0.05, 'settle': 1.0},
+             False: {'drift': 1e-4, 'resync': 0.25, 'settle': 2.0}}
 
 PARAMETERS = (
     Spec('arm.enabled', False, 'drive the arm on CAN'),
@@ -198,6 +207,7 @@ class DriverNode(Node):
         if self.use_arm:
             self.state_pub = self.publisher(interfaces.JOINT_STATES)
             self.chamber_pub = self.publisher(interfaces.CHAMBERS)
+            self.vented_pub = self.publisher(interfaces.VENTED)
         if self.use_actuator:
             self.actuator_state_pub = self.publisher(interfaces.ACTUATOR_JOINT_STATES)
             self.actuator_chamber_pub = self.publisher(interfaces.ACTUATOR_CHAMBERS)
@@ -206,6 +216,7 @@ class DriverNode(Node):
         self.arm = self.actuator = None
         self.reports = {}
         self.published = {'arm': 0, 'actuator': 0}
+        self.arm_vented = None        # the state bellows/vented last said
         self.refused = 0              # commands that arrived while not active
         self.estop_held = False       # /bellows/estop is True
         self.vent_requested = False   # ~/vent or the estop latched a vent: ~/release ends it
@@ -293,11 +304,22 @@ class DriverNode(Node):
             self.arm.vent()
         if self.actuator is not None:
             self.actuator.stop()
+        self._publish_vented()
 
     def _release_devices(self):
         for device in (self.arm, self.actuator):
             if device is not None:
                 device.release()
+
+    def _publish_vented(self):
+        """Say on bellows/vented when the arm's chambers start or stop being held vented."""
+        if not self.use_arm:
+            return
+        vented = self.arm is None or self.arm.vented
+        with self._publish_lock:
+            if vented != self.arm_vented:
+                self.arm_vented = vented
+                self.vented_pub.publish(self.msg.Bool(data=vented))
 
     def _wait_for_ambient(self):
         """Wait until every arm chamber reads ambient (the vent pressure p0), or the timeout."""
@@ -463,7 +485,7 @@ class DriverNode(Node):
         # a starved reader went out as fresh samples, and the arm controller acted on them.
         arrival = arrival_ns(self.get_clock().now().nanoseconds, sample.t_arrival)
         if self.arm_stamps is None:
-            self.arm_stamps = DeviceClock(**(ARRIVALS_TIMED if sample.t_arrival else {}))
+            self.arm_stamps = DeviceClock(**ARM_CLOCK[on_host_clock(sample.t_arrival)])
         stamp = self.runtime.Time(nanoseconds=self.arm_stamps.stamp(
             int(round(sample.t_device * 1e9)), arrival)).to_msg()
         previous = self._last_arm
@@ -484,6 +506,7 @@ class DriverNode(Node):
             self.state_pub.publish(state)
             self.chamber_pub.publish(chambers)
             self.published['arm'] += 1
+        self._publish_vented()   # the watchdog and the first accepted command change it
         self.arm_clock.tick(sample.index, sample.t_receive, time.monotonic() - start)
 
     # --- commands (refused by the devices unless active and released) ---------------------------
