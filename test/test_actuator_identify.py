@@ -19,10 +19,10 @@ import numpy as np
 import pytest
 
 from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
-from bellows_ros.identify.actuator import calibrate_stiffness, fit_actuator
+from bellows_ros.identify.actuator import calibrate_stiffness, fit_actuator, GasLost
 from bellows_ros.models.actuator import stiffness, without_bulging
 from bellows_ros.models.actuator_experiments import volume_test_series
-from bellows_ros.models.actuator_geometry import e_v
+from bellows_ros.models.actuator_geometry import e_v, P_ATM
 
 PLANT = load_actuator_plant_params()
 
@@ -96,3 +96,20 @@ def test_calibration_hits_the_papers_stiffness():
     calibrated = calibrate_stiffness(detuned)
     assert stiffness(calibrated, -0.02) == pytest.approx(1483.0, rel=1e-6)
     assert stiffness(calibrated, 0.02) == pytest.approx(1975.0, rel=1e-6)
+
+
+def test_the_gas_a_leak_took_is_the_same_read_whole_or_in_chunks():
+    """`GasLost`: ∫ P (P - P_atm) dt from each fill's first row, carried across chunks."""
+    t = np.arange(0.0, 10.0, 1e-3)
+    p = 1.2e5 + 3e4 * np.sin(t)
+    run = (t > 6.0).astype(int)
+    whole = GasLost().add(t, p, run)
+    lost = GasLost()
+    chunks = np.concatenate([lost.add(t[k:k + 777], p[k:k + 777], run[k:k + 777])
+                             for k in range(0, len(t), 777)])
+    assert np.allclose(chunks, whole, rtol=1e-12, atol=1e-6)
+    second = int(np.argmax(run))
+    assert whole[0] == 0.0 and whole[second] == 0.0   # a new fill has lost nothing yet
+    g = p * (p - P_ATM)
+    assert whole[4000] == pytest.approx(np.trapezoid(g[:4001], t[:4001]), rel=1e-9)
+    assert whole[-1] == pytest.approx(np.trapezoid(g[second:], t[second:]), rel=1e-9)

@@ -89,8 +89,10 @@ def effect_size(device):
     y0, jacobian = actuator_causes.baseline_directions(base, rows)
     change = np.vstack([(clean[name] - without[name]) / scales[name] for name in ('p', 'f')])
     raw = float(np.max(np.sqrt(np.mean(change ** 2, axis=1))))
-    # The two models differ only in the force the linear terms were refitted to: their
-    # predictions differ by the share of the change those terms take.
+    # At the same parameters the baseline's predictions on the two records differ by what it
+    # takes up without moving them: the force's linear terms, refitted to each record's force,
+    # and its response to the records' inputs (the encoder's x_c differs by micrometres where
+    # the effect loads the motor).
     change = change.ravel() - (with_base.predict(base.x0, everything)[0].ravel() - y0)
     left = actuator_causes.beyond_baseline(change, jacobian).reshape(2, rows)
     return float(np.max(np.sqrt(np.mean(left ** 2, axis=1)))), raw

@@ -42,7 +42,7 @@ from bellows_ros.bench import devices, Result
 from bellows_ros.config.actuator import load_actuator
 from bellows_ros.control.pd import PDController, PDGains
 from bellows_ros.control.stiffness import StiffnessSetpoint
-from bellows_ros.errors import BellowsError
+from bellows_ros.errors import BellowsError, ParameterError
 from bellows_ros.identify.actuator import fit_actuator
 from bellows_ros.models.actuator import stiffness
 from bellows_ros.models.actuator_experiments import actuator_record
@@ -77,27 +77,44 @@ def controller_settings():
 
 def identify(device):
     """
-    `bellows identify actuator` on an excitation record of `device` -> (ActuatorParams, why).
+    `bellows identify actuator` on an excitation record of `device` -> (ActuatorParams, how).
 
-    The params are None when the fit fails or its map cannot be used (no pressure root,
-    V_tube <= 0, no rising branch of K(x_c)); `why` says which. The identification assumes a
-    sealed, constant gas amount, which the device's leak breaks.
+    The sealed fit first; where it fails (no pressure root, V_tube <= 0, no rising branch of
+    K(x_c)), the fit with a leak (`--leak`, which the doctor's `air_leak` would point to), kept
+    if it does not fail. The params are None when both fail; `how` says which fit was kept (with
+    its G, and the volume error's correlation over STRUCTURE_LAG against the bound beyond which
+    `bellows identify actuator` refuses the record) or why both failed.
     """
     record = actuator_record(device.params, device.plant, device.effects, None, seed=device.seed,
                              duration=RECORD)
     start = load_actuator().model
-    try:
-        fitted = fit_actuator(start, record['x_c'], record['x_s'], record['p'], record['f'],
-                              seed=0).params
-        if not fitted.v_tube > 0:
-            return None, f'V_tube = {fitted.v_tube:.3g} m^3'
-        k_min, k_max = stiffness_range(fitted)
-        if not k_max > 1.01 * k_min:
-            return None, (f'the map has no usable rising branch (range {k_min:.0f}-{k_max:.0f} '
-                          'N/m)')
-    except BellowsError as exc:
-        return None, str(exc)
-    return fitted, ''
+    reasons = []
+    for leak in (False, True):
+        label = 'with a leak' if leak else 'sealed'
+        try:
+            fit = fit_actuator(start, record['x_c'], record['x_s'], record['p'], record['f'],
+                               seed=0, rate=1.0 / DT, t=record['t'] if leak else None)
+        except BellowsError as exc:
+            reasons.append(f'{label}: {exc}')
+            continue
+        why = _unusable(fit)
+        if why:
+            reasons.append(f'{label}: {why}')
+            continue
+        correlation, bound = fit.structure
+        return fit.params, (f'{label}{f", G = {fit.leak:.3g} m^3/(s Pa)" if leak else ""}, '
+                            f'structure {correlation:.2f} (bound {bound:.3f})')
+    return None, '; '.join(reasons)
+
+
+def _unusable(fit):
+    """Why the map of `fit` is of no use, or ''."""
+    if not fit.params.v_tube > 0:
+        return f'V_tube = {fit.params.v_tube:.3g} m^3'
+    k_min, k_max = stiffness_range(fit.params)
+    if not (k_min > 0.0 and k_max > 1.01 * k_min):
+        return f'the map has no usable rising branch (range {k_min:.0f}-{k_max:.0f} N/m)'
+    return ''
 
 
 def steps_on(device, controller_params):
@@ -137,14 +154,19 @@ def run(quick=False):
     count = QUICK_DEVICES if quick else DEVICES
     figures = {'identified_map': [], 'default_map': []}
     default = load_actuator().model
-    failed = []
+    failed, kept = [], []
     for index in range(count):
         device = draw_actuator(SEED + index)
-        fitted, why = identify(device)
+        fitted, how = identify(device)
+        try:
+            steps = [] if fitted is None else steps_on(device, fitted)
+        except ParameterError as exc:   # the map has no usable branch at the device's gas
+            fitted, how = None, f'{how}; in use: {exc}'
         if fitted is None:
-            failed.append(f'{index}: {why}')
+            failed.append(f'{index}: {how}')
         else:
-            figures['identified_map'] += steps_on(device, fitted)
+            kept.append(f'{index}: {how}')
+            figures['identified_map'] += steps
         figures['default_map'] += steps_on(device, default)
     results = []
     for name, steps in figures.items():
@@ -162,5 +184,6 @@ def run(quick=False):
         if name == 'identified_map':
             result.extra['identification_failed'] = f'{len(failed)} of {count}'
             result.extra['failures'] = '; '.join(failed) or 'none'
+            result.extra['fits'] = '; '.join(kept) or 'none'
         results.append(result)
     return results

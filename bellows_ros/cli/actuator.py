@@ -21,8 +21,8 @@ from bellows_ros import params as param_files
 from bellows_ros.config.actuator import load_actuator, params_to_flat
 from bellows_ros.data import check_moves, check_range, CsvOutput, read_chunks, read_record
 from bellows_ros.errors import BellowsError, DataError, ParameterError
-from bellows_ros.identify.actuator import (fit_actuator, LaggedCorrelation, parameter_count,
-                                           STRUCTURE_LAG, volume_error)
+from bellows_ros.identify.actuator import (fit_actuator, GasLost, LaggedCorrelation,
+                                           parameter_count, STRUCTURE_LAG, volume_error)
 from bellows_ros.models.actuator import evaluate_array
 from bellows_ros.models.actuator_plant import ActuatorPlant, effect_parameters
 
@@ -86,14 +86,15 @@ def _run_plant(plant, t, x_c, x_s, last=None):
 ROWS_PER_PARAMETER = 10
 
 
-def _check_identifiable(record, params, run):
+def _check_identifiable(record, params, run, leak=False):
     """Refuse a record that cannot determine the parameters: too short, or inputs that stay put."""
     table, stats = record.table, record.stats
     runs = 1 if run is None else len(np.unique(run))
-    needed = ROWS_PER_PARAMETER * parameter_count(params, runs)
+    count = parameter_count(params, runs, leak=leak)
+    needed = ROWS_PER_PARAMETER * count
     if record.rows < needed:
         raise DataError(table.path, f'only {record.rows} rows: identification fits '
-                        f'{parameter_count(params, runs)} numbers and needs at least {needed} '
+                        f'{count} numbers and needs at least {needed} '
                         f'rows ({ROWS_PER_PARAMETER} per number)')
     check_moves(table, 'x_c', 'the air-chamber compression must vary to separate the tube '
                 'volume from the gas amount', stats)
@@ -102,31 +103,35 @@ def _check_identifiable(record, params, run):
                 stats)
 
 
-def _not_sealed(data, evidence):
-    """Refuse a record that breaks the sealed-gas assumption, naming the evidence."""
+def _not_sealed(data, evidence, leak=False):
+    """Refuse a record that breaks the gas assumption (sealed, or leaking), naming the evidence."""
+    gas = 'one leaking' if leak else 'one sealed'
+    hint = '' if leak else ' (if it names air_leak, `--leak` fits the leak)'
     return BellowsError(
-        f'{data}: identification refused: the record does not behave as one sealed, isothermal '
+        f'{data}: identification refused: the record does not behave as {gas}, isothermal '
         f'gas volume ({evidence}; an air leak, heat exchange, a lagging sensor, backlash?); run '
-        '`bellows diagnose actuator` on it to find what it shows')
+        f'`bellows diagnose actuator` on it to find what it shows{hint}')
 
 
 def _raw_structure(path, fit, rate):
     """`leftover_structure` of the fitted model's volume error over every raw row of `path`."""
     structure = LaggedCorrelation(rate)
+    lost = GasLost()
     for chunk in read_chunks(path, 'actuator'):
         run = chunk['run'] if 'run' in chunk else None
+        taken = None if fit.leak is None else fit.leak * lost.add(chunk['t'], chunk['p'], run)
         structure.add(volume_error(fit.params, fit.amounts, chunk['x_c'], chunk['x_s'],
-                                   chunk['p'], run))
+                                   chunk['p'], run, taken))
     return structure.result()
 
 
-def _check_fit(path, data):
+def _check_fit(path, data, leak):
     """Read the fitted file back with the actuator loader; a refusal explains the record."""
     try:
         load_actuator(path)
     except ParameterError as exc:
         problem = str(exc).split(': ', 1)[-1]
-        raise _not_sealed(data, f'the fit gives an impossible value: {problem}') from None
+        raise _not_sealed(data, f'the fit gives an impossible value: {problem}', leak) from None
 
 
 def identify(args):
@@ -138,27 +143,30 @@ def identify(args):
                          per_chunk=lambda chunk: _check_compressions(chunk, params))
     table = record.table
     run = table['run'] if 'run' in table else None
-    _check_identifiable(record, params, run)
+    _check_identifiable(record, params, run, args.leak)
     rate = 1.0 / float(np.median(np.diff(table['t'])))
     try:
         fit = fit_actuator(params, table['x_c'], table['x_s'], table['p'], table['f'], run=run,
-                           seed=args.seed, progress=not args.quiet, rate=rate)
+                           seed=args.seed, progress=not args.quiet, rate=rate,
+                           t=table['t'] if args.leak else None)
     except ParameterError as exc:  # the fitted numbers describe no device (a gas law with no root)
-        raise _not_sealed(args.data, f'the fitted parameters are impossible: {exc}') from None
+        raise _not_sealed(args.data, f'the fitted parameters are impossible: {exc}',
+                          args.leak) from None
     correlation, bound = fit.structure
     if record.factor > 1:  # block means hide the noise: the raw rows' error, chunk by chunk
         correlation, bound = _raw_structure(args.data, fit, rate * record.factor)
     if correlation > bound:
         raise _not_sealed(args.data, f'the volume error stays correlated over {STRUCTURE_LAG:g} '
-                          f's: {correlation:.2f}, where noise stays below {bound:.3f}')
+                          f's: {correlation:.2f}, where noise stays below {bound:.3f}', args.leak)
     fitted = fit.params
+    leak = '' if fit.leak is None else f', air leak G = {fit.leak:.3g} m^3/(s Pa)'
     header = (f'bellows identify actuator {args.data}\n'
               f'volume error rms {fit.volume_error_ml[0]:.3f} mL, '
-              f'force error rms {fit.force_error_n[0]:.3f} N')
+              f'force error rms {fit.force_error_n[0]:.3f} N{leak}')
     # The whole file (drive, sensors and effects as given): one file to read back. It replaces
     # the output only once its own loader has read it (an impossible fit is refused, not written).
     param_files.write_file(args.output, params_to_flat(fitted, config.plant), header,
-                           check=lambda path: _check_fit(path, args.data))
+                           check=lambda path: _check_fit(path, args.data, args.leak))
     rms, low, high = fit.volume_error_ml
     print(f'volume error: {low:+.2f} mL to {high:+.2f} mL (rms {rms:.3f} mL) '
           f'over {fit.rows} samples')
@@ -171,5 +179,8 @@ def identify(args):
           f'P0 (p_ref at x_c = {fitted.x_c_ref * 1e3:g} mm) = '
           f'{fitted.p_ref:.0f} Pa, F_MTS = [{", ".join(f"{v:.5g}" for v in fitted.f_mts)}], '
           f'E_F = [{", ".join(f"{v:.5g}" for v in fitted.e_f)}]')
+    if fit.leak is not None:
+        print(f'air leak conductance G = {fit.leak:.3g} m^3/(s Pa) (dN/dt = -G P (P - P_atm)); '
+              f'P0 is the gas at the first row')
     print(f'wrote {args.output}')
     return 0

@@ -16,6 +16,7 @@
 import argparse
 import importlib
 
+from bellows_ros.errors import BellowsError
 from bellows_ros.outputs import check_output
 
 
@@ -29,6 +30,9 @@ def add_arguments(parser):
     parser.add_argument('--seed', type=seed, default=0,
                         help='seed for the multi-start search (0 .. 2**32 - 1)')
     parser.add_argument('--quiet', action='store_true', help='no progress bar')
+    parser.add_argument('--leak', action='store_true',
+                        help="actuator: fit an air leak's conductance too (a record that "
+                             '`bellows diagnose actuator` found leaking)')
 
 
 def seed(text):
@@ -43,6 +47,8 @@ def seed(text):
 
 
 def run(args):
+    if args.leak and args.system != 'actuator':
+        raise BellowsError('--leak: only the actuator holds a sealed gas that can leak')
     check_output(args.output, inputs=(args.data, args.params))  # before the fit, not after it
     system = importlib.import_module(f'bellows_ros.cli.{args.system}')
     return system.identify(args)

@@ -25,7 +25,9 @@ Two stages, as in the paper:
    kept from the starting parameters (see `fit_volume`); several separately sealed runs (a `run`
    column) pin the rest better. P0 (`p_ref`) follows from N. The volume error is reported the
    paper's way: the volume the gas law gives for the measured pressure (N/P) against the model's
-   volume, in mL.
+   volume, in mL. Optionally (`leak`) the gas is not sealed but leaks by the plant's law,
+   dN/dt = -G P (P - P_atm): with P measured, N(t) = N_0 - G L(t), L the integral of
+   P (P - P_atm), so the conductance G is one more linear unknown (`GasLost`).
 2. Force (7-12). With P measured, f - (P - P_atm) A(Δh_s, P) = F_MTS(x_s) + E_F(Δh_s, P): the
    polynomial F_MTS and C1 are linear, (C2, C3) enter E_F nonlinearly — variable projection with
    SciPy `least_squares` over (C2, C3) from several starting points. C4 is fixed at -C2 P_atm (it
@@ -76,6 +78,7 @@ class ActuatorFit:
     rows: int
     structure: tuple = (0.0, 1.0)
     amounts: dict = None   # {run number (0 without a `run` column): gas amount, Pa·m³}
+    leak: float = None     # fitted leak conductance G, m³/(s·Pa) (None: sealed gas assumed)
 
 
 # A sealed, isothermal gas leaves a volume error that is sensor noise: uncorrelated from sample to
@@ -135,36 +138,76 @@ class LaggedCorrelation:
         return float(correlation), STRUCTURE_DEVIATIONS / np.sqrt(n)
 
 
-def volume_error(params, amounts, x_c, x_s, p, run=None):
-    """Model minus gas-law volume, mL, with the gas amount of each run (`ActuatorFit.amounts`)."""
+class GasLost:
+    """
+    L(t) = ∫ P (P - P_atm) dt (Pa²·s) since each run's first row: G·L is the gas a leak took.
+
+    The plant's leak law (docs/actuator.md, "Effects"): laminar flow to ambient,
+    dN/dt = -G P (P - P_atm) at ambient temperature, N = P·V in Pa·m³. With the pressure measured
+    the gas amount is N_0 - G L(t), linear in the conductance G. Trapezoidal in the rows' own
+    times; `add` takes a record chunk by chunk and carries the integral across chunks.
+    """
+
+    def __init__(self):
+        self._last = None   # (t, P (P - P_atm), L, run) of the previous chunk's last row
+
+    def add(self, t, p, run=None):
+        """Return L at each row of the next chunk (t s, p Pa, `run` numbers or None)."""
+        t, p = np.asarray(t, float), np.asarray(p, float)
+        g = p * (p - P_ATM)
+        run = np.zeros(len(p), int) if run is None else np.asarray(run).astype(int)
+        t0, g0, carry, run0 = self._last or (t[0], g[0], 0.0, run[0])
+        step = 0.5 * (g + np.r_[g0, g[:-1]]) * (t - np.r_[t0, t[:-1]])
+        new_fill = run != np.r_[run0, run[:-1]]
+        step[new_fill] = 0.0
+        lost = np.empty(len(t))
+        edges = np.r_[0, np.flatnonzero(new_fill), len(t)]
+        for begin, end in zip(edges[:-1], edges[1:]):
+            lost[begin:end] = carry + np.cumsum(step[begin:end])
+            carry = 0.0     # a new fill starts with nothing lost
+        self._last = (t[-1], g[-1], lost[-1], run[-1])
+        return lost
+
+
+def volume_error(params, amounts, x_c, x_s, p, run=None, lost=None):
+    """
+    Model minus gas-law volume, mL, with the gas amount of each run (`ActuatorFit.amounts`).
+
+    `lost`: the gas a leak took by each row (G·L, Pa·m³; `GasLost`), or None for a sealed gas.
+    """
     if run is None:
         amount = np.full(len(p), amounts[0])
     else:
         runs = np.array(sorted(amounts))
         amount = np.array([amounts[r] for r in runs])[
             np.searchsorted(runs, np.asarray(run).astype(int))]
+    if lost is not None:
+        amount = amount - lost
     return (total_volume(params, x_c, x_s, p) - amount / p) * 1e6
 
 
-def parameter_count(params, runs=1, wall_bulging=True):
-    """How many numbers `fit_actuator` fits: gas amounts, V_tube, E_V terms, F_MTS and E_F."""
+def parameter_count(params, runs=1, wall_bulging=True, leak=False):
+    """How many numbers `fit_actuator` fits: gas amounts, V_tube, E_V, F_MTS, E_F (and G)."""
     fitted_e_v = 2 * (len(E_V_TERMS) - len(_KEPT)) if wall_bulging else 0
-    return runs + 1 + fitted_e_v + len(params.f_mts) + len(params.e_f)
+    return runs + 1 + fitted_e_v + len(params.f_mts) + len(params.e_f) + int(leak)
 
 
-def fit_volume(params, x_c, x_s, p, wall_bulging=True, run=None):
+def fit_volume(params, x_c, x_s, p, wall_bulging=True, run=None, lost=None):
     """
     Stage 1: V_tube, the gas amount of each run and (optionally) the E_V coefficients.
 
     `run` (optional array of run numbers) marks separately sealed fills, each with its own gas
     amount, like the paper's syringe settings; without it the record is one sealed fill.
+    `lost` (optional, `GasLost` over the rows, Pa²·s): the gas leaks, and its conductance G is
+    fitted too; a G below zero (gas that comes in: no leak) is refitted as a sealed gas, G = 0.
     Some E_V terms are kept from `params` (`_KEPT`): from pressures alone a sealed record fixes
     volumes only up to what a different tube volume or gas amount can imitate. A pressure-only
     term acts like a larger tube (P·a01·q = a01·P²/P_atm - a01·P), and a term linear in Δh changes
     the effective area, which with V_tube and N rescales every volume. The paper measured those
     with the syringe rig of known volume; here they come from the YAML or `--params`.
-    Returns (params, amounts) with amounts an array (Pa·m³) per row; params.p_ref is the design-
-    point pressure of the first run's gas.
+    Returns (params, amounts, G) with amounts an array (Pa·m³) per row (less what the leak took
+    by then), G in m³/(s·Pa) (None without `lost`); params.p_ref is the design-point pressure of
+    the first run's gas at its first row.
     """
     c, s = params.chamber, params.spring
     v_known = volume_geo(c, x_c) + volume_geo(s, x_s)
@@ -172,6 +215,9 @@ def fit_volume(params, x_c, x_s, p, wall_bulging=True, run=None):
     runs = int(labels.max()) + 1
     columns = [(labels == j).astype(float) for j in range(runs)] + [-p]
     names = [('n', j) for j in range(runs)] + [('v_tube', None)]
+    if lost is not None:
+        columns.append(-np.asarray(lost, float))
+        names.append(('leak', None))
     e_c, e_s = [0.0] * 10, [0.0] * 10
     if wall_bulging:
         m_c = e_v_regressors(c, x_c, p)
@@ -186,23 +232,30 @@ def fit_volume(params, x_c, x_s, p, wall_bulging=True, run=None):
     # Unknowns in convenient units (N in Pa·m³, volumes in mL) so one ridge weight fits all E_V
     # terms.
     a = np.column_stack(columns)
-    units = np.array([1.0] * runs + [1e-6] * (len(columns) - runs))
+    # G in units of 1e-12 m³/(s·Pa): a leak the sensors resolve moves N by ~1 Pa·m³ in a minute.
+    first_ev = runs + 1 + (lost is not None)
+    units = np.array([1.0] * runs + [1e-6] + [1e-12] * (lost is not None)
+                     + [1e-6] * (len(columns) - first_ev))
     a = a * units
-    # A light ridge on the E_V coefficients (not on N, V_tube): where the data leave terms nearly
-    # collinear it picks the smallest polynomial that fits instead of huge cancelling terms.
-    first_ev = runs + 1
+    # A light ridge on the E_V coefficients (not on N, V_tube, G): where the data leave terms
+    # nearly collinear it picks the smallest polynomial that fits instead of huge cancelling terms.
     penalty = np.zeros((len(columns) - first_ev, len(columns)))
     penalty[:, first_ev:] = np.sqrt(_RIDGE * len(p)) * np.eye(len(columns) - first_ev)
     solution, *_ = np.linalg.lstsq(np.vstack([a, penalty]),
                                    np.concatenate([p * v_known, np.zeros(len(penalty))]),
                                    rcond=None)
     solution = solution * units
+    if lost is not None and solution[runs + 1] < 0.0:
+        return fit_volume(params, x_c, x_s, p, wall_bulging, run)[:2] + (0.0,)
     amounts, v_tube = solution[:runs], solution[runs]
+    conductance = float(solution[runs + 1]) if lost is not None else None
     if not (np.all(np.isfinite(amounts)) and np.all(amounts > 0.0)):
+        gas = 'leaking' if lost is not None else 'sealed'
+        hint = '' if lost is not None else ' (if it names air_leak, `--leak` fits the leak)'
         raise BellowsError('identification refused: the fit finds no positive gas amount, so the '
-                           'record does not behave as one sealed gas volume (an air leak, heat '
+                           f'record does not behave as one {gas} gas volume (an air leak, heat '
                            'exchange, a pressure that does not follow the compressions?); run '
-                           '`bellows diagnose actuator` on it to find what it shows')
+                           f'`bellows diagnose actuator` on it to find what it shows{hint}')
     for value, (which, k) in zip(solution[first_ev:], names[first_ev:]):
         (e_c if which == 'chamber' else e_s)[k] = float(value)
     fitted = dataclasses.replace(
@@ -210,7 +263,9 @@ def fit_volume(params, x_c, x_s, p, wall_bulging=True, run=None):
         chamber=dataclasses.replace(c, e_v=tuple(e_c)),
         spring=dataclasses.replace(s, e_v=tuple(e_s)))
     fitted = dataclasses.replace(fitted, p_ref=float(p_ref_of_amount(fitted, amounts[0])))
-    return fitted, amounts[labels]
+    if lost is not None:
+        return fitted, amounts[labels] - conductance * np.asarray(lost, float), conductance
+    return fitted, amounts[labels], None
 
 
 def _force_regressors(params, x_s, p):
@@ -265,24 +320,26 @@ def _progress(total, label, enabled):
 
 
 def fit_actuator(params, x_c, x_s, p, f, run=None, wall_bulging=True, force_error=True, seed=0,
-                 progress=False, rate=1000.0):
+                 progress=False, rate=1000.0, t=None):
     """
     Both stages on arrays (m, m, Pa, N; `run` as in `fit_volume`); returns `ActuatorFit`.
 
-    `rate`: the samples' rate, Hz, for the structure left in the volume error.
+    `rate`: the samples' rate, Hz, for the structure left in the volume error. `t` (s): fit an
+    air leak's conductance too (`GasLost`); without it the gas is sealed.
     """
     x_c, x_s, p, f = (np.asarray(v, dtype=float) for v in (x_c, x_s, p, f))
-    fitted, amount = fit_volume(params, x_c, x_s, p, wall_bulging, run)
+    lost = None if t is None else GasLost().add(t, p, run)
+    fitted, amount, leak = fit_volume(params, x_c, x_s, p, wall_bulging, run, lost)
     fitted = fit_force(fitted, x_s, p, f, force_error, seed, progress)
     volume_error = (total_volume(fitted, x_c, x_s, p) - amount / p) * 1e6
-    gas = p_ref_of_amount(fitted, amount) if run is not None else None
+    gas = p_ref_of_amount(fitted, amount) if run is not None or leak else None
     _, force_model, _ = evaluate_array(fitted, x_c, x_s, gas)
     force_error_n = force_model - f
     labels = np.zeros(len(p), int) if run is None else np.asarray(run).astype(int)
     first = np.unique(labels, return_index=True)
     amounts = {int(r): float(amount[i]) for r, i in zip(*first)}
     return ActuatorFit(fitted, _summary(volume_error), _summary(force_error_n), len(p),
-                       leftover_structure(volume_error, rate), amounts)
+                       leftover_structure(volume_error, rate), amounts, leak)
 
 
 def _summary(error):
