@@ -126,7 +126,8 @@ ESTOP = Topic('/bellows/estop', 'std_msgs/msg/Bool', 1,
 # (a latched vent) has a set-point and an integral from before the segment fell.
 VENTED = Topic('bellows/vented', 'std_msgs/msg/Bool', 1,
                'arm: True while the driver holds its chambers vented (not active, a latched vent, '
-               'the emergency stop, the command watchdog), sent on each change', latched=True)
+               'the emergency stop, the command watchdog), False once a command has taken; sent '
+               'on each change', latched=True)
 
 TOPICS = (JOINT_STATES, CHAMBERS, ACTUATOR_JOINT_STATES, ACTUATOR_CHAMBERS, WRENCH,
           DRIVING_TORQUE, EXTERNAL_TORQUE, PRESSURE_COMMAND, STIFFNESS_SETPOINT, STIFFNESS,

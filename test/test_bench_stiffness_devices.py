@@ -41,7 +41,8 @@ def test_the_quick_bench_reports_both_maps_and_what_was_fitted():
     assert identified.name.endswith('identified_map.step_time')
     assert default.name.endswith('default_map.step_time') and default.samples == 8
     fits, failed = identified.extra['fits'], identified.extra['failures']
-    assert identified.samples == 4 * (2 - int(identified.extra['identification_failed'][0]))
+    failures = int(identified.extra['identification_failed'].split()[0])
+    assert identified.samples == 4 * (2 - failures)
     assert (fits == 'none') == (identified.samples == 0) and (failed == 'none') == (
         identified.samples == 8)
     for result in (identified, default):

@@ -180,7 +180,8 @@ def identify(args):
           f'{fitted.p_ref:.0f} Pa, F_MTS = [{", ".join(f"{v:.5g}" for v in fitted.f_mts)}], '
           f'E_F = [{", ".join(f"{v:.5g}" for v in fitted.e_f)}]')
     if fit.leak is not None:
-        print(f'air leak conductance G = {fit.leak:.3g} m^3/(s Pa) (dN/dt = -G P (P - P_atm)); '
-              f'P0 is the gas at the first row')
+        print(f'air leak conductance G = {fit.leak:.3g} m^3/(s Pa) (dN/dt = -G P (P - P_atm))'
+              + ('; P0 is the gas at the first row' if fit.leak else
+                 ': none found, fitted as sealed'))
     print(f'wrote {args.output}')
     return 0

@@ -192,14 +192,15 @@ def parameter_count(params, runs=1, wall_bulging=True, leak=False):
     return runs + 1 + fitted_e_v + len(params.f_mts) + len(params.e_f) + int(leak)
 
 
-def fit_volume(params, x_c, x_s, p, wall_bulging=True, run=None, lost=None):
+def fit_volume(params, x_c, x_s, p, wall_bulging=True, run=None, lost=None, leaking=None):
     """
     Stage 1: V_tube, the gas amount of each run and (optionally) the E_V coefficients.
 
     `run` (optional array of run numbers) marks separately sealed fills, each with its own gas
     amount, like the paper's syringe settings; without it the record is one sealed fill.
     `lost` (optional, `GasLost` over the rows, Pa²·s): the gas leaks, and its conductance G is
-    fitted too; a G below zero (gas that comes in: no leak) is refitted as a sealed gas, G = 0.
+    fitted too; a G below zero (gas that comes in: no leak) is refitted as a sealed gas, G = 0
+    (`leaking`: a leak was asked for, which a refusal then says; default: `lost` is given).
     Some E_V terms are kept from `params` (`_KEPT`): from pressures alone a sealed record fixes
     volumes only up to what a different tube volume or gas amount can imitate. A pressure-only
     term acts like a larger tube (P·a01·q = a01·P²/P_atm - a01·P), and a term linear in Δh changes
@@ -246,12 +247,13 @@ def fit_volume(params, x_c, x_s, p, wall_bulging=True, run=None, lost=None):
                                    rcond=None)
     solution = solution * units
     if lost is not None and solution[runs + 1] < 0.0:
-        return fit_volume(params, x_c, x_s, p, wall_bulging, run)[:2] + (0.0,)
+        return fit_volume(params, x_c, x_s, p, wall_bulging, run, leaking=True)[:2] + (0.0,)
     amounts, v_tube = solution[:runs], solution[runs]
     conductance = float(solution[runs + 1]) if lost is not None else None
     if not (np.all(np.isfinite(amounts)) and np.all(amounts > 0.0)):
-        gas = 'leaking' if lost is not None else 'sealed'
-        hint = '' if lost is not None else ' (if it names air_leak, `--leak` fits the leak)'
+        leaking = lost is not None if leaking is None else leaking
+        gas = 'leaking' if leaking else 'sealed'
+        hint = '' if leaking else ' (if it names air_leak, `--leak` fits the leak)'
         raise BellowsError('identification refused: the fit finds no positive gas amount, so the '
                            f'record does not behave as one {gas} gas volume (an air leak, heat '
                            'exchange, a pressure that does not follow the compressions?); run '

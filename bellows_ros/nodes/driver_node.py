@@ -315,8 +315,11 @@ class DriverNode(Node):
         """Say on bellows/vented when the arm's chambers start or stop being held vented."""
         if not self.use_arm:
             return
-        vented = self.arm is None or self.arm.vented
+        # Read under the lock: the reader thread (after each sample) and the executor (a vent)
+        # both call this, and a state read before the other's publish would overwrite it.
         with self._publish_lock:
+            arm = self.arm
+            vented = arm is None or arm.vented
             if vented != self.arm_vented:
                 self.arm_vented = vented
                 self.vented_pub.publish(self.msg.Bool(data=vented))
