@@ -21,7 +21,7 @@ from bellows_ros import params as param_files
 from bellows_ros.config.actuator import load_actuator, params_to_flat
 from bellows_ros.data import check_moves, check_range, CsvOutput, read_chunks, read_record
 from bellows_ros.errors import BellowsError, DataError, ParameterError
-from bellows_ros.identify.actuator import (fit_actuator, GasLost, LaggedCorrelation,
+from bellows_ros.identify.actuator import (fit_actuator, GasLost, LaggedCorrelation, LEAK_HINT,
                                            parameter_count, STRUCTURE_LAG, volume_error)
 from bellows_ros.models.actuator import evaluate_array
 from bellows_ros.models.actuator_plant import ActuatorPlant, effect_parameters
@@ -106,7 +106,7 @@ def _check_identifiable(record, params, run, leak=False):
 def _not_sealed(data, evidence, leak=False):
     """Refuse a record that breaks the gas assumption (sealed, or leaking), naming the evidence."""
     gas = 'one leaking' if leak else 'one sealed'
-    hint = '' if leak else ' (if it names air_leak, `--leak` fits the leak)'
+    hint = '' if leak else LEAK_HINT
     return BellowsError(
         f'{data}: identification refused: the record does not behave as {gas}, isothermal '
         f'gas volume ({evidence}; an air leak, heat exchange, a lagging sensor, backlash?); run '

@@ -169,6 +169,10 @@ class GasLost:
         return lost
 
 
+# What a refusal of a record as not sealed adds, when the fit assumed a sealed gas.
+LEAK_HINT = ' (if it names air_leak, `--leak` fits the leak)'
+
+
 def volume_error(params, amounts, x_c, x_s, p, run=None, lost=None):
     """
     Model minus gas-law volume, mL, with the gas amount of each run (`ActuatorFit.amounts`).
@@ -253,7 +257,7 @@ def fit_volume(params, x_c, x_s, p, wall_bulging=True, run=None, lost=None, leak
     if not (np.all(np.isfinite(amounts)) and np.all(amounts > 0.0)):
         leaking = lost is not None if leaking is None else leaking
         gas = 'leaking' if leaking else 'sealed'
-        hint = '' if leaking else ' (if it names air_leak, `--leak` fits the leak)'
+        hint = '' if leaking else LEAK_HINT
         raise BellowsError('identification refused: the fit finds no positive gas amount, so the '
                            f'record does not behave as one {gas} gas volume (an air leak, heat '
                            'exchange, a pressure that does not follow the compressions?); run '
