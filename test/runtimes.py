@@ -99,6 +99,46 @@ def logs(log_dir):
     return '\n'.join(f'--- {p.name}\n{p.read_text()[-1500:]}' for p in log_dir.glob('*.log'))
 
 
+def process_states(processes):
+    """
+    One line per process: its program, whether it runs, its scheduling and the CPU it has used.
+
+    For the message of a test whose process did not end in time: a process that used seconds of
+    CPU was working, one that used next to none was starved or blocked.
+    """
+    tick = os.sysconf('SC_CLK_TCK')
+    lines = []
+    for process in processes:
+        program = Path(process.args[0]).name
+        if process.poll() is not None:
+            lines.append(f'{program}: ended, exit status {process.returncode}')
+            continue
+        try:
+            fields = Path(f'/proc/{process.pid}/stat').read_text().rsplit(')', 1)[1].split()
+            policy = os.sched_getscheduler(process.pid)
+        except OSError as exc:  # ended in between
+            lines.append(f'{program}: {exc}')
+            continue
+        state, cpu = fields[0], (int(fields[11]) + int(fields[12])) / tick  # utime + stime
+        fifo = 'SCHED_FIFO' if policy == os.SCHED_FIFO else 'normal scheduling'
+        lines.append(f'{program}: state {state}, {fifo}, {cpu:.1f} s of CPU')
+    return '\n'.join(lines)
+
+
+def wait_for(process, timeout, processes, log_dir):
+    """
+    Wait up to `timeout` s for `process` to end; its exit status.
+
+    A process still running then fails the test with every process's state (`process_states`)
+    and the node logs, instead of a bare TimeoutExpired.
+    """
+    try:
+        return process.wait(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        pytest.fail(f'{Path(process.args[0]).name} still running after {timeout:g} s\n'
+                    f'{process_states(processes)}\n{logs(log_dir)}')
+
+
 def stop_all(processes, timeout=10.0):
     """SIGINT every node process (as Ctrl-C or `ros2 launch` does), then wait; kill a hung one."""
     for process in processes:
