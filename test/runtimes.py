@@ -106,7 +106,7 @@ def process_states(processes):
     For the message of a test whose process did not end in time: a process that used seconds of
     CPU was working, one that used next to none was starved or blocked.
     """
-    tick = os.sysconf('SC_CLK_TCK')
+    from bellows_ros.bench.graph import _cpu_seconds  # the graph bench's CPU per process
     lines = []
     for process in processes:
         program = Path(process.args[0]).name
@@ -114,12 +114,12 @@ def process_states(processes):
             lines.append(f'{program}: ended, exit status {process.returncode}')
             continue
         try:
-            fields = Path(f'/proc/{process.pid}/stat').read_text().rsplit(')', 1)[1].split()
-            policy = os.sched_getscheduler(process.pid)
+            # field 3 of /proc/<pid>/stat: R running, S sleeping, D waiting on I/O
+            state = Path(f'/proc/{process.pid}/stat').read_text().rsplit(')', 1)[1].split()[0]
+            cpu, policy = _cpu_seconds(process.pid), os.sched_getscheduler(process.pid)
         except OSError as exc:  # ended in between
             lines.append(f'{program}: {exc}')
             continue
-        state, cpu = fields[0], (int(fields[11]) + int(fields[12])) / tick  # utime + stime
         fifo = 'SCHED_FIFO' if policy == os.SCHED_FIFO else 'normal scheduling'
         lines.append(f'{program}: state {state}, {fifo}, {cpu:.1f} s of CPU')
     return '\n'.join(lines)
