@@ -68,13 +68,12 @@ SPRING, PERIOD = 0.02, 4.0      # m, s: the test machine's spring motion
 K_LOW, K_SET = 1500.0, 1900.0   # N/m: the recorded step's start, and the set-point held
 RECORD_S, STEP_S, TRACK_S = 28.0, 4.0, 22.0
 SETTLE_S = 6.0                  # s: windows before this are not scored in a tracking run
-# s the scenario may take beyond its duration. It starts (imports, DDS discovery) beside three
-# SCHED_FIFO processes. In one CI run on a shared host a scenario_node was still starting 142 s
-# after launch: it died of the SIGINT that ended the test (exit -2), as a process does before
-# run() installs its handler, i.e. while importing; most likely the SCHED_FIFO processes had the
-# CPU of a host that had slowed. A slow start is not what this test measures; a failure says
-# what each process was doing (runtimes.process_states).
-START_ALLOWANCE_S = 300.0
+# s the scenario may take beyond its duration to end. In two CI runs on the DDS runtime a
+# scenario_node did not end: it had written its summary, scenario.csv and scenario.png on time,
+# then slept (state S, 6 s of CPU) until the test's SIGINT killed it (exit -2: Python's own
+# handler is gone by then, so it hung late in the interpreter's exit). Why is open; a failure
+# says what each process was doing (runtimes.process_states).
+END_ALLOWANCE_S = 120.0
 
 
 def bellows(*args, timeout=900):
@@ -130,7 +129,7 @@ def run_scenario(env, out, device, controller_params, k_low, k_high, step_time, 
         time.sleep(2.0)
         node = launch('scenario_node', scenario, env, out)
         processes.append(node)
-        assert wait_for(node, duration + START_ALLOWANCE_S, processes, out) == 0, logs(out)
+        assert wait_for(node, duration + END_ALLOWANCE_S, processes, out) == 0, logs(out)
     finally:
         stop_all(processes)
     assert recorder.returncode == 0, logs(out)
