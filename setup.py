@@ -29,6 +29,7 @@ setup(
         ('share/' + package_name + '/config', glob('config/*')),
         ('share/' + package_name + '/launch', glob('launch/*.launch.py')),
         ('share/' + package_name + '/scripts', glob('scripts/*.sh')),
+        ('share/' + package_name + '/requirements', glob('requirements/*.txt')),
     ],
     python_requires='>=3.10',
     install_requires=[
@@ -44,8 +45,6 @@ setup(
         'cobs>=1.2',
         'rosbags>=0.10',
         'mcap>=1.1',  # bellows reindex reads a killed recording record by record
-        # The DDS runtime used when rclpy is not importable; 11.x ships the C library in the wheel.
-        'cyclonedds==11.0.1',
     ],
     extras_require={'test': [
         'pytest>=7', 'hypothesis>=6', 'pytest-timeout>=2',

@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 from rosbags.rosbag2 import Reader
-from rosbags.typesys import get_typestore, Stores
+from rosbags.typesys import get_types_from_msg, get_typestore, Stores
 import yaml
 
 from bellows_ros import interfaces
@@ -49,6 +49,31 @@ JOINT_STATES, CHAMBERS, ACTUATOR_JOINT_STATES, ACTUATOR_CHAMBERS, WRENCH = (
                                    interfaces.WRENCH))
 TYPES = {name: interfaces.by_name()[name]
          for name in (JOINT_STATES, CHAMBERS, ACTUATOR_JOINT_STATES, ACTUATOR_CHAMBERS, WRENCH)}
+
+# The message types of a recording, without ROS: rosbags' Jazzy type store, plus the types it
+# lacks (it holds only ROS 2's core packages), as their .msg text installs them with Jazzy's
+# package, comments left out (they are not part of the type, nor of its RIHS01 hash).
+EXTRA_DEFINITIONS = {
+    # control_msgs 5.x (ros2_control for Jazzy): the arm controller's ~/state.
+    'control_msgs/msg/JointTrajectoryControllerState': """
+std_msgs/Header header
+string[] joint_names
+trajectory_msgs/JointTrajectoryPoint reference
+trajectory_msgs/JointTrajectoryPoint feedback
+trajectory_msgs/JointTrajectoryPoint error
+trajectory_msgs/JointTrajectoryPoint output
+string[] multi_dof_joint_names
+trajectory_msgs/MultiDOFJointTrajectoryPoint multi_dof_reference
+trajectory_msgs/MultiDOFJointTrajectoryPoint multi_dof_feedback
+trajectory_msgs/MultiDOFJointTrajectoryPoint multi_dof_error
+trajectory_msgs/MultiDOFJointTrajectoryPoint multi_dof_output
+float64 speed_scaling_factor
+""",
+}
+TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
+for _name, _text in EXTRA_DEFINITIONS.items():
+    TYPESTORE.register(get_types_from_msg(_text, _name))
+
 # The actuator's topics, and where a recording from before they existed held its samples.
 ACTUATOR_FALLBACK = {ACTUATOR_JOINT_STATES: JOINT_STATES, ACTUATOR_CHAMBERS: CHAMBERS}
 
@@ -175,7 +200,7 @@ def _open(path):
 def read_bag_table(path, system):
     """Read a rosbag2 directory as a `Table` with the columns of `system` (docs/interfaces.md)."""
     path = Path(path)
-    typestore = get_typestore(Stores.ROS2_JAZZY)
+    typestore = TYPESTORE
     reader = _open(path)
     try:
         if system == 'segment':

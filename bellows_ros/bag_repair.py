@@ -36,9 +36,9 @@ from rosbags.rosbag2 import Reader, Writer
 from rosbags.rosbag2.enums import StoragePlugin
 import yaml
 
+from bellows_ros.bag import TYPESTORE
 from bellows_ros.errors import BellowsError
 from bellows_ros.outputs import write_text
-from bellows_ros.runtime.messages import TYPESTORE
 
 DAMAGED_SUFFIX = '.damaged'
 

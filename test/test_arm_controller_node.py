@@ -28,7 +28,7 @@ from bellows_ros import interfaces
 from bellows_ros.config.segment import load_segment_params
 from bellows_ros.nodes import diagnostics
 from bellows_ros.nodes.arm_controller_node import ArmControllerNode, ArmControllerTask
-from bellows_ros.runtime import dds_node
+import probe
 
 MS = 1_000_000  # ns
 
@@ -36,14 +36,14 @@ MS = 1_000_000  # ns
 @pytest.fixture
 def controller(monkeypatch):
     monkeypatch.setenv('ROS_DOMAIN_ID', '196')
-    dds_node.init([])
+    probe.init([])
     node = ArmControllerNode.on(dds_node)()
-    peer = dds_node.Node('peer')
+    peer = probe.Node('peer')
     commands = []
-    peer.create_subscription(dds_node.msg.JointState, interfaces.PRESSURE_COMMAND.resolved(),
+    peer.create_subscription(probe.msg.JointState, interfaces.PRESSURE_COMMAND.resolved(),
                              commands.append, interfaces.COMMAND_DEPTH)
     yield node, peer, commands
-    dds_node.shutdown()
+    probe.shutdown()
 
 
 def feed(node, stamps, psi=0.1):
@@ -56,9 +56,9 @@ def feed(node, stamps, psi=0.1):
     p0 = load_segment_params().p0
     for stamp in stamps:
         stamp = node.get_clock().now().nanoseconds if stamp is None else stamp
-        state = dds_node.msg.JointState(name=['segment_1'], position=array('d', [psi]),
+        state = probe.msg.JointState(name=['segment_1'], position=array('d', [psi]),
                                         velocity=array('d', [0.0]))
-        chambers = dds_node.msg.JointState(name=['segment_1/chain_1', 'segment_1/chain_2'],
+        chambers = probe.msg.JointState(name=['segment_1/chain_1', 'segment_1/chain_2'],
                                            effort=array('d', [p0 + 1e5, p0 + 1e5]))
         for half in (state, chambers):
             half.header.stamp.sec, half.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
@@ -103,7 +103,7 @@ def test_samples_older_than_max_sample_age_get_no_command_and_say_so(controller)
     for _ in range(100):
         if len(commands) == node.counts['commands']:
             break
-        dds_node.spin_once(peer, timeout_sec=0.05)
+        probe.spin_once(peer, timeout_sec=0.05)
     assert len(commands) == node.counts['commands']
     [status] = task.statuses()
     assert status.level != diagnostics.ERROR, status.message
@@ -156,12 +156,12 @@ def test_a_latched_vent_restarts_from_where_the_segment_fell_though_commands_nev
     node, peer, commands = controller
     [loop] = node.loops
     feed(node, [None] * 20)  # holds the first sample's angle, 0.1 rad
-    node.on_vented(dds_node.msg.Bool(data=True))
+    node.on_vented(probe.msg.Bool(data=True))
     feed(node, [None] * 50, psi=-0.3)   # the segment falls while the vent lasts
     assert node.counts['restarts'] == 1 and node.counts['commands'] == 14
     assert loop.setpoint[0] == pytest.approx(-0.3, abs=1e-3)
     assert loop.tracker.integral == pytest.approx(0.0, abs=1e-9)
-    node.on_vented(dds_node.msg.Bool(data=False))
+    node.on_vented(probe.msg.Bool(data=False))
     feed(node, [None] * 5, psi=-0.3)
     start, offset, duration = loop.resume
     assert offset == pytest.approx(-0.4, abs=1e-3) and node.counts['restarts'] == 1
@@ -175,7 +175,7 @@ def test_a_joint_trajectory_taken_while_resuming_does_not_jump(controller):
     vent_and_resume(node, psi=-0.3)
     assert loop.resume is not None
     before = loop.desired(node.last_stamp * 1e-9)[0]
-    msg = dds_node.msg
+    msg = probe.msg
     node.on_trajectory(msg.JointTrajectory(joint_names=['segment_1'], points=[
         msg.JointTrajectoryPoint(positions=[0.5], velocities=[0.0],
                                  time_from_start=msg.Duration(sec=2, nanosec=0))]))

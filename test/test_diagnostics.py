@@ -25,7 +25,7 @@ import time
 import types
 
 import pytest
-from runtimes import node_env
+from node_processes import node_env
 
 from bellows_ros import interfaces
 from bellows_ros.nodes import diagnostics as d
@@ -299,18 +299,18 @@ NODE = textwrap.dedent("""
 
 
 @pytest.mark.slow  # a node process
-def test_a_node_on_each_runtime_reports_on_diagnostics(runtime, tmp_path, monkeypatch):
+def test_a_node_on_each_runtime_reports_on_diagnostics(tmp_path, monkeypatch):
     domain = '193' if runtime == 'dds' else '194'
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     script = tmp_path / 'probe.py'
     script.write_text(NODE)
     process = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE,
                                stderr=subprocess.STDOUT, text=True,
-                               env=node_env(runtime, ROS_DOMAIN_ID=domain))
+                               env=node_env(ROS_DOMAIN_ID=domain))
     seen = {}
-    dds_node.init([])
+    probe.init([])
     try:
-        reader = dds_node.Node('diag_reader')
+        reader = probe.Node('diag_reader')
         reader.create_subscription(
             dds_msg.DiagnosticArray, '/diagnostics',
             lambda a: seen.update({s.name: (d.level_of(s.level), s.message, s.hardware_id,
@@ -318,10 +318,10 @@ def test_a_node_on_each_runtime_reports_on_diagnostics(runtime, tmp_path, monkey
                                    for s in a.status}), 10)
         end = time.monotonic() + 60
         while len(seen) < 2 and time.monotonic() < end and process.poll() is None:
-            dds_node.spin_once(reader, timeout_sec=0.1)
+            probe.spin_once(reader, timeout_sec=0.1)
         reader.destroy_node()
     finally:
-        dds_node.shutdown()
+        probe.shutdown()
         process.terminate()
         output = process.communicate(timeout=20)[0]
     assert seen.get('diag_probe: fine') == (d.WARN, '2 samples missed', '/dev/ttyACM0',

@@ -31,10 +31,10 @@ import random
 import time
 
 import pytest
-from runtimes import launch_arm, node_env, override, stop_all
+from node_processes import launch_arm, node_env, override, stop_all
 
 from bellows_ros.control import angle_trajectory
-from bellows_ros.runtime import dds_node
+import probe
 from bellows_ros.runtime.messages import msg
 
 
@@ -46,13 +46,13 @@ def interpolate(points, t):
 
 @pytest.mark.slow
 @pytest.mark.timeout(150)
-def test_arm_controller_tracks_on_the_simulated_arm(runtime, tmp_path, monkeypatch):
+def test_arm_controller_tracks_on_the_simulated_arm(tmp_path, monkeypatch):
     # A domain and CAN group of its own: the other graph tests and launch_sim.sh use 201-230 and
     # 239.74.163.x, and a second arm's /joint_states would be taken for this one's.
     domain = str(random.randint(101, 140))
     group = f'239.74.171.{random.randint(2, 250)}'
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
-    env = node_env(runtime, ROS_DOMAIN_ID=domain)
+    env = node_env(ROS_DOMAIN_ID=domain)
     trajectory = angle_trajectory.SWEEP
     processes = launch_arm(env, group, tmp_path,
                            override('arm_controller_node', 'feedforward', 'paper_a'))
@@ -67,8 +67,8 @@ def test_arm_controller_tracks_on_the_simulated_arm(runtime, tmp_path, monkeypat
             elif status.name == 'driver_node: arm' and stopping is None:
                 driver.append((time.monotonic(), values))
     try:
-        dds_node.init([])
-        node = dds_node.Node('arm_control_acceptance')
+        probe.init([])
+        node = probe.Node('arm_control_acceptance')
         publisher = node.create_publisher(msg.JointState, '/arm/psi_setpoint', 10)
         node.create_subscription(
             msg.JointState, '/joint_states',
@@ -77,7 +77,7 @@ def test_arm_controller_tracks_on_the_simulated_arm(runtime, tmp_path, monkeypat
         node.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
         end = time.monotonic() + 20
         while len(angle) < 500 and time.monotonic() < end:
-            dds_node.spin_once(node, timeout_sec=0.05)
+            probe.spin_once(node, timeout_sec=0.05)
         assert angle, 'no /joint_states from the graph'
         start = time.monotonic()
         total = angle_trajectory.duration(trajectory) + 1.0
@@ -90,11 +90,11 @@ def test_arm_controller_tracks_on_the_simulated_arm(runtime, tmp_path, monkeypat
                                                  velocity=[psi_dot_d]))
                 setpoints.append((now, psi_d))
                 next_send += 0.02
-            dds_node.spin_once(node, timeout_sec=0.005)
+            probe.spin_once(node, timeout_sec=0.005)
     finally:
         stopping = time.monotonic()
         stop_all(processes)
-        dds_node.shutdown()
+        probe.shutdown()
     logs = '\n'.join(p.read_text()[-800:] for p in tmp_path.glob('*.log'))
 
     during = [(t, psi) for t, psi in angle if setpoints[0][0] <= t <= setpoints[-1][0]]

@@ -25,9 +25,9 @@ import signal
 import time
 
 import pytest
-from runtimes import launch, logs, node_env, override
+from node_processes import launch, logs, node_env, override
 
-from bellows_ros.runtime import dds_node
+import probe
 from bellows_ros.runtime.messages import msg
 
 pytestmark = pytest.mark.slow  # node processes, ~20 s per runtime
@@ -37,7 +37,7 @@ def test_a_board_killed_under_the_driver_is_reported_and_survived(
         runtime, tmp_path, monkeypatch):
     domain = str(random.randint(100, 180))
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
-    env = node_env(runtime, ROS_DOMAIN_ID=domain)
+    env = node_env(ROS_DOMAIN_ID=domain)
     port = str(tmp_path / 'board')
     normal = [('realtime_priority', 0)]
 
@@ -46,7 +46,7 @@ def test_a_board_killed_under_the_driver_is_reported_and_survived(
                                                 in [('port', port)] + normal), []), env,
                       tmp_path)
     sim = board()
-    dds_node.init([])
+    probe.init([])
     driver = None
     try:
         deadline = time.monotonic() + 30
@@ -55,7 +55,7 @@ def test_a_board_killed_under_the_driver_is_reported_and_survived(
         driver = launch('driver_node', sum((override('driver_node', k, v) for k, v in
                                             [('actuator.port', port), ('arm.enabled', 'false')]
                                             + normal), []), env, tmp_path)
-        probe = dds_node.Node('board_probe')
+        probe = probe.Node('board_probe')
         status, samples = {}, []
         probe.create_subscription(
             msg.DiagnosticArray, '/diagnostics',
@@ -66,7 +66,7 @@ def test_a_board_killed_under_the_driver_is_reported_and_survived(
         def spin_until(condition, seconds):
             end = time.monotonic() + seconds
             while not condition() and time.monotonic() < end:
-                dds_node.spin_once(probe, timeout_sec=0.05)
+                probe.spin_once(probe, timeout_sec=0.05)
             return condition()
 
         assert spin_until(lambda: len(samples) > 500, 40), logs(tmp_path)
@@ -92,4 +92,4 @@ def test_a_board_killed_under_the_driver_is_reported_and_survived(
             if process is not None and process.poll() is None:
                 process.kill()
                 process.wait()
-        dds_node.shutdown()
+        probe.shutdown()

@@ -26,21 +26,21 @@ import subprocess
 import time
 
 import pytest
-from runtimes import (BIN, launch, logs, node_env, override, require_rclpy, ros2_cli,
+from node_processes import (BIN, launch, logs, node_env, override, require_rclpy, ros2_cli,
                       SIM_CONFIG, stop_all)
 
 from bellows_ros import interfaces
-from bellows_ros.runtime import dds_node
+import probe
 from bellows_ros.runtime.messages import msg
 
 pytestmark = pytest.mark.slow  # two node processes, ~20 s per runtime
 
 
-def test_the_composed_arm_graph_runs_the_three_nodes(runtime, tmp_path, monkeypatch):
+def test_the_composed_arm_graph_runs_the_three_nodes(tmp_path, monkeypatch):
     domain = str(random.randint(100, 180))
     group = f'239.74.171.{random.randint(2, 250)}'
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
-    env = node_env(runtime, ROS_DOMAIN_ID=domain)
+    env = node_env(ROS_DOMAIN_ID=domain)
     sim = launch('sim_arm_node', override('sim_arm_node', 'can.channel', group)
                  + override('sim_arm_node', 'realtime_priority', 0), env, tmp_path)
     log = open(tmp_path / 'arm_graph.log', 'w')
@@ -53,9 +53,9 @@ def test_the_composed_arm_graph_runs_the_three_nodes(runtime, tmp_path, monkeypa
          *override('arm_controller_node', 'realtime_priority', 0)],
         env=env, stdout=log, stderr=subprocess.STDOUT)
     torques, pressures = [], []
-    dds_node.init([])
+    probe.init([])
     try:
-        probe = dds_node.Node('composed_probe')
+        probe = probe.Node('composed_probe')
         probe.create_subscription(msg.JointState, interfaces.DRIVING_TORQUE.resolved(),
                                   lambda m: torques.append(m), 1000)
         probe.create_subscription(msg.JointState, interfaces.CHAMBERS.resolved(),
@@ -63,7 +63,7 @@ def test_the_composed_arm_graph_runs_the_three_nodes(runtime, tmp_path, monkeypa
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline and not (
                 torques and pressures and max(pressures) > 1.5e5):
-            dds_node.spin_once(probe, timeout_sec=0.05)
+            probe.spin_once(probe, timeout_sec=0.05)
         assert torques, logs(tmp_path)
         assert max(pressures) > 1.5e5, logs(tmp_path)  # the controller commands the chambers
         require_rclpy()
@@ -74,7 +74,7 @@ def test_the_composed_arm_graph_runs_the_three_nodes(runtime, tmp_path, monkeypa
         graph.send_signal(signal.SIGINT)
         assert graph.wait(timeout=30) == 0, logs(tmp_path)
     finally:
-        dds_node.shutdown()
+        probe.shutdown()
         stop_all([graph, sim])
     text = (tmp_path / 'arm_graph.log').read_text()
     assert 'shutdown: every chamber within' in text, text[-2000:]

@@ -29,10 +29,10 @@ import subprocess
 import time
 
 import pytest
-from runtimes import launch, logs, node_env, override, ros2_cli
+from node_processes import launch, logs, node_env, override, ros2_cli
 
 from bellows_ros import interfaces
-from bellows_ros.runtime import dds_node
+import probe
 from bellows_ros.runtime.messages import msg
 
 pytestmark = pytest.mark.slow  # two node processes, ~15 s per runtime
@@ -54,7 +54,7 @@ def test_estop_vents_under_a_command_flood_and_false_does_not_release(
     domain = str(random.randint(100, 180))
     group = f'239.74.168.{random.randint(2, 250)}'
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
-    env = node_env(runtime, ROS_DOMAIN_ID=domain)
+    env = node_env(ROS_DOMAIN_ID=domain)
     normal = [('realtime_priority', 0)]
     processes = [
         launch('sim_arm_node', sum((override('sim_arm_node', k, v) for k, v in
@@ -64,12 +64,12 @@ def test_estop_vents_under_a_command_flood_and_false_does_not_release(
                                    [('arm.channel', group), ('arm.n_segments', 1),
                                     ('actuator.enabled', 'false')] + normal), []),
                env, tmp_path)]
-    dds_node.init([])
+    probe.init([])
     try:
-        probe = dds_node.Node('estop_probe')
+        probe = probe.Node('estop_probe')
         pressures, status, vented = [], {}, []
         probe.create_subscription(msg.Bool, interfaces.VENTED.resolved(),
-                                  lambda m: vented.append(m.data), dds_node.LATCHED)
+                                  lambda m: vented.append(m.data), probe.LATCHED)
         probe.create_subscription(msg.JointState, interfaces.CHAMBERS.resolved(),
                                   lambda m: pressures.append((time.monotonic(), max(m.effort))),
                                   1000)
@@ -79,7 +79,7 @@ def test_estop_vents_under_a_command_flood_and_false_does_not_release(
                                      for s in a.status}), 50)
         commands = probe.create_publisher(msg.JointState, interfaces.PRESSURE_COMMAND.resolved(),
                                           10)
-        estop = probe.create_publisher(msg.Bool, interfaces.ESTOP.resolved(), dds_node.LATCHED)
+        estop = probe.create_publisher(msg.Bool, interfaces.ESTOP.resolved(), probe.LATCHED)
         command = msg.JointState(name=[interfaces.chain_chamber(1, 1),
                                        interfaces.chain_chamber(1, 2)],
                                  effort=[COMMAND, COMMAND])
@@ -88,7 +88,7 @@ def test_estop_vents_under_a_command_flood_and_false_does_not_release(
             end = time.monotonic() + seconds
             while time.monotonic() < end:
                 commands.publish(command)
-                dds_node.spin_once(probe, timeout_sec=0.001)
+                probe.spin_once(probe, timeout_sec=0.001)
 
         flood(0.5)
         deadline = time.monotonic() + 40
@@ -133,4 +133,4 @@ def test_estop_vents_under_a_command_flood_and_false_does_not_release(
                 process.wait(timeout=10)
             except subprocess.TimeoutExpired:
                 process.kill()
-        dds_node.shutdown()
+        probe.shutdown()

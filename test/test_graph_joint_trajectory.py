@@ -30,10 +30,10 @@ import random
 import time
 
 import pytest
-from runtimes import launch_arm, logs, node_env, stop_all
+from node_processes import launch_arm, logs, node_env, stop_all
 
 from bellows_ros import interfaces
-from bellows_ros.runtime import dds_node
+import probe
 from bellows_ros.runtime.messages import msg
 
 END = -0.4  # rad, trajectory B's last point
@@ -50,12 +50,12 @@ def trajectory(names, points):
 
 @pytest.mark.slow
 @pytest.mark.timeout(150)
-def test_arm_controller_follows_a_joint_trajectory(runtime, tmp_path, monkeypatch):
+def test_arm_controller_follows_a_joint_trajectory(tmp_path, monkeypatch):
     # A domain and CAN group of their own (test_graph_arm_control uses 101-140, 239.74.171.x).
     domain = str(random.randint(141, 170))
     group = f'239.74.172.{random.randint(2, 250)}'
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
-    env = node_env(runtime, ROS_DOMAIN_ID=domain)
+    env = node_env(ROS_DOMAIN_ID=domain)
     processes = launch_arm(env, group, tmp_path)
     angle, states, controller = [], [], []
 
@@ -64,8 +64,8 @@ def test_arm_controller_follows_a_joint_trajectory(runtime, tmp_path, monkeypatc
             if status.name == 'arm_controller_node: segment_1':
                 controller.append({kv.key: kv.value for kv in status.values})
     try:
-        dds_node.init([])
-        node = dds_node.Node('joint_trajectory_acceptance')
+        probe.init([])
+        node = probe.Node('joint_trajectory_acceptance')
         publisher = node.create_publisher(msg.JointTrajectory,
                                           interfaces.JOINT_TRAJECTORY.resolved(), 10)
         node.create_subscription(
@@ -80,7 +80,7 @@ def test_arm_controller_follows_a_joint_trajectory(runtime, tmp_path, monkeypatc
         def spin(seconds, until=lambda: False):
             end = time.monotonic() + seconds
             while time.monotonic() < end and not until():
-                dds_node.spin_once(node, timeout_sec=0.01)
+                probe.spin_once(node, timeout_sec=0.01)
         spin(20, lambda: len(angle) >= 500 and states and publisher.get_subscription_count())
         assert angle, 'no /joint_states from the graph\n' + logs(tmp_path)
         assert publisher.get_subscription_count(), 'the controller does not subscribe\n' + logs(
@@ -95,7 +95,7 @@ def test_arm_controller_follows_a_joint_trajectory(runtime, tmp_path, monkeypatc
         spin(5.0, lambda: controller and controller[-1].get('rejected_trajectories') == '1')
     finally:
         stop_all(processes)
-        dds_node.shutdown()
+        probe.shutdown()
     log = logs(tmp_path)
 
     under_a = [psi for t, psi in angle if sent_a + 1.0 <= t <= sent_b]

@@ -33,10 +33,10 @@ import time
 
 from polling import wait_for
 import pytest
-from runtimes import launch, logs, node_env, override, require_rclpy, ros2_cli, stop_all
+from node_processes import launch, logs, node_env, override, require_rclpy, ros2_cli, stop_all
 
 from bellows_ros import interfaces
-from bellows_ros.runtime import dds_node
+import probe
 from bellows_ros.runtime.messages import msg
 
 pytestmark = pytest.mark.slow  # node processes and ros2 CLI calls, ~30 s per runtime
@@ -66,9 +66,9 @@ def ros2(args, env):
     return result.stdout
 
 
-def test_the_state_machine_is_rcl_lifecycles(runtime, tmp_path):
+def test_the_state_machine_is_rcl_lifecycles(tmp_path):
     """`ros2 lifecycle list -a` and `list` read the same from the driver as from rclpy's node."""
-    env = node_env(runtime, ROS_DOMAIN_ID=str(random.randint(100, 180)))
+    env = node_env(ROS_DOMAIN_ID=str(random.randint(100, 180)))
     reference = subprocess.Popen([sys.executable, '-c', REFERENCE], env=env)
     driver = launch('driver_node', override('driver_node', 'autostart', 'false')
                     + override('driver_node', 'actuator.enabled', 'false'), env, tmp_path)
@@ -96,7 +96,7 @@ def rig(runtime, tmp_path, monkeypatch):
     domain = str(random.randint(100, 180))
     group = f'239.74.169.{random.randint(2, 250)}'
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
-    env = node_env(runtime, ROS_DOMAIN_ID=domain)
+    env = node_env(ROS_DOMAIN_ID=domain)
     normal = [('realtime_priority', 0)]
     processes = [launch('sim_arm_node', sum((override('sim_arm_node', k, v) for k, v in
                                              [('can.channel', group), ('n_segments', 1)]
@@ -111,19 +111,19 @@ def rig(runtime, tmp_path, monkeypatch):
                                 env, tmp_path))
         return processes[-1]
 
-    dds_node.init([])
+    probe.init([])
     try:
         yield start_driver, Probe(), env, tmp_path
     finally:
         stop_all(processes, timeout=15)
-        dds_node.shutdown()
+        probe.shutdown()
 
 
 class Probe:
     """Floods pressure commands, records the chamber pressures and the driver's diagnostics."""
 
     def __init__(self):
-        self.node = dds_node.Node('lifecycle_probe')
+        self.node = probe.Node('lifecycle_probe')
         self.pressures, self.status = [], {}
         self.node.create_subscription(
             msg.JointState, interfaces.CHAMBERS.resolved(),
@@ -143,7 +143,7 @@ class Probe:
         end = time.monotonic() + seconds
         while time.monotonic() < end or (until is not None and until.poll() is None):
             self.commands.publish(self.command)
-            dds_node.spin_once(self.node, timeout_sec=0.001)
+            probe.spin_once(self.node, timeout_sec=0.001)
         return until.communicate()[0] if until is not None else None
 
     def lifecycle(self, env, *args):

@@ -30,12 +30,12 @@ import random
 import time
 
 import pytest
-from runtimes import launch, logs, node_env, override, ros2_cli, stop_all
+from node_processes import launch, logs, node_env, override, ros2_cli, stop_all
 
 from bellows_ros.config.actuator import load_actuator_params
 from bellows_ros.models.stiffness_map import compression_for_stiffness
 from bellows_ros.nodes.diagnostics import level_of, WARN
-from bellows_ros.runtime import dds_node
+import probe
 from bellows_ros.runtime.messages import msg
 
 pytestmark = pytest.mark.slow   # three node processes for ~2 min per runtime
@@ -56,7 +56,7 @@ def test_a_leak_set_mid_run_is_named_within_a_minute_and_no_warn_before(
     params = load_actuator_params()
     domain = str(random.randint(181, 200))
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
-    env = node_env(runtime, ROS_DOMAIN_ID=domain)
+    env = node_env(ROS_DOMAIN_ID=domain)
     port = str(tmp_path / 'actuator')
     sim = [('port', port), ('x_c0', compression_for_stiffness(params, SETPOINTS[0])),
            ('effects', '[wall_bulging, buckling]'), ('realtime_priority', 0)]
@@ -80,8 +80,8 @@ def test_a_leak_set_mid_run_is_named_within_a_minute_and_no_warn_before(
                 reports.append((time.monotonic(), level_of(status.level), status.message,
                                 {kv.key: kv.value for kv in status.values}))
     try:
-        dds_node.init([])
-        node = dds_node.Node('live_doctor_acceptance')
+        probe.init([])
+        node = probe.Node('live_doctor_acceptance')
         setpoint = node.create_publisher(msg.Float64, '/actuator/stiffness_setpoint', 10)
         node.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
         step = [0, time.monotonic()]
@@ -92,7 +92,7 @@ def test_a_leak_set_mid_run_is_named_within_a_minute_and_no_warn_before(
                 if time.monotonic() - step[1] > SWITCH:
                     step[0], step[1] = 1 - step[0], time.monotonic()
                     setpoint.publish(msg.Float64(data=SETPOINTS[step[0]]))
-                dds_node.spin_once(node, timeout_sec=0.05)
+                probe.spin_once(node, timeout_sec=0.05)
             return condition()
 
         def state():
@@ -113,7 +113,7 @@ def test_a_leak_set_mid_run_is_named_within_a_minute_and_no_warn_before(
         found = spin_until(named, DEADLINE + 5.0)
     finally:
         stop_all(processes)
-        dds_node.shutdown()
+        probe.shutdown()
     before = [r for r in reports if r[0] <= t_set]
     false_warns = [r[:3] for r in before if r[1] >= WARN]
     watched = t_set - healthy_from

@@ -28,9 +28,9 @@ import random
 import time
 
 import pytest
-from runtimes import launch, logs, node_env, override, ros2_cli, stop_all
+from node_processes import launch, logs, node_env, override, ros2_cli, stop_all
 
-from bellows_ros.runtime import dds_node
+import probe
 from bellows_ros.runtime.messages import msg
 
 pytestmark = pytest.mark.slow  # a node process and ~8 ros2 CLI calls per runtime
@@ -48,14 +48,14 @@ def test_a_leak_set_mid_run_drains_the_gas_and_a_bad_one_is_refused(
         runtime, tmp_path, monkeypatch):
     domain = str(random.randint(100, 180))
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
-    env = node_env(runtime, ROS_DOMAIN_ID=domain)
+    env = node_env(ROS_DOMAIN_ID=domain)
     port = str(tmp_path / 'board')
     given = [('port', port), ('realtime_priority', 0), ('x_c0', 0.04), ('effects', "['']")]
     sim = launch(NODE, sum((override(NODE, k, v) for k, v in given), []), env, tmp_path)
-    dds_node.init([])
+    probe.init([])
     reports = []  # the plant's /diagnostics values, in order
     try:
-        probe = dds_node.Node('live_effect_probe')
+        probe = probe.Node('live_effect_probe')
         probe.create_subscription(
             msg.DiagnosticArray, '/diagnostics',
             lambda a: reports.extend({kv.key: kv.value for kv in s.values} for s in a.status
@@ -64,7 +64,7 @@ def test_a_leak_set_mid_run_drains_the_gas_and_a_bad_one_is_refused(
         def spin_until(condition, seconds):
             end = time.monotonic() + seconds
             while not condition() and time.monotonic() < end:
-                dds_node.spin_once(probe, timeout_sec=0.05)
+                probe.spin_once(probe, timeout_sec=0.05)
             return condition()
 
         def gas(leak):
@@ -103,7 +103,7 @@ def test_a_leak_set_mid_run_drains_the_gas_and_a_bad_one_is_refused(
         assert sim.poll() is None, logs(tmp_path)
     finally:
         stop_all([sim])
-        dds_node.shutdown()
+        probe.shutdown()
 
 
 def test_a_segment_effect_set_mid_run_is_taken_and_a_bad_one_is_refused(
@@ -111,15 +111,15 @@ def test_a_segment_effect_set_mid_run_is_taken_and_a_bad_one_is_refused(
     """sim_arm_node: the strength reaches the running plants (their /diagnostics say so)."""
     domain = str(random.randint(100, 180))
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
-    env = node_env(runtime, ROS_DOMAIN_ID=domain)
+    env = node_env(ROS_DOMAIN_ID=domain)
     arm, friction = 'sim_arm_node', 'effect.pressure_friction.c_fp'
     given = [('can.channel', f'239.74.172.{random.randint(2, 250)}'), ('n_segments', 2),
              ('realtime_priority', 0), ('effects', '[contact_hysteresis]')]
     sim = launch(arm, sum((override(arm, k, v) for k, v in given), []), env, tmp_path)
-    dds_node.init([])
+    probe.init([])
     reports = []
     try:
-        probe = dds_node.Node('live_segment_effect_probe')
+        probe = probe.Node('live_segment_effect_probe')
         probe.create_subscription(
             msg.DiagnosticArray, '/diagnostics',
             lambda a: reports.extend({kv.key: kv.value for kv in s.values} for s in a.status
@@ -131,7 +131,7 @@ def test_a_segment_effect_set_mid_run_is_taken_and_a_bad_one_is_refused(
         def spin_until(condition, seconds):
             end = time.monotonic() + seconds
             while not condition() and time.monotonic() < end:
-                dds_node.spin_once(probe, timeout_sec=0.05)
+                probe.spin_once(probe, timeout_sec=0.05)
             return condition()
 
         assert spin_until(lambda: reported('0'), 40), (reports[-1:], logs(tmp_path))
@@ -144,4 +144,4 @@ def test_a_segment_effect_set_mid_run_is_taken_and_a_bad_one_is_refused(
         assert sim.poll() is None, logs(tmp_path)
     finally:
         stop_all([sim])
-        dds_node.shutdown()
+        probe.shutdown()

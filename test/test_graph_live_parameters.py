@@ -25,9 +25,9 @@ import random
 import time
 
 import pytest
-from runtimes import launch, logs, node_env, ros2_cli, stop_all
+from node_processes import launch, logs, node_env, ros2_cli, stop_all
 
-from bellows_ros.runtime import dds_node
+import probe
 from bellows_ros.runtime.messages import message_class, msg
 from bellows_ros.runtime.parameter_services import from_message
 
@@ -68,7 +68,7 @@ def ros2_param(env, *args):
 def graph(runtime, tmp_path, monkeypatch):
     domain = str(random.randint(100, 180))
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
-    env = node_env(runtime, ROS_DOMAIN_ID=domain)
+    env = node_env(ROS_DOMAIN_ID=domain)
     processes = [launch(name, [], env, tmp_path) for name in NODES]
     try:
         deadline = time.monotonic() + 30
@@ -88,9 +88,9 @@ def test_live_parameters_set_refuse_and_take_effect(graph):
     # A probe listens from the start: /diagnostics, and /parameter_events, where every change
     # taken is announced (a refused one is not).
     seen, changed = {}, []
-    dds_node.init([])
+    probe.init([])
     try:
-        probe = dds_node.Node('live_parameter_probe')
+        probe = probe.Node('live_parameter_probe')
         probe.create_subscription(
             msg.DiagnosticArray, '/diagnostics',
             lambda a: seen.update({kv.key: kv.value for s in a.status
@@ -118,9 +118,9 @@ def test_live_parameters_set_refuse_and_take_effect(graph):
         deadline = time.monotonic() + 15
         while (seen.get('feedforward') != 'previous' or len(changed) < len(LIVE)) \
                 and time.monotonic() < deadline:
-            dds_node.spin_once(probe, timeout_sec=0.1)
+            probe.spin_once(probe, timeout_sec=0.1)
     finally:
-        dds_node.shutdown()
+        probe.shutdown()
     assert seen.get('feedforward') == 'previous', seen
     assert sorted(changed) == sorted((node, name, value) for node, name, value, _ in LIVE), \
         changed

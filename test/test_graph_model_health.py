@@ -27,10 +27,10 @@ import random
 import time
 
 import pytest
-from runtimes import launch, logs, node_env, override, ros2_cli, stop_all
+from node_processes import launch, logs, node_env, override, ros2_cli, stop_all
 
 from bellows_ros.nodes.diagnostics import level_of, WARN
-from bellows_ros.runtime import dds_node
+import probe
 from bellows_ros.runtime.messages import msg
 
 pytestmark = pytest.mark.slow   # three node processes for ~40 s per runtime
@@ -44,11 +44,11 @@ STATUS = 'model_node: model_health'
 
 
 @pytest.mark.timeout(240)
-def test_a_load_set_mid_run_leaves_the_floor_and_no_warn_before(runtime, tmp_path, monkeypatch):
+def test_a_load_set_mid_run_leaves_the_floor_and_no_warn_before(tmp_path, monkeypatch):
     domain = str(random.randint(100, 180))
     group = f'239.74.165.{random.randint(2, 250)}'
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
-    env = node_env(runtime, ROS_DOMAIN_ID=domain)
+    env = node_env(ROS_DOMAIN_ID=domain)
     model = [('segments', '[1]'), ('model_health.calibration', CALIBRATION),
              ('model_health.window', WINDOW), ('realtime_priority', 0)]
     driver = [('arm.enabled', 'true'), ('actuator.enabled', 'false'), ('arm.channel', group),
@@ -70,14 +70,14 @@ def test_a_load_set_mid_run_leaves_the_floor_and_no_warn_before(runtime, tmp_pat
                 reports.append((time.monotonic(), level_of(status.level), status.message,
                                 {kv.key: kv.value for kv in status.values}))
     try:
-        dds_node.init([])
-        node = dds_node.Node('model_health_acceptance')
+        probe.init([])
+        node = probe.Node('model_health_acceptance')
         node.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
 
         def spin_until(condition, seconds):
             end = time.monotonic() + seconds
             while not condition() and time.monotonic() < end:
-                dds_node.spin_once(node, timeout_sec=0.05)
+                probe.spin_once(node, timeout_sec=0.05)
             return condition()
 
         def state():
@@ -98,7 +98,7 @@ def test_a_load_set_mid_run_leaves_the_floor_and_no_warn_before(runtime, tmp_pat
         assert all(p.poll() is None for p in processes), logs(tmp_path)
     finally:
         stop_all(processes)
-        dds_node.shutdown()
+        probe.shutdown()
     before = [r for r in reports if r[0] <= t_set]
     assert not [r[:3] for r in before if r[1] >= WARN], before[-3:]
     assert found, (reports[-3:], logs(tmp_path))

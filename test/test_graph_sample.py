@@ -37,10 +37,11 @@ import time
 
 from plain_cyclone import JOINT_STATE_SUBSCRIBER
 import pytest
-from runtimes import launch, logs, node_env, override, SIM_CONFIG
+from node_processes import launch, logs, node_env, override, SIM_CONFIG
 
 from bellows_ros import interfaces, params
-from bellows_ros.runtime import dds_node, realtime
+import probe
+from bellows_ros.runtime import realtime
 from bellows_ros.runtime.messages import msg
 
 
@@ -129,10 +130,10 @@ def graph(runtime, tmp_path, monkeypatch):
     domain = str(random.randint(100, 180))
     group = f'239.74.164.{random.randint(2, 250)}'
     port = str(tmp_path / 'actuator')
-    env = node_env(runtime, ROS_DOMAIN_ID=domain)
+    env = node_env(ROS_DOMAIN_ID=domain)
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
-    dds_node.init([])
-    probe = dds_node.Node('acceptance_probe')
+    probe.init([])
+    probe = probe.Node('acceptance_probe')
     final = {}
 
     def on_diagnostics(array):
@@ -169,7 +170,7 @@ def graph(runtime, tmp_path, monkeypatch):
         # samples published before anyone listened.
         end = time.monotonic() + 60.0
         while 'model_node: driving torque' not in final and time.monotonic() < end:
-            dds_node.spin_once(probe, timeout_sec=0.05)
+            probe.spin_once(probe, timeout_sec=0.05)
         assert 'model_node: driving torque' in final, logs(tmp_path)
         driver = [override('driver_node', name, value) for name, value in (
             ('arm.channel', group), ('arm.n_segments', 2), ('actuator.port', port),
@@ -180,7 +181,7 @@ def graph(runtime, tmp_path, monkeypatch):
     finally:
         for process in processes.values():
             stop(process)
-        dds_node.shutdown()
+        probe.shutdown()
 
 
 def test_graph_publishes_and_every_sample_is_evaluated(graph):
@@ -209,11 +210,11 @@ def test_graph_publishes_and_every_sample_is_evaluated(graph):
     # Count: let the graph run, stop the driver, then compare its final count with the model's.
     end = time.monotonic() + 4.0
     while time.monotonic() < end:
-        dds_node.spin_once(node, timeout_sec=0.05)
+        probe.spin_once(node, timeout_sec=0.05)
     assert stop(processes['driver_node']) == 0, logs(tmp_path)
     end = time.monotonic() + 3.0
     while time.monotonic() < end:
-        dds_node.spin_once(node, timeout_sec=0.05)
+        probe.spin_once(node, timeout_sec=0.05)
     driver, model = final['driver_node: arm'], final['model_node: driving torque']
     published = int(driver['published'])
     assert published > 500, (driver, logs(tmp_path))
@@ -259,7 +260,7 @@ def test_a_driver_stopped_for_half_a_second_stamps_its_backlog_on_the_arms_clock
     def spin(seconds):
         end = time.monotonic() + seconds
         while time.monotonic() < end:
-            dds_node.spin_once(probe, timeout_sec=0.05)
+            probe.spin_once(probe, timeout_sec=0.05)
     end = time.monotonic() + 30.0
     while len(stamps) < 1000 and time.monotonic() < end:
         spin(0.1)

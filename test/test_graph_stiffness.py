@@ -36,13 +36,13 @@ import random
 import time
 
 import pytest
-from runtimes import launch, node_env, override, stop_all
+from node_processes import launch, node_env, override, stop_all
 
 from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.config.hardware import actuator_board_config
 from bellows_ros.models.actuator import stiffness
 from bellows_ros.models.stiffness_map import compression_for_stiffness, stiffness_range
-from bellows_ros.runtime import dds_node
+import probe
 from bellows_ros.runtime.messages import msg
 
 K_HIGH = 1900.0
@@ -51,7 +51,7 @@ HOLD = 60.0
 
 @pytest.mark.slow
 @pytest.mark.timeout(200)
-def test_stiffness_step_and_leak_hold(runtime, tmp_path, monkeypatch):
+def test_stiffness_step_and_leak_hold(tmp_path, monkeypatch):
     params = load_actuator_params()
     k_min, _ = stiffness_range(params)
     k_low = max(1400.0, 1.01 * k_min)
@@ -62,7 +62,7 @@ def test_stiffness_step_and_leak_hold(runtime, tmp_path, monkeypatch):
 
     domain = str(random.randint(201, 230))
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
-    env = node_env(runtime, ROS_DOMAIN_ID=domain)
+    env = node_env(ROS_DOMAIN_ID=domain)
     port = str(tmp_path / 'actuator')
     processes = [
         launch('sim_actuator_node', override('sim_actuator_node', 'port', port)
@@ -84,25 +84,25 @@ def test_stiffness_step_and_leak_hold(runtime, tmp_path, monkeypatch):
                           if kv.key in ('x_c', 'gas_p_ref', 'end_stop_hits')}
                 plant.append((time.monotonic(), values))
     try:
-        dds_node.init([])
-        node = dds_node.Node('stiffness_acceptance')
+        probe.init([])
+        node = probe.Node('stiffness_acceptance')
         setpoint = node.create_publisher(msg.Float64, '/actuator/stiffness_setpoint', 10)
         node.create_subscription(msg.Float64, '/actuator/stiffness',
                                  lambda m: estimate.append((time.monotonic(), m.data)), 100)
         node.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
         end = time.monotonic() + 20
         while len(estimate) < 50 and time.monotonic() < end:
-            dds_node.spin_once(node, timeout_sec=0.05)
+            probe.spin_once(node, timeout_sec=0.05)
         assert estimate, 'no /actuator/stiffness from the graph'
         k_before = estimate[-1][1]
         t_step = time.monotonic()
         setpoint.publish(msg.Float64(data=K_HIGH))
         end = t_step + 1.3 * travel_min + HOLD + 3.0
         while time.monotonic() < end:
-            dds_node.spin_once(node, timeout_sec=0.05)
+            probe.spin_once(node, timeout_sec=0.05)
     finally:
         stop_all(processes)
-        dds_node.shutdown()
+        probe.shutdown()
     logs = '\n'.join(p.read_text()[-800:] for p in tmp_path.glob('*.log'))
     assert abs(k_before - k_low) < 0.02 * k_low, (k_before, k_low, logs)
 

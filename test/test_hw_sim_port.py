@@ -26,7 +26,7 @@ import subprocess
 import sys
 
 import pytest
-from runtimes import node_env
+from node_processes import node_env
 
 from bellows_ros.errors import ParameterError
 from bellows_ros.hardware.sim_actuator_board import ActuatorState, SimActuatorBoard
@@ -116,9 +116,9 @@ def test_a_link_replaced_by_someone_else_is_not_removed(tmp_path):
 
 @pytest.mark.slow
 @pytest.mark.parametrize('taken', ['file', 'directory', 'link'], indirect=True)
-def test_the_node_given_a_taken_port_exits_2_and_leaves_it(runtime, taken, tmp_path):
+def test_the_node_given_a_taken_port_exits_2_and_leaves_it(taken, tmp_path):
     before = snapshot(taken)
-    env = node_env(runtime, ROS_DOMAIN_ID=str(random.randint(181, 200)))
+    env = node_env(ROS_DOMAIN_ID=str(random.randint(181, 200)))
     result = subprocess.run([str(BIN / 'sim_actuator_node'), '--ros-args', '-p',
                              f'port:={taken}'], capture_output=True, text=True, timeout=60,
                             env=env, cwd=tmp_path)

@@ -32,7 +32,7 @@ import threading
 import time
 
 import pytest
-from runtimes import LOOPBACK_ENVIRONMENT, require_rclpy
+from node_processes import LOOPBACK_ENVIRONMENT, require_rclpy
 import yaml
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -288,9 +288,9 @@ def test_two_namespaced_graphs_run_side_by_side(prefix, tmp_path, monkeypatch):
     arm_b = {tuple(interfaces.segment_joint(i) for i in (1, 2)),
              tuple(interfaces.chain_chamber(i, j) for i in (1, 2) for j in (1, 2))}
     monkeypatch.setenv('ROS_DOMAIN_ID', env['ROS_DOMAIN_ID'])
-    dds_node.init([])
+    probe.init([])
     try:
-        probe = dds_node.Node('namespace_probe')
+        probe = probe.Node('namespace_probe')
         for namespace, seen in names.items():
             for topic in (interfaces.JOINT_STATES, interfaces.CHAMBERS):
                 probe.create_subscription(msg.JointState, topic.resolved(namespace),
@@ -303,12 +303,12 @@ def test_two_namespaced_graphs_run_side_by_side(prefix, tmp_path, monkeypatch):
         # Until each graph's arm speaks (its actuator may come up seconds earlier on a busy host)
         while not (set(names['/arm_a']) & arm_a and set(names['/arm_b']) & arm_b) \
                 and time.monotonic() < deadline:
-            dds_node.spin_once(probe, timeout_sec=0.1)
+            probe.spin_once(probe, timeout_sec=0.1)
         end = time.monotonic() + 3.0
         while time.monotonic() < end:
-            dds_node.spin_once(probe, timeout_sec=0.05)
+            probe.spin_once(probe, timeout_sec=0.05)
     finally:
-        dds_node.shutdown()
+        probe.shutdown()
         _stop(graph_a)
         _stop(graph_b)
     logs = '\n'.join(p.read_text()[-800:] for p in (tmp_path / 'b' / 'logs').glob('*.log'))

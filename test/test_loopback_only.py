@@ -26,7 +26,7 @@ import subprocess
 import sys
 
 import pytest
-from runtimes import node_env
+from node_processes import node_env
 
 from bellows_ros.errors import ParameterError
 from bellows_ros.hardware.arm_bus import open_can
@@ -101,9 +101,9 @@ def test_the_simulated_bus_sends_nothing_off_the_machine():
 
 @needs_netns
 @pytest.mark.slow
-def test_a_whole_simulated_launch_sends_nothing_off_the_machine(runtime, tmp_path):
+def test_a_whole_simulated_launch_sends_nothing_off_the_machine(tmp_path):
     """launch_sim.sh (every simulated device and node, and the scenario) in the namespace."""
-    env = node_env(runtime, BELLOWS_VENV=str(Path(sys.executable).parent.parent))
+    env = node_env(BELLOWS_VENV=str(Path(sys.executable).parent.parent))
     # What the launcher itself must set: nothing of the test session's loopback settings.
     for name in ('ROS_AUTOMATIC_DISCOVERY_RANGE', 'CYCLONEDDS_URI'):
         env.pop(name, None)

@@ -35,7 +35,7 @@ from bellows_ros.models.derivatives import rate
 from bellows_ros.models.segment import external_torque, SegmentModel
 from bellows_ros.nodes import diagnostics
 from bellows_ros.nodes.model_node import MAX_MISSED_GAP, ModelNode
-from bellows_ros.runtime import dds_node
+import probe
 
 DOMAIN = '194'
 DYNAMICS = {'segment': {'dynamics': {'inertia': 0.02, 'damping': 0.1, 'gravity': 0.3}}}
@@ -46,10 +46,10 @@ def feeder(monkeypatch, tmp_path):
     monkeypatch.setenv('ROS_DOMAIN_ID', DOMAIN)
     params_file = tmp_path / 'dynamics.yaml'
     params_file.write_text(yaml.safe_dump({'/**': {'ros__parameters': DYNAMICS}}))
-    dds_node.init(['--ros-args', '-p', f'model_node:params_file:={params_file}',
+    probe.init(['--ros-args', '-p', f'model_node:params_file:={params_file}',
                    '-p', 'model_node:segments:=[1, 2]'])
-    yield ModelNode.on(dds_node)(), dds_node.Node('feeder'), params_file
-    dds_node.shutdown()
+    yield ModelNode.on(dds_node)(), probe.Node('feeder'), params_file
+    probe.shutdown()
 
 
 def _stream(count, seed=3):
@@ -69,7 +69,7 @@ def _feed(node, peer, stream, expected=None):
 
     Waits until `expected` torques (default: one per sample) have come back, or 10 s.
     """
-    msg = dds_node.msg
+    msg = probe.msg
     received = {'/bellows/driving_torque': [], '/bellows/external_torque': []}
     for topic, out in received.items():
         peer.create_subscription(msg.JointState, topic, out.append, SAMPLE_DEPTH)
@@ -78,7 +78,7 @@ def _feed(node, peer, stream, expected=None):
     end = time.monotonic() + 10.0
     while (joints.get_subscription_count() < 1 or chambers.get_subscription_count() < 1
            or node.drive_pub.get_subscription_count() < 1) and time.monotonic() < end:
-        dds_node.spin_once(peer, timeout_sec=0.05)
+        probe.spin_once(peer, timeout_sec=0.05)
 
     names = ['segment_1', 'segment_2']
     chains = [f'{n}/chain_{c}' for n in names for c in (1, 2)]
@@ -90,12 +90,12 @@ def _feed(node, peer, stream, expected=None):
             half.header.stamp.sec, half.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
         joints.publish(state)
         chambers.publish(chamber)
-        dds_node.spin_once(node, timeout_sec=0.0)   # the node serves as it would spinning
+        probe.spin_once(node, timeout_sec=0.0)   # the node serves as it would spinning
     end = time.monotonic() + 10.0
     expected = len(stream) if expected is None else expected
     while min(len(v) for v in received.values()) < expected and time.monotonic() < end:
-        dds_node.spin_once(node, timeout_sec=0.01)
-        dds_node.spin_once(peer, timeout_sec=0.01)
+        probe.spin_once(node, timeout_sec=0.01)
+        probe.spin_once(peer, timeout_sec=0.01)
     return received
 
 

@@ -29,7 +29,7 @@ import sys
 
 from hypothesis import given, settings, strategies as st
 import pytest
-from runtimes import node_env
+from node_processes import node_env
 
 from bellows_ros import nodes
 from bellows_ros.errors import ParameterError
@@ -142,7 +142,7 @@ STARTS = [
 @pytest.mark.parametrize('node, setting, name', STARTS, ids=[f'{n}:{s}' for n, s, _ in STARTS])
 def test_a_node_given_a_bad_value_says_so_in_one_line_and_exits_2(
         runtime, node, setting, name, tmp_path):
-    env = node_env(runtime, ROS_DOMAIN_ID=str(random.randint(181, 200)))
+    env = node_env(ROS_DOMAIN_ID=str(random.randint(181, 200)))
     result = subprocess.run([str(BIN / node), '--ros-args', '-p', setting], capture_output=True,
                             text=True, timeout=60, env=env, cwd=tmp_path)
     assert result.returncode == 2, result.stderr

@@ -34,7 +34,7 @@ import pytest
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import get_typestore, Stores
 
-from bellows_ros.runtime import dds_node
+import probe
 from bellows_ros.runtime.messages import msg
 
 pytestmark = pytest.mark.slow  # each case records for a few seconds
@@ -61,7 +61,7 @@ class NumberedPublisher:
     """Publish 0, 1, 2, ... on TOPIC at about 500 Hz, noting when each went out."""
 
     def __init__(self):
-        self.node = dds_node.Node('numbered_publisher')
+        self.node = probe.Node('numbered_publisher')
         self.publisher = self.node.create_publisher(msg.Float64, TOPIC, 1000)
         self.sent = []  # time.monotonic() of each number
         self.stop = threading.Event()
@@ -83,7 +83,7 @@ def recording(tmp_path, monkeypatch):
     recorder = subprocess.Popen([BELLOWS, 'record', '--output', str(bag), '--topics', TOPIC],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                 env=dict(os.environ, ROS_DOMAIN_ID=domain))
-    dds_node.init([])
+    probe.init([])
     publisher = NumberedPublisher()
     try:
         end = time.monotonic() + 30
@@ -98,7 +98,7 @@ def recording(tmp_path, monkeypatch):
         if recorder.poll() is None:
             recorder.kill()
             recorder.wait()
-        dds_node.shutdown()
+        probe.shutdown()
 
 
 def recorded_count(stdout):

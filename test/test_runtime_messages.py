@@ -18,7 +18,7 @@ import os
 from pathlib import Path
 
 from rosbags.typesys import get_typestore, Stores
-from runtimes import require_rclpy
+from node_processes import require_rclpy
 
 from bellows_ros.runtime.cdr import EXTRA_DEFINITIONS, TYPESTORE
 from bellows_ros.runtime.messages import (dds_type_name, from_typestore, message_class, msg,

@@ -29,7 +29,7 @@ import subprocess
 import sys
 
 import pytest
-from runtimes import node_env
+from node_processes import node_env
 
 PROBE = Path(__file__).resolve().parent / 'parameter_probe.py'
 DEFAULTS = {'gain': 0.5, 'label': 'none', 'port': '/default', 'segments': [0, 0]}
@@ -154,7 +154,7 @@ CASES = [
 def probe(runtime, cwd, argv, parameters=DEFAULTS, topics=TOPICS):
     """Run the probe node on `runtime` with `--ros-args *argv`: the finished process."""
     spec = json.dumps({'parameters': parameters, 'topics': topics})
-    env = node_env(runtime, ROS_DOMAIN_ID=str(random.randint(60, 99)), PROBE_SPEC=spec)
+    env = node_env(ROS_DOMAIN_ID=str(random.randint(60, 99)), PROBE_SPEC=spec)
     return subprocess.run([sys.executable, str(PROBE), '--ros-args', *argv], cwd=cwd, env=env,
                           capture_output=True, text=True, timeout=60)
 
@@ -176,7 +176,7 @@ def check_error(result, fragment):
 
 @pytest.mark.slow  # a node process per case and runtime
 @pytest.mark.parametrize('case', CASES, ids=[case.id for case in CASES])
-def test_rcl_rules(case, runtime, files):
+def test_rcl_rules(case, files):
     result = probe(runtime, files, case.argv)
     if case.error:
         check_error(result, case.error)
@@ -193,7 +193,7 @@ def test_rcl_rules(case, runtime, files):
 
 
 @pytest.mark.slow
-def test_array_of_another_type_later(runtime, files):
+def test_array_of_another_type_later(files):
     """
     An rcl quirk, not copied: a later array of another element type is dropped by rcl.
 

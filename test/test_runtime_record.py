@@ -28,7 +28,7 @@ from rosbags.typesys import get_typestore, Stores
 from bellows_ros import interfaces
 from bellows_ros.data import read_table
 from bellows_ros.errors import DataError
-from bellows_ros.runtime import dds_node
+import probe
 from bellows_ros.runtime.messages import msg, to_typestore
 
 DOMAIN = '193'
@@ -63,8 +63,8 @@ def test_record_then_read_back(tmp_path, monkeypatch):
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
         env=dict(os.environ, ROS_DOMAIN_ID=DOMAIN))
     try:
-        dds_node.init([])
-        node = dds_node.Node('synthetic_driver')
+        probe.init([])
+        node = probe.Node('synthetic_driver')
         publishers = {topic: node.create_publisher(type(m), topic, 200)
                       for topic, m in segment_messages(0, 0).items()}
         end = time.monotonic() + 10
@@ -78,7 +78,7 @@ def test_record_then_read_back(tmp_path, monkeypatch):
             time.sleep(0.001)
         out, err = recorder.communicate(timeout=20)
     finally:
-        dds_node.shutdown()
+        probe.shutdown()
         if recorder.poll() is None:
             recorder.kill()
     assert recorder.returncode == 0, err
@@ -195,8 +195,8 @@ def test_a_recorder_stalled_for_seconds_loses_nothing(tmp_path):
     n = 4000
     try:
         os.environ['ROS_DOMAIN_ID'] = domain
-        dds_node.init([])
-        node = dds_node.Node('synthetic_driver')
+        probe.init([])
+        node = probe.Node('synthetic_driver')
         publishers = {topic: node.create_publisher(type(m), topic, interfaces.SAMPLE_DEPTH)
                       for topic, m in segment_messages(0, 0).items()}
         end = time.monotonic() + 10
@@ -218,7 +218,7 @@ def test_a_recorder_stalled_for_seconds_loses_nothing(tmp_path):
         out, err = recorder.communicate(timeout=30)
     finally:
         recorder.send_signal(signal.SIGCONT)
-        dds_node.shutdown()
+        probe.shutdown()
         os.environ.pop('ROS_DOMAIN_ID', None)
         if recorder.poll() is None:
             recorder.kill()

@@ -43,7 +43,7 @@ import time
 
 import numpy as np
 import pytest
-from runtimes import BIN, launch, logs, node_env, override, stop_all, wait_for
+from node_processes import BIN, launch, logs, node_env, override, stop_all, wait_for
 from test_doctor_bag import write_actuator_bag
 
 from bellows_ros.cli import main
@@ -156,10 +156,10 @@ def identify_and_diagnose(data, out):
 
 @pytest.mark.slow
 @pytest.mark.timeout(1800)
-def test_record_identify_diagnose_extend_track(runtime, tmp_path, monkeypatch):
+def test_record_identify_diagnose_extend_track(tmp_path, monkeypatch):
     domain = str(random.randint(201, 230))
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
-    env = node_env(runtime, ROS_DOMAIN_ID=domain)
+    env = node_env(ROS_DOMAIN_ID=domain)
     device = tmp_path / 'device.yaml'
     device.write_text(DEVICE_YAML)
     default = load_actuator_params()

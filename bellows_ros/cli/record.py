@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""`bellows record --output DIR [--topics T ...] [--duration S]` — rosbag2 (MCAP) without ROS."""
+"""`bellows record --output DIR [--topics T ...] [--namespace NS] [--duration S]`: rosbag2 (MCAP)."""
 from bellows_ros.errors import BellowsError
 
 
@@ -31,6 +31,9 @@ def add_arguments(parser):
                         help='rosbag2 directory to create (MCAP)')
     parser.add_argument('--topics', nargs='+', metavar='TOPIC',
                         help='topics to record (default: every topic of the contract)')
+    parser.add_argument('--namespace', default='/', metavar='NS',
+                        help="the graph's namespace: its relative topics are recorded under it "
+                        "(default: '/')")
     parser.add_argument('--duration', type=str, metavar='S',
                         help='stop after S seconds (default: record until Ctrl-C)')
 

@@ -235,7 +235,11 @@ class ArmControllerNode(Node):
         self._p_limit = 2.0 * params.p_max
 
         self.command_pub = self.publisher(interfaces.PRESSURE_COMMAND)
-        self.state_pub = self.publisher(interfaces.TRAJECTORY_STATE)
+        self.state_pub = None
+        if self.msg.JointTrajectoryControllerState is not None:
+            self.state_pub = self.publisher(interfaces.TRAJECTORY_STATE)
+        else:  # no control_msgs wheel on PyPI (runtime/messages.py)
+            self.get_logger().info('control_msgs is not installed: ~/state is not published')
         self.subscription(interfaces.JOINT_STATES, self.on_joint_states)
         self.subscription(interfaces.CHAMBERS, self.on_chambers)
         self.subscription(interfaces.PSI_SETPOINT, self.on_setpoint)
@@ -394,7 +398,8 @@ class ArmControllerNode(Node):
         command.header.stamp = joints.header.stamp
         self.command_pub.publish(command)
         self.counts['commands'] += 1
-        if self.last_state is None or stamp - self.last_state >= STATE_PERIOD * 1e9 - 1:
+        if self.state_pub is not None and (
+                self.last_state is None or stamp - self.last_state >= STATE_PERIOD * 1e9 - 1):
             self.last_state = stamp
             self.publish_state(joints.header.stamp, t)
         self.stats.record(dt * self.control_every, 0.0, time.perf_counter() - start)

@@ -28,7 +28,7 @@ true age; there is no ROS timer at 1 kHz.
 Commands (`/bellows/pressure_command`, `/actuator/motor_command`) pass through the hardware layer's
 safety limits (clamping, end stops, watchdogs).
 
-A managed (lifecycle) node, as ros2_control's hardware is (runtime/lifecycle.py, docs/protocols.md
+A managed (lifecycle) node, as ros2_control's hardware is (rclpy.lifecycle, docs/protocols.md
 "Safety states"): `configure` opens the devices and waits for their first samples (inactive: the
 samples are published, the chambers are vented, commands are refused and counted); `activate`
 accepts commands; `deactivate` vents and refuses them; `cleanup` closes the devices; `shutdown`
@@ -64,6 +64,10 @@ import stat
 import threading
 import time
 
+from rclpy.duration import Duration
+from rclpy.lifecycle import TransitionCallbackReturn
+from rclpy.time import Time
+
 from bellows_ros import interfaces
 from bellows_ros.config.hardware import actuator_board_config, arm_bus_config
 from bellows_ros.errors import BellowsError
@@ -73,8 +77,7 @@ from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.hardware.sample_delivery import arrival_ns, DeviceClock, on_host_clock
 from bellows_ros.models.derivatives import rate
 from bellows_ros.nodes import diagnostics
-from bellows_ros.runtime import Node, realtime, run
-from bellows_ros.runtime.lifecycle import FAILURE, Lifecycle, SUCCESS
+from bellows_ros.runtime import LifecycleNode, realtime, run
 from bellows_ros.runtime.parameters import Spec
 
 _DISCOVERY_SETTLE = 0.5  # s, see DriverNode._wait_for_subscribers
@@ -188,7 +191,10 @@ PARAMETERS = (
 )
 
 
-class DriverNode(Node):
+SUCCESS, FAILURE = TransitionCallbackReturn.SUCCESS, TransitionCallbackReturn.FAILURE
+
+
+class DriverNode(LifecycleNode):
 
     def __init__(self, **kwargs):
         super().__init__('driver_node', **kwargs)
@@ -222,7 +228,7 @@ class DriverNode(Node):
         self.vent_requested = False   # ~/vent or the estop latched a vent: ~/release ends it
         self.failure = ''             # why the last configure failed
         self.vent_time = None         # s from shutdown to every chamber at ambient
-        self.lifecycle = Lifecycle(self)
+        self.state = 'unconfigured'  # the lifecycle state's label, as each transition ends
         self.subscription(interfaces.PRESSURE_COMMAND, self.on_pressure_command)
         self.subscription(interfaces.MOTOR_COMMAND, self.on_motor_command)
         self.subscription(interfaces.ESTOP, self.on_estop)
@@ -234,15 +240,15 @@ class DriverNode(Node):
         self.diagnostics.add('lifecycle', self.diagnose_lifecycle)
         if self.given['autostart']:
             # A device that does not answer is then a start error (one line, exit status 2).
-            if self.lifecycle.trigger('configure') != SUCCESS:
+            if self.trigger_configure() != SUCCESS:
                 raise BellowsError(self.failure or 'driver_node: configure failed')
-            self.lifecycle.trigger('activate')
+            self.trigger_activate()
 
     @property
     def active(self):
-        return self.lifecycle.state == 'active'
+        return self.state == 'active'
 
-    # --- lifecycle (runtime/lifecycle.py): each returns SUCCESS or FAILURE -----------------------
+    # --- lifecycle (rclpy.lifecycle): each returns SUCCESS or FAILURE, and keeps self.state ----
     def on_configure(self, previous):
         """Open the devices and wait for their first samples; they start vented, refusing."""
         given = self.given
@@ -263,6 +269,7 @@ class DriverNode(Node):
             self._close_devices()
             return FAILURE
         self._hold_vented()
+        self.state = 'inactive'
         self.get_logger().info(f'configured: {self._devices()} open, vented until activated')
         return SUCCESS
 
@@ -270,28 +277,33 @@ class DriverNode(Node):
         """Accept commands, unless a vent is latched (then from ~/release on)."""
         if not (self.vent_requested or self.estop_held):
             self._release_devices()
+        self.state = 'active'
         self.get_logger().info(f'driving {self._devices()}'
                                + (' (vented until ~/release)' if self.vented else ''))
         return SUCCESS
 
     def on_deactivate(self, previous):
         self._hold_vented()
+        self.state = 'inactive'
         self.get_logger().info('deactivated: vented, commands refused')
         return SUCCESS
 
     def on_cleanup(self, previous):
         self._close_devices()
+        self.state = 'unconfigured'
         return SUCCESS
 
     def on_shutdown(self, previous):
         self._hold_vented()
         self._wait_for_ambient()
         self._close_devices()
+        self.state = 'finalized'
         return SUCCESS
 
     def on_error(self, previous):
         self._hold_vented()
         self._close_devices()
+        self.state = 'unconfigured'  # the error handled: rcl_lifecycle's errorprocessing -> here
         return SUCCESS
 
     def _devices(self):
@@ -431,8 +443,8 @@ class DriverNode(Node):
 
     def close(self):
         """End of the process: shut down (vent, wait for ambient) from wherever it is."""
-        if self.lifecycle.state in ('inactive', 'active'):
-            self.lifecycle.trigger('shutdown')
+        if self.state in ('inactive', 'active'):
+            self.trigger_shutdown()
         self._close_devices()
 
     def _close_devices(self):
@@ -452,7 +464,7 @@ class DriverNode(Node):
             for publisher in (*self._sample_publishers(), self.wrench_pub,
                               self.diagnostics.publisher):
                 left = max(0.0, end - time.monotonic())
-                publisher.wait_for_all_acked(self.runtime.Duration(seconds=left))
+                publisher.wait_for_all_acked(Duration(seconds=left))
         self.actuator = self.arm = None
         for name in self.reports:
             self.diagnostics.removeByName(name)
@@ -466,7 +478,7 @@ class DriverNode(Node):
 
     def on_actuator_sample(self, sample):
         start = time.monotonic()
-        stamp = self.runtime.Time(nanoseconds=self.actuator_stamps.stamp(
+        stamp = Time(nanoseconds=self.actuator_stamps.stamp(
             int(round(sample.t_device * 1e9)), self.get_clock().now().nanoseconds)).to_msg()
         state = self._header(self.msg.JointState(name=list(interfaces.ACTUATOR_JOINTS),
                                                  position=[sample.x_c, sample.x_s]), stamp)
@@ -489,7 +501,7 @@ class DriverNode(Node):
         arrival = arrival_ns(self.get_clock().now().nanoseconds, sample.t_arrival)
         if self.arm_stamps is None:
             self.arm_stamps = DeviceClock(**ARM_CLOCK[on_host_clock(sample.t_arrival)])
-        stamp = self.runtime.Time(nanoseconds=self.arm_stamps.stamp(
+        stamp = Time(nanoseconds=self.arm_stamps.stamp(
             int(round(sample.t_device * 1e9)), arrival)).to_msg()
         previous = self._last_arm
         if previous is not None:
@@ -546,7 +558,7 @@ class DriverNode(Node):
             return False, f'{interfaces.ESTOP.name} is held (True): release it first'
         self.vent_requested = False
         if not self.active:
-            why = f'released: commands accepted once active (now {self.lifecycle.state})'
+            why = f'released: commands accepted once active (now {self.state})'
         else:
             self._release_devices()
             why = 'released: commands accepted again (vented until the next set-point)'
@@ -582,7 +594,7 @@ class DriverNode(Node):
         values.update(device.counters())
         values['published'] = str(self.published[name])
         values['stale'] = str(device.stale)
-        values['lifecycle'] = self.lifecycle.state
+        values['lifecycle'] = self.state
         values['vented'] = str(device.latched)
         values['estop_held'] = str(self.estop_held)
         values['refused_unconfigured'] = str(self.refused)
@@ -600,13 +612,13 @@ class DriverNode(Node):
             elif self.vent_requested:
                 stat.mergeSummary(diagnostics.WARN, 'vented until released (~/release)')
             elif not self.active:
-                stat.mergeSummary(diagnostics.OK, f'{self.lifecycle.state}: vented, commands '
+                stat.mergeSummary(diagnostics.OK, f'{self.state}: vented, commands '
                                   'refused')
         return stat
 
     def diagnose_lifecycle(self, stat):
         """Report the node's state: lifecycle, emergency stop, vent latch, refused commands."""
-        state = self.lifecycle.state
+        state = self.state
         stat.update({'lifecycle': state, 'devices': self._devices() or 'none',
                      'estop_held': str(self.estop_held),
                      'vent_requested': str(self.vent_requested),

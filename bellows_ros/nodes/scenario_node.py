@@ -39,6 +39,8 @@ import csv
 import math
 from pathlib import Path
 
+from rclpy.qos import qos_profile_sensor_data
+
 from bellows_ros import interfaces
 from bellows_ros.config.actuator import load_actuator_params
 from bellows_ros.control import angle_trajectory, closed_loop
@@ -97,7 +99,7 @@ class ScenarioNode(Node):
         self.subscription(interfaces.STIFFNESS, lambda m: self._add('stiffness', m.data))
         # Best effort: the recorder must never hold up the driver's reliable writers (a reader
         # that does not acknowledge makes them block) and may miss samples when it falls behind.
-        sensor = self.runtime.SENSOR_DATA
+        sensor = qos_profile_sensor_data
         for topic, callback in ((interfaces.JOINT_STATES, self.on_joint_states),
                                 (interfaces.ACTUATOR_JOINT_STATES, self.on_actuator_states),
                                 (interfaces.CHAMBERS, self.on_chambers),

@@ -45,6 +45,8 @@ With use_sim_time the node is the clock source: it publishes the plant's time on
 """
 import math
 
+from rclpy.time import Time
+
 from bellows_ros.config.actuator import load_actuator
 from bellows_ros.config.hardware import actuator_board_config
 from bellows_ros.config.ranges import RANGES
@@ -138,7 +140,7 @@ class SimActuatorNode(LiveEffectStrengths, Node):
         self.x_c_seen = [min(self.x_c_seen[0], sample.x_c), max(self.x_c_seen[1], sample.x_c)]
         self._ticks += 1
         if self.sim_time and self._ticks % self._clock_every == 0:
-            now = self.runtime.Time(seconds=self.plant.t).to_msg()
+            now = Time(seconds=self.plant.t).to_msg()
             self.clock_pub.publish(self.msg.Clock(clock=now))
         return sample
 

@@ -40,6 +40,8 @@ Node parameters:
 
 import math
 
+from rclpy.time import Time
+
 from bellows_ros.config.ranges import RANGES
 from bellows_ros.config.segment import load_segment
 from bellows_ros.errors import BellowsError
@@ -148,7 +150,7 @@ class SimArmNode(LiveEffectStrengths, Node):
             measured.append((sample.p1, sample.p2, sample.psi))
         self._ticks += 1
         if self.sim_time and self._ticks % self._clock_every == 0:
-            now = self.runtime.Time(seconds=self.plants[0].t).to_msg()
+            now = Time(seconds=self.plants[0].t).to_msg()
             self.clock_pub.publish(self.msg.Clock(clock=now))
         return measured
 

@@ -13,14 +13,10 @@
 # limitations under the License.
 
 """
-The runtime the nodes run on: rclpy, or plain Cyclone DDS with ROS 2's wire conventions.
-
-Nodes are written once against the runtime contract (runtime/contract.py), subclassing `Node`
-(runtime/node.py), and started with `run(NodeClass, args)`, which picks the implementation once
-(`rclpy_runtime` where rclpy imports, else `dds_node`; `$BELLOWS_RUNTIME=rclpy|dds` chooses
-explicitly) and composes the node class with it: `NodeClass.on(runtime)`, on rclpy an
-`rclpy.node.Node`.
+How a bellows node runs on rclpy: the node base classes and `run` (runtime/node.py), the message
+classes (messages.py), parameter tables (parameters.py), real-time scheduling (realtime.py) and
+the recorder (record.py).
 """
-from bellows_ros.runtime.node import Node, run, select_runtime, stamp_ns
+from bellows_ros.runtime.node import LifecycleNode, Node, run, stamp_ns
 
-__all__ = ['Node', 'run', 'select_runtime', 'stamp_ns']
+__all__ = ['LifecycleNode', 'Node', 'run', 'stamp_ns']

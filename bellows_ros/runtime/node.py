@@ -13,86 +13,72 @@
 # limitations under the License.
 
 """
-The bellows part of every node, and `main`, which picks the runtime and composes the node with it.
+The bellows part of every node, on rclpy, and `run`, which starts one.
 
-A bellows node subclasses `Node` and is written against the runtime contract (runtime/contract.py:
-rclpy.node.Node's names, which both runtimes' node classes implement)::
+A bellows node subclasses `Node` (an `rclpy.node.Node`) or, for a managed node, `LifecycleNode`
+(an `rclpy.lifecycle.LifecycleNode`)::
 
     class Talker(Node):
         def __init__(self, **kwargs):
             super().__init__('talker', **kwargs)
-            self.pub = self.create_publisher(self.msg.Float64, '/x', 10)
+            self.declare_specs(PARAMETERS)
+            self.pub = self.publisher(interfaces.DRIVING_TORQUE)
 
     def main(args=None):
         return run(Talker, args)
 
-`Talker.on(runtime)` is the class composed with the runtime's node class (`runtime.Node`), a
-subclass of both: on rclpy `rclpy.node.Node`, so a node is spun by any rclpy executor and several
-share a process (`rclpy.spin(Talker.on(rclpy_runtime)())`, after `rclpy_runtime.init()`); on the
-DDS runtime `dds_node.Node`. `run` does that composition. `Node` adds what is bellows' own:
-`declare_specs` (a node's parameter table, checked by `parameters.validate`, the one check, at
-start and for every change while running), `publisher`/`subscription` (a topic of
-bellows_ros/interfaces.py), `msg` and `srv` (the runtime's message and service classes), the
-`parameters` dict kept current, and `runtime`.
+What the base adds to rclpy's node: `declare_specs` (a node's parameter table, checked by
+`parameters.validate`, the one check, at start and for every change while running),
+`check_parameters` (a parameter given in a file or with -p that the node does not declare is an
+error, not silently ignored), `publisher`/`subscription` (a topic of bellows_ros/interfaces.py),
+`msg` and `srv` (runtime/messages.py) and the `parameters` dict kept current.
 
-A runtime is a module with the same names in both implementations (`rclpy_runtime`, `dds_node`),
-the `Runtime` Protocol of runtime/contract.py. `select_runtime` picks one, once, in `run`:
-`$BELLOWS_RUNTIME` = `rclpy` or `dds`, else rclpy when it imports. `rclpy_unavailable` asks
-a child Python whether rclpy could run the nodes here, for a process (the bench, the tests) that
-uses the DDS runtime itself.
+`run` spins the node on rclpy's EventsExecutor (rclpy >= 7.1.5; it costs about a third of the
+SingleThreadedExecutor's CPU per message), in bounded slices: on the PyPI wheels an unbounded
+`spin()` busy-loops a core and starves Fast DDS's receive threads, so the node stops answering
+discovery, services and signals. Where rclpy lacks it (a sourced Jazzy with rclpy 7.1.3) the
+node says so once and spins on the SingleThreadedExecutor.
 """
 import array
 import gc
-import importlib
 import os
 import signal
-import subprocess
 import sys
-import threading
-from types import ModuleType
 from typing import Any, Callable, Optional, Sequence
 
+import rclpy
+import rclpy.exceptions
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+import rclpy.lifecycle
+import rclpy.node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.signals import SignalHandlerOptions
+from rclpy.task import Future
+
 from bellows_ros.errors import BellowsError, ParameterError
-from bellows_ros.runtime.parameters import validate
+from bellows_ros.runtime import messages
+from bellows_ros.runtime.parameters import descriptor_message, validate
 
-RUNTIMES = {'rclpy': 'bellows_ros.runtime.rclpy_runtime', 'dds': 'bellows_ros.runtime.dds_node'}
+try:
+    from rclpy.experimental.events_executor import EventsExecutor
+except ImportError:  # rclpy before 7.1.5 (a sourced Jazzy of early 2025)
+    EventsExecutor = None
 
+# Reliable, transient local, depth 1: a late joiner gets the last message (a latched state).
+LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+# s: the longest the executor runs without returning to Python, where signals are acted on and
+# the end of a node (`done`) is seen.
+SPIN_SLICE = 0.1
 
-def select_runtime(choice: Optional[str] = None) -> ModuleType:
-    """
-    Pick the runtime module: `choice` or `$BELLOWS_RUNTIME`, else rclpy when it imports.
-
-    Raises ParameterError for an unknown choice, or when rclpy was asked for and does not import.
-    """
-    choice = (choice or os.environ.get('BELLOWS_RUNTIME', '')).strip().lower()
-    if choice and choice not in RUNTIMES:
-        raise ParameterError(f"BELLOWS_RUNTIME='{choice}': expected one of {', '.join(RUNTIMES)}")
-    if choice != 'dds':
-        try:
-            return importlib.import_module(RUNTIMES['rclpy'])
-        except ImportError as exc:
-            if choice == 'rclpy':
-                raise ParameterError(f'BELLOWS_RUNTIME=rclpy: rclpy does not import ({exc}); '
-                                     'source your ROS 2 setup.bash') from None
-    return importlib.import_module(RUNTIMES['dds'])
+# A user's mistake in a node name, namespace, topic name or parameter, as rclpy reports it.
+USER_ERRORS = (rclpy.exceptions.ParameterException, rclpy.exceptions.InvalidNodeNameException,
+               rclpy.exceptions.InvalidNamespaceException,
+               rclpy.exceptions.InvalidTopicNameException)
 
 
-def rclpy_unavailable() -> str:
-    """
-    Tell why rclpy cannot run the nodes here ('' when it can), asking a child Python.
-
-    The child imports rclpy and the message package of every type the nodes use (cdr.USED_TYPES).
-    A child, because a process on the DDS runtime must not load a second Cyclone DDS library.
-    """
-    from bellows_ros.runtime.cdr import USED_TYPES
-    packages = sorted({ros_name.split('/')[0] for ros_name in USED_TYPES.values()})
-    probe = subprocess.run([sys.executable, '-c', 'import rclpy, '
-                            + ', '.join(f'{package}.msg' for package in packages)],
-                           capture_output=True, text=True, timeout=60)
-    if probe.returncode == 0:
-        return ''
-    lines = probe.stderr.strip().splitlines()
-    return lines[-1] if lines else f'exit status {probe.returncode}'
+# The parameters every rclpy node declares itself (Jazzy).
+RCLPY_OWN = ('use_sim_time', 'start_type_description_service')
 
 
 def stamp_ns(stamp: Any) -> int:
@@ -105,43 +91,23 @@ def _plain(value: Any) -> Any:
     return list(value) if isinstance(value, array.array) else value
 
 
-class Node:
-    """
-    A bellows node's own part, on either runtime: composed with the runtime's node class.
+class _BellowsNode:
+    """What every bellows node adds to rclpy's node class (see the module docstring)."""
 
-    `on(runtime)` makes the class a node of that runtime, `NodeClass.on(runtime)`, a subclass
-    of both (cached): on rclpy an `rclpy.node.Node`. See the module docstring.
-    """
-
-    # The runtime module (rclpy_runtime or dds_node): set on the class `on` returns.
-    runtime: ModuleType
-
-    @classmethod
-    def on(cls, runtime: ModuleType) -> type:
-        """Return this node class composed with `runtime.Node` (one class per pair, cached)."""
-        if 'runtime' in cls.__dict__:  # composed already
-            return cls
-        key = (cls, runtime)
-        if key not in _composed:
-            _composed[key] = type(cls.__name__, (cls, runtime.Node), {
-                'runtime': runtime, '__module__': cls.__module__,
-                '__qualname__': cls.__qualname__, '__doc__': cls.__doc__})
-        return _composed[key]
+    msg = messages.msg
+    srv = messages.srv
 
     def __init__(self, node_name: str, **kwargs: Any) -> None:
-        """Create the node `node_name`; `kwargs` go to the runtime's Node (`namespace`, ...)."""
-        runtime = getattr(type(self), 'runtime', None)
-        if runtime is None:
-            raise TypeError(f'{type(self).__name__} needs a runtime: build it with '
-                            f'{type(self).__name__}.on(runtime)()')
-        self.msg = runtime.msg
-        self.srv = runtime.srv
+        """Create the node `node_name`; `kwargs` go to rclpy's Node (`namespace`, ...)."""
         self._specs = {}
         # The value of every parameter declared with a Spec, kept current while the node runs.
         self.parameters = {}
-        super().__init__(node_name, **kwargs)
-        # Every parameter given to this node (files, -p), declared or not: {name: value}.
-        self._given = runtime.parameter_overrides(self)
+        # Every parameter given (files, -p) is declared from its override first, so that the
+        # node can tell which it was given (public API: rclpy keeps the overrides private).
+        super().__init__(node_name, automatically_declare_parameters_from_overrides=True,
+                         **kwargs)
+        self._given = {name: _plain(value.value) for name, value
+                       in self.get_parameters_by_prefix('').items() if name not in RCLPY_OWN}
 
     # parameters
     def declare_specs(self, specs: Sequence[Any]) -> dict:
@@ -149,24 +115,27 @@ class Node:
         Declare every parameter of `specs` (runtime/parameters.py) and check its value.
 
         The value given (file or -p), else the default, is checked against its Spec
-        (`parameters.validate`) before it is declared, the same way on both runtimes; rclpy also
-        gets the Spec as the parameter's descriptor. Returns {name: value}.
+        (`parameters.validate`) before it is declared; rclpy gets the Spec as the parameter's
+        descriptor (`ros2 param describe`). Returns {name: value}.
         """
         values = {}
         for spec in specs:
-            validate(self.get_name(), spec, self._given.get(spec.name, spec.default))
+            given = self._given.get(spec.name, spec.default)
+            validate(self.get_name(), spec, given)
+            if spec.name in self._given:  # declared from its override: again, with its Spec
+                self.undeclare_parameter(spec.name)
+            descriptor = descriptor_message(spec, messages.message_class)
             values[spec.name] = _plain(self.declare_parameter(
-                spec.name, spec.default, self.runtime.descriptor(spec)).value)
+                spec.name, spec.default, descriptor).value)
         self._specs.update({spec.name: spec for spec in specs})
         self.parameters.update(values)
         return values
 
-    # A change while running (`ros2 param set`, rqt_reconfigure), the same way on both runtimes:
-    # the runtime has checked that the parameter is declared and keeps its type; here its Spec
-    # decides (read-only, type, bounds, choices, rule), and the node is told once the change is
-    # taken.
+    # A change while running (`ros2 param set`, rqt_reconfigure): rclpy has checked that the
+    # parameter is declared and keeps its type; here its Spec decides (read-only, bounds,
+    # choices, rule), and the node is told once the change is taken.
     def _check_change(self, changes: Sequence[Any]) -> Any:
-        result = self.runtime.service_message('rcl_interfaces/msg/SetParametersResult')(
+        result = messages.message_class('rcl_interfaces/msg/SetParametersResult')(
             successful=True)
         for change in changes:
             spec = self._specs.get(change.name)
@@ -195,7 +164,7 @@ class Node:
 
     def check_parameters(self) -> None:
         """Raise ParameterError for a given parameter (file or -p) the node does not declare."""
-        unknown = [name for name in self._given if not self.has_parameter(name)]
+        unknown = [name for name in self._given if name not in self._specs]
         if unknown:
             raise ParameterError(f"unknown parameter '{unknown[0]}' for node '{self.get_name()}' "
                                  '(given in a params file or with -p; the node has no such '
@@ -213,27 +182,33 @@ class Node:
     # communication on the topics of the contract (bellows_ros/interfaces.py)
     def publisher(self, topic: Any) -> Any:
         """Create a publisher on a topic of the contract (bellows_ros/interfaces.py)."""
-        return self.create_publisher(getattr(self.msg, topic.message), topic.name,
+        return self.create_publisher(messages.message_class(topic.ros_type), topic.name,
                                      self._qos(topic))
 
     def subscription(self, topic: Any, callback: Callable[[Any], None]) -> Any:
         """Create a subscription to a topic of the contract (bellows_ros/interfaces.py)."""
-        return self.create_subscription(getattr(self.msg, topic.message), topic.name, callback,
-                                        self._qos(topic))
+        return self.create_subscription(messages.message_class(topic.ros_type), topic.name,
+                                        callback, self._qos(topic))
 
-    def _qos(self, topic: Any) -> Any:
-        return self.runtime.LATCHED if topic.latched else topic.depth
+    @staticmethod
+    def _qos(topic: Any) -> Any:
+        return LATCHED if topic.latched else topic.depth
 
 
-_composed = {}
+class Node(_BellowsNode, rclpy.node.Node):
+    """A bellows node: an rclpy.node.Node with a parameter table and the topic contract."""
+
+
+class LifecycleNode(_BellowsNode, rclpy.lifecycle.LifecycleNode):
+    """A managed bellows node: an rclpy.lifecycle.LifecycleNode (`ros2 lifecycle`)."""
 
 
 # Where the process is with respect to SIGINT/SIGTERM: while a node is being built a signal
 # interrupts at once (KeyboardInterrupt); while it spins, a signal only sets `stop`, which the spin
-# loop sees within one wait (a KeyboardInterrupt raised inside a C call of rclpy or Cyclone
-# surfaces as some other error, a traceback and exit status 1); once clean-up has begun, further
-# signals are ignored (a terminal's Ctrl-C reaches a launched node twice: from the terminal and
-# from `ros2 launch`).
+# loop sees within one slice (the executor runs in C++ and returns to Python at least every
+# SPIN_SLICE); once clean-up has begun, further signals are ignored (a terminal's Ctrl-C reaches a
+# launched node twice: from the terminal and from `ros2 launch`). rclpy's own handlers are off:
+# they shut the context down at once, before a node's close() could vent or publish its counts.
 _signals = {'spinning': False, 'stop': False, 'closing': False}
 
 
@@ -245,22 +220,32 @@ def _on_signal(signum, frame):
         raise KeyboardInterrupt
 
 
-def run(node_class: Any, args: Optional[Sequence[str]] = None,
-        runtime: Optional[ModuleType] = None) -> int:
+def executor() -> Any:
+    """Return the executor the nodes spin on: the EventsExecutor, else rclpy's single-threaded."""
+    if EventsExecutor is not None:
+        return EventsExecutor()
+    return SingleThreadedExecutor()
+
+
+def spin(node_executor: Any, until: Callable[[], bool]) -> None:
+    """Spin `node_executor` in slices of SPIN_SLICE s until `until()` or rclpy's shutdown."""
+    never = Future()  # bounded slices: see the module docstring
+    while not until() and rclpy.ok():
+        node_executor.spin_until_future_complete(never, timeout_sec=SPIN_SLICE)
+
+
+def run(node_class: Any, args: Optional[Sequence[str]] = None) -> int:
     """
     Run one node until Ctrl-C/SIGTERM; a user mistake is one line on stderr and exit status 2.
 
-    Picks the runtime (`select_runtime`) unless one is given, builds `node_class.on(runtime)()`
-    (which must declare its parameters up front), then checks that every given parameter was
-    declared.
-    A node with a `done` attribute runs until it is true, then `finish()` is called (the scenario).
-    A node may define `close()` for its own clean-up (devices, threads); it runs before shutdown.
-    A node that declares `realtime_priority` and `cpu_latency_limit` gets them here
-    (`realtime.request`, `realtime.limit_cpu_latency`), the latter until it shuts down.
+    Builds `node_class()` (which declares its parameters up front), then checks that every
+    given parameter was declared. A node with a `done` attribute runs until it is true, then
+    `finish()` is called (the scenario). A node may define `close()` for its own clean-up
+    (devices, threads); it runs before the node is destroyed. A node that declares
+    `realtime_priority` and `cpu_latency_limit` gets them here (runtime/realtime.py).
 
-    `node_class` may be a sequence of node classes: a composed process (nodes/arm_graph.py). Each
-    node is built in that order, spun in a thread of its own (the first in the main thread, where
-    the signals arrive), and closed in the reverse order.
+    `node_class` may be a sequence of node classes: one process, one executor (nodes/arm_graph.py).
+    Nodes are built in that order and closed in the reverse order.
     """
     from bellows_ros.runtime import realtime
 
@@ -271,57 +256,59 @@ def run(node_class: Any, args: Optional[Sequence[str]] = None,
     _signals.update(spinning=False, stop=False, closing=False)
     signal.signal(signal.SIGTERM, _on_signal)
     signal.signal(signal.SIGINT, _on_signal)
-    nodes, threads, latency_requests = [], [], []
+    nodes, latency_requests = [], []
     try:
-        runtime = runtime or select_runtime()
-        runtime.init(args)
+        _init(args)
+        node_executor = executor()
         for cls in classes:
-            nodes.append(cls.on(runtime)())
+            nodes.append(cls())
+        if EventsExecutor is None:
+            nodes[0].get_logger().info('this rclpy has no EventsExecutor: spinning on the '
+                                       'SingleThreadedExecutor (about 3x the CPU per message)')
         for node in nodes:
             node.check_parameters()
             node.watch_parameters()
             realtime.request(node)
             latency_requests.append(realtime.limit_cpu_latency(node))
-        # Everything built so far (modules, type store, model tables) lives as long as the node:
-        # keep the cyclic collector from walking it again and again in the 1 kHz callbacks.
+            node_executor.add_node(node)
+        # Everything built so far (modules, type support, model tables) lives as long as the
+        # node: keep the cyclic collector from walking it again and again in 1 kHz callbacks.
         gc.freeze()
         _signals['spinning'] = True
-        for node in nodes[1:]:
-            threads.append(threading.Thread(target=_spin, args=(runtime, node),
-                                            name=f'spin-{node.get_name()}', daemon=True))
-            threads[-1].start()
-        _spin(runtime, nodes[0])
+        spin(node_executor, lambda: _signals['stop'] or getattr(nodes[0], 'done', False))
         if getattr(nodes[0], 'done', False):
             nodes[0].finish()
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except Exception as exc:
-        # rcl's own argument and parameter errors are user mistakes too; a signal that shut
-        # rclpy's context down ends the spin with its own exception.
-        if isinstance(exc, BellowsError) or (runtime and isinstance(exc, runtime.USER_ERRORS)):
+        if isinstance(exc, (BellowsError,) + USER_ERRORS):
             return _user_error(program, exc)
-        if not (runtime and isinstance(exc, runtime.INTERRUPTED)):
-            raise
+        raise
     finally:
         _signals['closing'] = _signals['stop'] = True
-        for thread in threads:
-            thread.join(timeout=2.0)  # a spin returns within one wait
         for node in reversed(nodes):
             if hasattr(node, 'close'):
                 node.close()
             node.destroy_node()
-        if runtime is not None and runtime.ok():
-            runtime.shutdown()
+        rclpy.try_shutdown()
         for request in latency_requests:
             if request is not None:
                 os.close(request)
     return 0
 
 
-def _spin(runtime: ModuleType, node: Node) -> None:
-    """Spin `node` until a signal, its end (`done`, the scenario) or the runtime's shutdown."""
-    while not _signals['stop'] and not getattr(node, 'done', False) and runtime.ok():
-        runtime.spin_once(node, timeout_sec=None)
+def _init(args: Optional[Sequence[str]]) -> None:
+    """rclpy.init without its signal handlers; a malformed `--ros-args` is a ParameterError."""
+    try:
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    except RuntimeError as exc:  # rcl's argument errors (UnknownROSArgsError, RCLError)
+        text = str(exc)
+        if text.startswith('['):  # UnknownROSArgsError: the list of unknown arguments
+            unknown = text.strip('[]').split(',')[0].strip().strip("'")
+            raise ParameterError(f"--ros-args: unknown argument '{unknown}'") from None
+        # rcl appends the C source locations of the error (', at /path/file.c:123'): drop them.
+        message = ' '.join(text.split()).split(', at /')[0]
+        raise ParameterError(message.removeprefix('failed to initialize rcl: ')) from None
 
 
 def _user_error(program: str, exc: Exception) -> int:

@@ -13,12 +13,13 @@
 # limitations under the License.
 
 """
-`bellows record`: write the contract topics to a rosbag2 (MCAP) directory, without ROS.
+`bellows record`: write the contract topics to a rosbag2 (MCAP) directory.
 
-Subscribes over Cyclone DDS with ROS 2's wire conventions (so it records ROS 2 nodes on
-rmw_cyclonedds_cpp too), converts each message to the rosbags Jazzy type store's class and
-serialises it to CDR with the type store. The bag timestamp is the receive time, as rosbag2 does;
-the sample time stays in `header.stamp`.
+An rclpy node subscribes to each topic as serialized messages (`raw=True`) and hands the CDR
+bytes to rosbags' writer as they came: nothing is decoded or encoded on the way, as `ros2 bag
+record` does. The bag timestamp is the receive time, as rosbag2's; the sample time stays in
+`header.stamp`. Latched topics (the emergency stop, the driver's vent state) are subscribed
+transient local, so the bag holds their state at the start.
 
 A recording survives being stopped:
 - SIGINT and SIGTERM end the recording the same way: the bag is closed (summary, footer,
@@ -34,18 +35,29 @@ import signal
 import sys
 import time
 
+import rclpy
+from rclpy.executors import ExternalShutdownException
+import rclpy.node
+from rclpy.task import Future
+from rclpy.signals import SignalHandlerOptions
 from rosbags.rosbag2 import Writer
 from rosbags.rosbag2.enums import StoragePlugin
 
+from bellows_ros import interfaces
+from bellows_ros.bag import TYPESTORE
 from bellows_ros.errors import BellowsError
-from bellows_ros.interfaces import by_name, SAMPLE_DEPTH
 from bellows_ros.outputs import check_output
-from bellows_ros.runtime import dds_node
-from bellows_ros.runtime.messages import message_class, TYPESTORE
+from bellows_ros.runtime import messages
+from bellows_ros.runtime.node import executor, LATCHED
 
-TOPICS = by_name()  # the contract's topics in the root namespace: {name: type}
 # Longest time a received message stays only in the recorder's memory (a SIGKILL loses it).
 FLUSH_PERIOD = 1.0  # s
+SPIN_SLICE = 0.05  # s between looks at the stop request, the duration and the flush
+
+
+def topics_of(namespace='/'):
+    """{full topic name: contract Topic} of the contract in `namespace`."""
+    return {topic.resolved(namespace): topic for topic in interfaces.TOPICS}
 
 
 class _Stop:
@@ -82,59 +94,80 @@ def _flush(writer):
     storage.bio.flush()
 
 
-def record(output, topics=None, duration=None, ready=None):
+def record(output, topics=None, duration=None, ready=None, namespace='/'):
     """
-    Record `topics` (default: all of TOPICS) into the new directory `output`.
+    Record `topics` (default: every topic of the contract in `namespace`) into new dir `output`.
 
-    Runs for `duration` seconds, or until KeyboardInterrupt. `ready()` is called once subscribed.
+    Runs for `duration` seconds, or until SIGINT/SIGTERM. `ready()` is called once subscribed.
     Returns {topic: message count}.
     """
-    topics = list(topics or TOPICS)
-    unknown = [t for t in topics if t not in TOPICS]
+    known = topics_of(namespace)
+    named, topics = bool(topics), list(topics or known)
+    unknown = [t for t in topics if t not in known]
     if unknown:
-        raise BellowsError(f"record: unknown topic '{unknown[0]}' (known: {', '.join(TOPICS)})")
+        raise BellowsError(f"record: unknown topic '{unknown[0]}' (known in namespace "
+                           f"{namespace}: {', '.join(known)})")
+    twice = sorted({t for t in topics if topics.count(t) > 1})
+    if twice:
+        raise BellowsError(f"record: topic '{twice[0]}' is given twice")
     output = Path(output)
     if os.path.lexists(output):
         raise BellowsError(f'{output}: already exists (rosbag2 writes a new directory)')
     check_output(output)  # its directory exists and can be written, before anything starts
+    classes = {}
+    for topic in topics:
+        try:
+            classes[topic] = messages.message_class(known[topic].ros_type)
+        except ImportError as exc:  # control_msgs where ROS 2 came from PyPI (messages.py)
+            if named:
+                raise BellowsError(f"record: topic '{topic}': its type does not import "
+                                   f'({exc})') from None
+            print(f'bellows record: not recording {topic}: {exc}', file=sys.stderr)
+    topics = [t for t in topics if t in classes]
     counts = dict.fromkeys(topics, 0)
     with _Stop() as stop:
-        dds_node.init([])
-        node = dds_node.Node('bellows_record')
+        rclpy.init(args=[], signal_handler_options=SignalHandlerOptions.NO)
+        node = rclpy.node.Node('bellows_record')
         writer = Writer(output, version=9, storage_plugin=StoragePlugin.MCAP)
         try:
             writer.open()
         except OSError as exc:
-            dds_node.shutdown()
+            node.destroy_node()
+            rclpy.try_shutdown()
             raise BellowsError(f'{output}: cannot create the bag ({exc.strerror})') from None
+        node_executor = executor()
         try:
             for topic in topics:
-                ros_type = TOPICS[topic]
-                connection = writer.add_connection(topic, ros_type, typestore=TYPESTORE)
-                node.create_subscription(message_class(ros_type), topic,
+                connection = writer.add_connection(topic, known[topic].ros_type,
+                                                   typestore=TYPESTORE)
+                qos = LATCHED if known[topic].latched else interfaces.SAMPLE_DEPTH
+                node.create_subscription(classes[topic], topic,
                                          _writer_callback(writer, connection, counts, topic),
-                                         SAMPLE_DEPTH)
+                                         qos, raw=True)
+            node_executor.add_node(node)
             if ready:
                 ready()
             end = None if duration is None else time.monotonic() + duration
             next_flush = time.monotonic() + FLUSH_PERIOD
+            never = Future()
             while not stop.requested and (end is None or time.monotonic() < end):
-                dds_node.spin_once(node, timeout_sec=0.05)
+                node_executor.spin_until_future_complete(never, timeout_sec=SPIN_SLICE)
                 if time.monotonic() >= next_flush:
                     _flush(writer)
                     next_flush += FLUSH_PERIOD
+        except ExternalShutdownException:
+            pass
         finally:
             writer.close()
             node.destroy_node()
-            dds_node.shutdown()
+            rclpy.try_shutdown()
     return counts
 
 
 def _writer_callback(writer, connection, counts, topic):
-    def write(msg):
-        # The message classes serialise to the very CDR the type store would (tested), once.
-        data = msg.serialize(use_version_2=False)
-        writer.write(connection, time.time_ns(), data)
+    def write(data):
+        # The serialized message as it came (CDR with its encapsulation header): rosbag2's form.
+        writer.write(connection, time.time_ns(), bytes(data))
         counts[topic] += 1
     return write
 
@@ -142,10 +175,12 @@ def _writer_callback(writer, connection, counts, topic):
 def record_command(args):
     """CLI entry: `bellows record --output DIR [--topics T ...] [--duration S]`."""
     def ready():
-        print(f'bellows record: recording {len(args.topics or TOPICS)} topics to {args.output} '
+        count = len(args.topics or interfaces.TOPICS)
+        print(f'bellows record: recording {count} topics to {args.output} '
               + ('until Ctrl-C' if args.duration is None else f'for {args.duration:g} s'),
               file=sys.stderr, flush=True)
-    counts = record(args.output, args.topics, args.duration, ready)
+    counts = record(args.output, args.topics, args.duration, ready,
+                    getattr(args, 'namespace', None) or '/')
     for topic, count in counts.items():
         print(f'{topic}: {count} messages')
     return 0

@@ -13,14 +13,16 @@
 # limitations under the License.
 
 """
-The two runtimes in tests: is rclpy here, and the environment of a node process on either.
+Node processes in tests: their environment, starting and stopping them, the ROS 2 command line.
 
-Where rclpy does not import, tests on it are skipped with the reason, unless
-`BELLOWS_REQUIRE_RCLPY=1` (scripts/test.sh sets it when it installed ROS 2): then they fail.
+Every node process keeps its DDS traffic on this machine (LOOPBACK_ENVIRONMENT, conftest.py).
+Tests that need the ROS 2 command line (`ros2 param`, `ros2 lifecycle`, `ros2 service`,
+`ros2 launch`) skip where it is absent, saying why, unless `BELLOWS_REQUIRE_ROS2_CLI=1`
+(scripts/test.sh sets it when it installed the command line): then they fail.
 """
-import functools
 import os
 from pathlib import Path
+import shutil
 import signal
 import subprocess
 import sys
@@ -28,30 +30,33 @@ import time
 
 import pytest
 
-from bellows_ros.runtime import node
-from bellows_ros.runtime.dds_node import LOOPBACK_ENVIRONMENT  # noqa: F401 (conftest's)
+# DDS discovery and traffic on this host only (ROS 2 Jazzy's own switch, which rmw_fastrtps_cpp
+# and rmw_cyclonedds_cpp both honour); Fast DDS over UDP on loopback, without the shared-memory
+# files a killed process leaves in /dev/shm.
+LOOPBACK_ENVIRONMENT = {'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST', 'ROS_STATIC_PEERS': '',
+                        'FASTDDS_BUILTIN_TRANSPORTS': 'UDPv4'}
 
 
-@functools.lru_cache(maxsize=None)
-def rclpy_unavailable():
-    """Why rclpy cannot run nodes here ('' when it can): `runtime.node.rclpy_unavailable`, once."""
-    return node.rclpy_unavailable()
+def ros2_cli_missing():
+    """Why the ROS 2 command line cannot run here ('' when it can)."""
+    if shutil.which('ros2') is None:
+        return 'no ros2 command on PATH (scripts/test.sh installs it from ../shared/ros2-pip)'
+    return ''
 
 
-def require_rclpy():
-    """Skip (or, with BELLOWS_REQUIRE_RCLPY=1, fail) the calling test where rclpy is absent."""
-    reason = rclpy_unavailable()
+def require_ros2_cli():
+    """Skip (or, with BELLOWS_REQUIRE_ROS2_CLI=1, fail) the calling test where ros2 is absent."""
+    reason = ros2_cli_missing()
     if not reason:
         return
-    message = f'rclpy not importable ({reason}); source a ROS 2 Jazzy setup.bash to run this'
-    if os.environ.get('BELLOWS_REQUIRE_RCLPY') == '1':
-        pytest.fail(message + ' (BELLOWS_REQUIRE_RCLPY=1: ROS 2 was installed for this run)')
-    pytest.skip(message)
+    if os.environ.get('BELLOWS_REQUIRE_ROS2_CLI') == '1':
+        pytest.fail(reason + ' (BELLOWS_REQUIRE_ROS2_CLI=1: it was installed for this run)')
+    pytest.skip(reason)
 
 
-def node_env(runtime, **extra):
-    """Return the environment for a node process on `runtime`, with `extra` variables."""
-    return dict(os.environ, BELLOWS_RUNTIME=runtime, **extra)
+def node_env(**extra):
+    """Return the environment for a node process, with `extra` variables."""
+    return dict(os.environ, **extra)
 
 
 def override(node, name, value):
@@ -161,7 +166,7 @@ def ros2_cli(args, env, timeout=60.0):
     each call discovers for itself (`--spin-time`), so a node not found yet is asked again, until
     `timeout` s.
     """
-    require_rclpy()  # the ros2 command line is ROS 2's own
+    require_ros2_cli()
     own_discovery = [] if args[:2] == ['service', 'call'] else ['--no-daemon', '--spin-time', '1']
     end = time.monotonic() + timeout
     while True:

@@ -1,0 +1,66 @@
+# Copyright 2026 bellows_ros maintainers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The tests' own ROS 2 participant: an rclpy node in the pytest process, on the test's domain.
+
+    probe.init()                    # rclpy on $ROS_DOMAIN_ID (the test sets it)
+    node = probe.Node('estop_probe')    # an rclpy.node.Node
+    node.create_subscription(msg.Bool, '/bellows/vented', seen.append, probe.LATCHED)
+    probe.spin_once(node, timeout_sec=0.05)
+    probe.shutdown()                # every probe node destroyed, rclpy shut down
+
+Plain rclpy, nothing of bellows_ros's node base: what any ROS 2 user's node sees of the graph.
+"""
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.task import Future
+import rclpy.node
+
+from bellows_ros.runtime.node import LATCHED  # noqa: F401 (the probes' QoS for latched topics)
+
+_executors = {}
+_NEVER = Future()  # spin_until_future_complete of it: spin for the timeout
+
+
+def init():
+    """rclpy.init on the domain of $ROS_DOMAIN_ID (once per test; `shutdown` ends it)."""
+    rclpy.init(args=[])
+
+
+def Node(name):  # noqa: N802 (stands for the class, as rclpy.create_node does)
+    """Return a new rclpy node `name` in the probe's context."""
+    node = rclpy.node.Node(name)
+    _executors[node] = SingleThreadedExecutor()
+    _executors[node].add_node(node)
+    return node
+
+
+def spin_once(node, timeout_sec=0.05):
+    """Serve every callback of `node` that gets ready within `timeout_sec` (>= 1 ms)."""
+    _executors[node].spin_until_future_complete(_NEVER, timeout_sec=max(timeout_sec, 0.001))
+
+
+def spin_for(node, seconds):
+    """Spin `node` for `seconds`."""
+    spin_once(node, seconds)
+
+
+def shutdown():
+    """Destroy every probe node and shut rclpy down."""
+    for node, node_executor in list(_executors.items()):
+        node_executor.shutdown(timeout_sec=1.0)
+        node.destroy_node()
+    _executors.clear()
+    rclpy.try_shutdown()
