@@ -30,7 +30,7 @@ bin=$(find_executables "$top" launch_sim) || exit 2
 echo "launch_sim: executables in $bin" >&2
 params="$top/config/nodes_sim.yaml"
 output="$here/out/scenario"
-duration=40.0
+duration=''  # the scenario's own (config/nodes_sim.yaml, scenario_node)
 scenario=1
 namespace=''
 record=''
@@ -52,7 +52,8 @@ while [ $# -gt 0 ]; do
   shift
 done
 case "$duration" in
-  ''|*[!0-9.]*|*.*.*) echo "launch_sim.sh: --duration '$duration': expected seconds, e.g. 40" >&2
+  '') ;;
+  *[!0-9.]*|*.*.*) echo "launch_sim.sh: --duration '$duration': expected seconds, e.g. 40" >&2
                      exit 2 ;;
   *.*) ;;
   *) duration="$duration.0" ;;  # rcl types parameters strictly: duration is a double
@@ -66,8 +67,9 @@ fi
 if [ -n "$namespace" ] && ! [[ "$namespace" =~ ^[A-Za-z][A-Za-z0-9_]*(/[A-Za-z][A-Za-z0-9_]*)*$ ]]; then
   echo "launch_sim.sh: --namespace '$namespace': expected a ROS name such as arm_a" >&2; exit 2
 fi
-# A simulation stays off the network: DDS discovery on this host only, Cyclone on loopback
-# (unless the user configured Cyclone); the simulated CAN bus is on loopback already.
+# A simulation stays off the network: DDS discovery on this host only (ROS 2's switch, which
+# Fast DDS and Cyclone DDS honour; Cyclone also bound to loopback unless the user configured
+# it); the simulated CAN bus is on loopback already.
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
 if [ -z "${CYCLONEDDS_URI:-}" ]; then
   export CYCLONEDDS_URI='<CycloneDDS><Domain><General><Interfaces><NetworkInterface name="lo"/></Interfaces><AllowMulticast>false</AllowMulticast></General></Domain></CycloneDDS>'
@@ -93,7 +95,7 @@ cat >"$overrides.tmp" <<YAML
   ros__parameters: {autostart: true, arm: {channel: '$group'$( [ "$arm" = 1 ] || echo ', enabled: false')}, actuator: {port: '$port'}}
 $( [ "$arm" = 1 ] || printf '%s\n  %s' '/**/stiffness_controller_node:' 'ros__parameters: {realtime_priority: 50}')
 /**/scenario_node:
-  ros__parameters: {duration: $duration, output_dir: '$output'}
+  ros__parameters: {$( [ -z "$duration" ] || echo "duration: $duration, ")output_dir: '$output'}
 YAML
 mv -f "$overrides.tmp" "$overrides"
 common=(--ros-args -r "__ns:=/$namespace" --params-file "$params" --params-file "$overrides")

@@ -25,8 +25,8 @@ Plain rclpy, nothing of bellows_ros's node base: what any ROS 2 user's node sees
 """
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
-from rclpy.task import Future
 import rclpy.node
+from rclpy.task import Future
 
 from bellows_ros.runtime.node import LATCHED  # noqa: F401 (the probes' QoS for latched topics)
 

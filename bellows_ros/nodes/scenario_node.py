@@ -17,33 +17,38 @@ scenario_node: a short scripted scenario on the running graph, printed and plott
 
 1. Stiffness step: set-point `stiffness_low` (1400 N/m; raised to 1 % above the bottom of the
    actuator model's range when that is higher), then at `step_time` `stiffness_high` (1900 N/m).
-2. Angle tracking: from `trajectory_start` on, `segment_1` follows the built-in angle
-   `trajectory` (`sweep`: ±0.7 rad with holds) through the arm controller (arm_controller_node,
-   paper A's model as feedforward), the set-points published on /arm/psi_setpoint at 50 Hz.
+2. Angle tracking, like for like: from `trajectory_start` on, `segment_1` follows the built-in
+   angle `trajectory` (`sweep`: ±0.7 rad with holds) through the arm controller
+   (arm_controller_node), the set-points published on /arm/psi_setpoint at 50 Hz, twice on the
+   same graph: first with paper A's model inverted as feedforward, then, after a hold of `GAP`
+   s, feedback only (the controller's live parameter `feedforward` set to `none` through its
+   parameter service; set back to what it was afterwards). `compare_feedforward: false` runs
+   the trajectory once, with the controller as configured.
 
 What comes back is recorded: /actuator/stiffness, /joint_states (segment_1 Ψ),
 /actuator/joint_states (air_chamber x_c), /bellows/chambers (segment_1 pressures),
 /bellows/driving_torque (segment_1 τ_drive). At the end it prints a summary (step settling time
-and overshoot, tracking error) and writes
-`output_dir/scenario.csv` and `output_dir/scenario.png`. For comparison the plot also shows the
-angle of a feedback-only controller (same gains, no model) on the same trajectory, run in process
-on the simulated segment (`control.closed_loop`, as `bellows bench --only arm_control`).
+and overshoot; the RMS tracking error of each run and their ratio) and writes
+`output_dir/scenario.csv` and `output_dir/scenario.png`, whose angle and error panels show both
+runs on the trajectory's own time axis.
 
 Parameters: duration (s), step_time (s), stiffness_low, stiffness_high (N/m), trajectory (str),
-trajectory_start (s), output_dir (str), actuator_params (str), realtime_priority (SCHED_FIFO
-priority, 0 = normal scheduling; when the 1 kHz nodes run SCHED_FIFO give it one too, below
-theirs), cpu_latency_limit (s: CPU wake-up latency held while the node runs, 0 = idle CPUs poll,
+trajectory_start (s), compare_feedforward (bool), output_dir (str), actuator_params (str),
+realtime_priority (SCHED_FIFO priority, 0 = normal scheduling; when the 1 kHz nodes run
+SCHED_FIFO give it one too, below theirs), cpu_latency_limit (s: CPU wake-up latency held while the node runs, 0 = idle CPUs poll,
 negative = off; runtime/realtime.py).
 """
 import csv
 import math
 from pathlib import Path
 
+from rclpy.parameter import Parameter
+from rclpy.parameter_client import AsyncParameterClient
 from rclpy.qos import qos_profile_sensor_data
 
 from bellows_ros import interfaces
 from bellows_ros.config.actuator import load_actuator_params
-from bellows_ros.control import angle_trajectory, closed_loop
+from bellows_ros.control import angle_trajectory
 from bellows_ros.errors import BellowsError
 from bellows_ros.models.stiffness_map import stiffness_range
 from bellows_ros.outputs import atomic_file
@@ -55,15 +60,22 @@ from bellows_ros.runtime.parameters import Spec
 SEGMENT = interfaces.segment_joint(1)
 CHAINS = (interfaces.chain_chamber(1, 1), interfaces.chain_chamber(1, 2))
 AIR_CHAMBER = interfaces.ACTUATOR_JOINTS[0]
+# s: the hold at the trajectory's end point (rest) between the two runs; the controller's
+# feedforward is switched at its middle.
+GAP = 3.0
+# The two runs of the comparison: (label, the arm controller's `feedforward`).
+RUNS = (('paper A feedforward', 'paper_a'), ('feedback only', 'none'))
 
 PARAMETERS = (
-    Spec('duration', 40.0, 'length of the scenario, s', low=1.0, high=24 * 3600.0),
+    Spec('duration', 56.0, 'length of the scenario, s', low=1.0, high=24 * 3600.0),
     Spec('step_time', 5.0, 'time of the stiffness step, s', low=0.0, high=24 * 3600.0),
     Spec('stiffness_low', 1400.0, 'stiffness before the step, N/m', low=0.0, high=1e6),
     Spec('stiffness_high', 1900.0, 'stiffness after the step, N/m', low=0.0, high=1e6),
     Spec('trajectory', 'sweep', 'built-in angle trajectory of segment_1',
          choices=tuple(angle_trajectory.TRAJECTORIES)),
     Spec('trajectory_start', 2.0, 'start of the trajectory, s', low=0.0, high=24 * 3600.0),
+    Spec('compare_feedforward', True, "run the trajectory twice: paper A's feedforward, then "
+         "feedback only (the arm controller's live parameter)"),
     Spec('output_dir', 'scenario_out', 'directory of scenario.png and scenario.csv',
          check=lambda path: '' if path else 'must not be empty'),
     Spec('actuator_params', '', "YAML laid over config/actuator.yaml ('' = defaults)"),
@@ -106,6 +118,17 @@ class ScenarioNode(Node):
                                 (interfaces.DRIVING_TORQUE, self.on_torque)):
             self.create_subscription(getattr(self.msg, topic.message), topic.name, callback,
                                      sensor)
+        # The runs: (label, feedforward or None = as configured, start s).
+        span = angle_trajectory.duration(self.trajectory) + GAP
+        self.runs = ([(label, mode, self.trajectory_start + k * span)
+                      for k, (label, mode) in enumerate(RUNS)] if given['compare_feedforward']
+                     else [('as configured', None, self.trajectory_start)])
+        self.controller = AsyncParameterClient(self, interfaces.ARM_CONTROLLER_NODE)
+        self.switches = [(start - GAP / 2, mode) for _, mode, start in self.runs[1:]]
+        if self.switches:  # and back to what the controller had, once the last run is over
+            self.switches.append((self.runs[-1][2] + span - GAP / 2, None))
+        self.switch_results = []  # (mode, SetParameters future)
+        self.configured = None    # GetParameters future: the controller's feedforward before
         self.start_ns = self.get_clock().now().nanoseconds
         self.done = False
         self._last_setpoint, self._ticks = None, 0
@@ -152,9 +175,18 @@ class ScenarioNode(Node):
             self.setpoint_pub.publish(self.msg.Float64(data=k))
             self._last_setpoint = k
         self._ticks += 1
+        if self.switches and self.configured is None and t >= self.trajectory_start:
+            self.configured = self.controller.get_parameters(['feedforward'])
+        if self.switches and t >= self.switches[0][0]:
+            _, mode = self.switches.pop(0)
+            if mode is None:  # back to the configured value (when it was read)
+                result = self.configured.result() if self.configured.done() else None
+                mode = result.values[0].string_value if result and result.values else RUNS[0][1]
+            self.switch_results.append((mode, self.controller.set_parameters(
+                [Parameter('feedforward', value=mode)])))
         if t >= self.trajectory_start:
-            psi_d, psi_dot_d, _ = angle_trajectory.setpoint(self.trajectory,
-                                                            t - self.trajectory_start)
+            run_start = max(start for _, _, start in self.runs if start <= t)
+            psi_d, psi_dot_d, _ = angle_trajectory.setpoint(self.trajectory, t - run_start)
             setpoint = self.msg.JointState(name=[SEGMENT], position=[psi_d],
                                            velocity=[psi_dot_d])
             setpoint.header.stamp = self.get_clock().now().to_msg()
@@ -188,33 +220,44 @@ class ScenarioNode(Node):
                          f'overshoot {max(0.0, overshoot):.1f} N/m, final {after[-1][1]:.1f} N/m')
         else:
             lines.append('stiffness step: no /actuator/stiffness received')
-        errors = [e for _, e in self.tracking_errors()]
-        if errors:
-            graph = math.sqrt(sum(e * e for e in errors) / len(errors))
-            run = self.feedback_only()
-            alone = closed_loop.rms(run.psi_d - run.psi)
-            lines.append(f'segment_1 tracking ({len(errors)} samples): RMS error {graph:.4f} rad '
-                         f'with paper A feedforward on the graph; feedback only (in process, same '
-                         f'trajectory and gains): {alone:.4f} rad')
-        else:
-            lines.append('segment_1 tracking: no /joint_states during the trajectory')
+        lines += self.tracking_summary()
         for name, unit in (('p1', 'Pa'), ('psi', 'rad'), ('tau_drive', 'N·m'), ('x_c', 'm')):
             values = [v for _, v in self.series[name]]
             lines.append(f'{name}: {len(values)} samples' + (
                 f', min {min(values):.4g} {unit}, max {max(values):.4g} {unit}' if values else ''))
         return lines
 
-    def tracking_errors(self):
-        """(t s, set-point minus measured Ψ rad) of segment_1 over the trajectory."""
-        end = self.trajectory_start + angle_trajectory.duration(self.trajectory)
-        return [(t, angle_trajectory.setpoint(self.trajectory, t - self.trajectory_start)[0]
-                 - psi) for t, psi in self.series['psi'] if self.trajectory_start <= t <= end]
+    def tracking_errors(self, start):
+        """(t s from `start`, set-point minus measured Ψ rad) of segment_1 over one run."""
+        end = start + angle_trajectory.duration(self.trajectory)
+        return [(t - start, angle_trajectory.setpoint(self.trajectory, t - start)[0] - psi)
+                for t, psi in self.series['psi'] if start <= t <= end]
 
-    def feedback_only(self):
-        """Return the feedback-only controller on the same trajectory, in process (cached)."""
-        if not hasattr(self, '_feedback_only'):
-            self._feedback_only = closed_loop.track('none', self.trajectory)
-        return self._feedback_only
+    def tracking_summary(self):
+        """The RMS tracking error of each run, and the ratio of the first to the second."""
+        refused = [mode for mode, future in self.switch_results
+                   if not (future.done() and future.result() is not None
+                           and all(r.successful for r in future.result().results))]
+        if refused:
+            return [f'segment_1 tracking: the arm controller did not take feedforward '
+                    f"'{refused[0]}' (is arm_controller_node running?): no comparison"]
+        rms, lines = [], []
+        length = angle_trajectory.duration(self.trajectory)
+        for label, _, start in self.runs:
+            run = self.tracking_errors(start)
+            errors = [e for _, e in run]
+            if not errors or run[-1][0] < 0.95 * length:
+                return lines + [f'segment_1 tracking ({label}): the run ended '
+                                f'{run[-1][0] if run else 0.0:.1f} s into the {length:g} s '
+                                f'trajectory (duration {self.duration:g} s is too short, or no '
+                                '/joint_states)']
+            rms.append(math.sqrt(sum(e * e for e in errors) / len(errors)))
+            lines.append(f'segment_1 tracking, {label} ({len(errors)} samples): RMS error '
+                         f'{rms[-1]:.4f} rad')
+        if len(rms) == 2:
+            lines.append(f'feedforward / feedback only: {rms[0] / rms[1]:.2f} (same sweep, same '
+                         'graph, same gains)')
+        return lines
 
     def write(self):
         with atomic_file(self.output_dir / 'scenario.csv', 'w', newline='') as stream:
@@ -239,21 +282,23 @@ class ScenarioNode(Node):
         plot(axes[1], 'p2', 1e-5, label='segment_1 chain 2')
         axes[1].set_ylabel('pressure (bar abs)')
         deg = 180 / math.pi
-        alone = self.feedback_only()
-        start = self.trajectory_start
-        plot(axes[2], 'psi', deg, lw=1.5, label='Ψ, paper A feedforward (graph)')
-        axes[2].plot(alone.t + start, alone.psi * deg, lw=1.0,
-                     label='Ψ, feedback only (in process)')
-        plot(axes[2], 'psi_setpoint', deg, color='k', ls='--', lw=1.0, label='Ψ set-point')
+        # Each run on the trajectory's own time: the angles, then the errors, one over the other.
+        first = self.runs[0][2]
+        trajectory_t = [t * 0.02 for t in range(int(angle_trajectory.duration(self.trajectory)
+                                                    / 0.02))]
+        axes[2].plot([first + t for t in trajectory_t],
+                     [angle_trajectory.setpoint(self.trajectory, t)[0] * deg
+                      for t in trajectory_t], color='k', ls='--', lw=1.0, label='Ψ set-point')
+        for label, _, start in self.runs:
+            psi = [(t - start + first, v * deg) for t, v in self.series['psi']
+                   if start <= t <= start + angle_trajectory.duration(self.trajectory)]
+            axes[2].plot([t for t, _ in psi], [v for _, v in psi], lw=1.0, label=f'Ψ, {label}')
+            errors = self.tracking_errors(start)
+            axes[3].plot([first + t for t, _ in errors], [e * deg for _, e in errors], lw=1.0,
+                         label=label)
         axes[2].set_ylabel('segment_1 angle (deg)')
-        # The angles lie on top of each other at this scale: the errors show the difference.
-        graph = self.tracking_errors()
-        axes[3].plot([t for t, _ in graph], [e * deg for _, e in graph], lw=1.0,
-                     label='paper A feedforward (graph)')
-        axes[3].plot(alone.t + start, (alone.psi_d - alone.psi) * deg, lw=1.0,
-                     label='feedback only (in process)')
         axes[3].set_ylabel('set-point − Ψ (deg)')
-        axes[3].set_xlabel('time (s)')
+        axes[3].set_xlabel("time (s); the runs on the first one's time axis")
         for ax in axes:
             ax.grid(True)
             ax.legend(loc='best')

@@ -38,8 +38,8 @@ import time
 import rclpy
 from rclpy.executors import ExternalShutdownException
 import rclpy.node
-from rclpy.task import Future
 from rclpy.signals import SignalHandlerOptions
+from rclpy.task import Future
 from rosbags.rosbag2 import Writer
 from rosbags.rosbag2.enums import StoragePlugin
 
