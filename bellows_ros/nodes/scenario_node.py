@@ -35,8 +35,8 @@ runs on the trajectory's own time axis.
 Parameters: duration (s), step_time (s), stiffness_low, stiffness_high (N/m), trajectory (str),
 trajectory_start (s), compare_feedforward (bool), output_dir (str), actuator_params (str),
 realtime_priority (SCHED_FIFO priority, 0 = normal scheduling; when the 1 kHz nodes run
-SCHED_FIFO give it one too, below theirs), cpu_latency_limit (s: CPU wake-up latency held while the node runs, 0 = idle CPUs poll,
-negative = off; runtime/realtime.py).
+SCHED_FIFO give it one too, below theirs), cpu_latency_limit (s: CPU wake-up latency held while
+the node runs, 0 = idle CPUs poll, negative = off; runtime/realtime.py).
 """
 import csv
 import math
