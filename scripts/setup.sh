@@ -16,7 +16,10 @@ if [ ! -x "$venv/bin/python" ]; then
   "$python" -m venv "$venv"
 fi
 sourced_ros=0
-if [ "${ROS_DISTRO:-}" = jazzy ] && env -u VIRTUAL_ENV "$python" -c 'import rclpy' 2>/dev/null; then
+# rclpy on the sourced ROS's PYTHONPATH (found, not imported: its own pip dependencies may be
+# installed only in the venv).
+if [ "${ROS_DISTRO:-}" = jazzy ] && "$python" -c 'import importlib.util, sys
+sys.exit(importlib.util.find_spec("rclpy") is None)' 2>/dev/null; then
   sourced_ros=1
 fi
 stamp="$venv/.bellows-installed"
