@@ -39,6 +39,7 @@ from rosbags.typesys import get_typestore, Stores
 import yaml
 
 from bellows_ros import interfaces
+from bellows_ros.bag_lock import check_not_written
 from bellows_ros.errors import DataError
 from bellows_ros.table import check_increasing, COLUMNS, Table
 
@@ -148,7 +149,11 @@ def _check_metadata(path):
     try:
         document = yaml.safe_load(metadata.read_bytes())
     except FileNotFoundError:
-        raise DataError(path, 'not a rosbag2 directory (it has no metadata.yaml)') from None
+        storage = any(p.suffix in ('.mcap', '.db3') for p in path.iterdir())
+        hint = (f'; a recording that was killed lacks it: `bellows reindex {path}` rebuilds it'
+                if storage else '')
+        raise DataError(path, f'not a rosbag2 directory (it has no metadata.yaml){hint}') \
+            from None
     except OSError as exc:
         raise DataError(metadata, f'cannot read file ({exc.strerror})') from None
     except yaml.YAMLError as exc:  # also for bytes that are not text
@@ -163,6 +168,7 @@ def _check_metadata(path):
 
 def _open(path):
     """Open a rosbags Reader of `path`, or raise DataError naming what is wrong."""
+    check_not_written(path)  # a bag being recorded would be read in part (bag_lock)
     _check_metadata(path)
     try:
         reader = Reader(path)
