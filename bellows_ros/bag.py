@@ -19,7 +19,10 @@ The rows are the joint-state samples of the wanted device group (the arm's on `/
 the actuator's on `/actuator/joint_states`); pressures (`/bellows/chambers`,
 `/actuator/chambers`) and the force/torque sensor (`/bellows/wrench`) are aligned onto them by
 stamp, zero-order hold: each row takes the latest message stamped at or before it (the first
-message for rows before any). `t` is the sample stamp in seconds from the first row.
+message for rows before any). A row whose channel was silent for longer than
+`table.MAX_HELD_STEPS` sample steps is marked (`Table.held`), and the readers refuse it
+(`table.check_held`): a channel that stops, starts late or has a hole is never filled in.
+`t` is the sample stamp in seconds from the first row.
 A recording made before the actuator had topics of its own holds its samples on `/joint_states`
 and `/bellows/chambers`: where the bag has no `/actuator/...` topic, that one is read instead.
 
@@ -135,12 +138,26 @@ def _wrench_rows(path, reader, typestore, frame, axis):
     return np.array(stamps, dtype=np.int64), np.array(values, dtype=float)[:, None]
 
 
+def _median_step(stamps):
+    return float(np.median(np.diff(stamps))) if len(stamps) > 1 else 0.0
+
+
 def _hold(sample_stamps, stamps, values):
-    """Zero-order hold of (stamps, values) onto sample_stamps; the first value fills the start."""
+    """
+    Zero-order hold of (stamps, values) onto sample_stamps: (values, (age s, step s)).
+
+    The first value fills the rows before it. The age of a row's value is how far its message's
+    stamp lies from the row's (before the first message: after it), the step the larger of the
+    rows' and the channel's median steps: `table.check_held` refuses a row older than
+    MAX_HELD_STEPS steps (the channel had a gap there).
+    """
     order = np.argsort(stamps, kind='stable')
     stamps, values = stamps[order], values[order]
     index = np.searchsorted(stamps, sample_stamps, side='right') - 1
-    return values[np.clip(index, 0, len(stamps) - 1)]
+    taken = np.clip(index, 0, len(stamps) - 1)
+    step = max(_median_step(sample_stamps), _median_step(stamps)) * 1e-9
+    age = np.abs(sample_stamps - stamps[taken]).astype(float) * 1e-9
+    return values[taken], (age, step)
 
 
 def _check_metadata(path):
@@ -191,10 +208,12 @@ def read_bag_table(path, system):
                 path, reader, typestore, CHAMBERS,
                 [interfaces.chain_chamber(1, 1), interfaces.chain_chamber(1, 2)], ('effort',))
             wrench_stamps, torque = _wrench_rows(path, reader, typestore, SEGMENT, ('torque', 'z'))
-            pressures = _hold(stamps, chamber_stamps, chambers)
+            pressures, pressure_gaps = _hold(stamps, chamber_stamps, chambers)
+            torque, torque_gaps = _hold(stamps, wrench_stamps, torque)
             columns = {'psi': joints[:, 0], 'psi_dot': joints[:, 1], 'p1': pressures[:, 0],
-                       'p2': pressures[:, 1],
-                       'tau_ext': _hold(stamps, wrench_stamps, torque)[:, 0]}
+                       'p2': pressures[:, 1], 'tau_ext': torque[:, 0]}
+            held = {'p1': (CHAMBERS, *pressure_gaps), 'p2': (CHAMBERS, *pressure_gaps),
+                    'tau_ext': (WRENCH, *torque_gaps)}
         elif system == 'actuator':
             topic, named = _actuator_topic(reader, ACTUATOR_JOINT_STATES)
             stamps, joints = _joint_rows(path, reader, typestore, topic,
@@ -203,11 +222,14 @@ def read_bag_table(path, system):
             chamber_stamps, pressure = _joint_rows(path, reader, typestore, topic,
                                                    [interfaces.ACTUATOR_CHAMBER], ('effort',),
                                                    named)
+            chamber_topic = topic
             wrench_stamps, force = _wrench_rows(path, reader, typestore, interfaces.ACTUATOR_FRAME,
                                                 ('force', 'z'))
-            columns = {'x_c': joints[:, 0], 'x_s': joints[:, 1],
-                       'p': _hold(stamps, chamber_stamps, pressure)[:, 0],
-                       'f': _hold(stamps, wrench_stamps, force)[:, 0]}
+            pressure, pressure_gaps = _hold(stamps, chamber_stamps, pressure)
+            force, force_gaps = _hold(stamps, wrench_stamps, force)
+            columns = {'x_c': joints[:, 0], 'x_s': joints[:, 1], 'p': pressure[:, 0],
+                       'f': force[:, 0]}
+            held = {'p': (chamber_topic, *pressure_gaps), 'f': (WRENCH, *force_gaps)}
         else:
             raise DataError(path, f"unknown system '{system}' (segment or actuator)")
     finally:
@@ -216,7 +238,7 @@ def read_bag_table(path, system):
     values = {'t': (stamps - stamps[0]) * 1e-9}
     values.update(columns)
     names = [n for n in required + optional if n in values]
-    table = Table(str(path), names, {n: values[n] for n in names})
+    table = Table(str(path), names, {n: values[n] for n in names}, held=held)
     check_increasing(table, 't')
     for name in names:
         bad = np.flatnonzero(~np.isfinite(table[name]))

@@ -35,7 +35,7 @@ from tqdm import tqdm
 
 from bellows_ros.errors import DataError
 from bellows_ros.outputs import atomic_file
-from bellows_ros.table import check_increasing, COLUMNS, Table
+from bellows_ros.table import check_held, check_increasing, COLUMNS, Table
 
 BOM = b'\xef\xbb\xbf'  # the UTF-8 byte-order mark spreadsheets write
 # Rows per chunk of a streamed record (`read_chunks`): about 30 MB while a chunk is run and
@@ -414,23 +414,40 @@ def _columns(system, required):
     return required, tuple(name for name in mandatory + optional if name not in required)
 
 
-def read_table(path, system, required=None):
+def read_table(path, system, required=None, span=None):
     """
     Read a `system` ('segment' or 'actuator') file: CSV, or a rosbag2 directory.
 
     `required` narrows the required columns of a CSV (e.g. a simulation input has no measured
-    torque); the system's other columns are then optional. A bag always yields the full set.
+    torque); the system's other columns are then optional. A bag always yields the full set, and
+    is refused where a channel has a gap its last value would fill (`table.check_held`).
+    `span` = (start, end), s: keep only the rows with start <= t <= end, before those checks
+    (`bellows export --start/--end`); DataError if none is left.
     """
     if Path(path).is_dir():
         from bellows_ros.bag import read_bag_table
-        table = read_bag_table(path, system)
+        table = _span(read_bag_table(path, system), span)
+        check_held(table)
         check_units(table, system)
         return table
     required, optional = _columns(system, required)
     table = read_csv(path, required, optional)
     check_increasing(table, 't')
+    table = _span(table, span)
     check_units(table, system, required)
     return table
+
+
+def _span(table, span):
+    if span is None:
+        return table
+    start, end = span
+    t = table['t']
+    kept = table.rows((t >= start) & (t <= end))
+    if not len(kept):
+        raise DataError(table.path, f'no rows with {start:g} s <= t <= {end:g} s (t runs '
+                                    f'from {t[0]:g} to {t[-1]:g} s)', column='t')
+    return kept
 
 
 def check_units(table, system, names=None):
