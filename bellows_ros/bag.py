@@ -44,6 +44,7 @@ import yaml
 from bellows_ros import interfaces
 from bellows_ros.bag_lock import check_not_written
 from bellows_ros.errors import DataError
+from bellows_ros.params import load_bounded, MAX_YAML_BYTES
 from bellows_ros.table import check_increasing, COLUMNS, Table
 
 SEGMENT = interfaces.segment_joint(1)
@@ -53,6 +54,9 @@ JOINT_STATES, CHAMBERS, ACTUATOR_JOINT_STATES, ACTUATOR_CHAMBERS, WRENCH = (
                                    interfaces.WRENCH))
 TYPES = {name: interfaces.by_name()[name]
          for name in (JOINT_STATES, CHAMBERS, ACTUATOR_JOINT_STATES, ACTUATOR_CHAMBERS, WRENCH)}
+# Messages a bag's table is read from, at most: the reader holds them all (~150 bytes each);
+# 30 million is about three hours of the three actuator topics at 1 kHz.
+MAX_BAG_MESSAGES = 30_000_000
 # The actuator's topics, and where a recording from before they existed held its samples.
 ACTUATOR_FALLBACK = {ACTUATOR_JOINT_STATES: JOINT_STATES, ACTUATOR_CHAMBERS: CHAMBERS}
 
@@ -164,7 +168,11 @@ def _check_metadata(path):
     """Parse metadata.yaml first, so that a broken one is named with its line, not a traceback."""
     metadata = path / 'metadata.yaml'
     try:
-        document = yaml.safe_load(metadata.read_bytes())
+        if metadata.exists() and not metadata.is_file():
+            raise DataError(metadata, 'not a regular file')
+        with open(metadata, 'rb') as stream:
+            raw = stream.read(MAX_YAML_BYTES + 1)
+        document = load_bounded(raw, yaml.SafeLoader)
     except FileNotFoundError:
         storage = any(p.suffix in ('.mcap', '.db3') for p in path.iterdir())
         hint = (f'; a recording that was killed lacks it: `bellows reindex {path}` rebuilds it'
@@ -201,6 +209,11 @@ def read_bag_table(path, system):
     typestore = get_typestore(Stores.ROS2_JAZZY)
     reader = _open(path)
     try:
+        messages = sum(c.msgcount for c in reader.connections if c.topic in TYPES)
+        if messages > MAX_BAG_MESSAGES:  # said before reading, not after minutes of it
+            raise DataError(path, f'{messages:,} messages on the topics read: over '
+                                  f'{MAX_BAG_MESSAGES:,} (bag.MAX_BAG_MESSAGES), more than '
+                                  'this reader holds in memory; record shorter parts')
         if system == 'segment':
             stamps, joints = _joint_rows(path, reader, typestore, JOINT_STATES, [SEGMENT],
                                          ('position', 'velocity'))

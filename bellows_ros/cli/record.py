@@ -13,17 +13,8 @@
 # limitations under the License.
 
 """`bellows record --output DIR [--topics T ...] [--duration S]` — rosbag2 (MCAP) without ROS."""
+from bellows_ros.config.ranges import option_type
 from bellows_ros.errors import BellowsError
-
-
-def _positive(text):
-    try:
-        value = float(text)
-    except ValueError:
-        raise BellowsError(f'--duration: not a number: {text!r}') from None
-    if not value > 0:
-        raise BellowsError(f'--duration: must be positive, got {text}')
-    return value
 
 
 def add_arguments(parser):
@@ -31,12 +22,13 @@ def add_arguments(parser):
                         help='rosbag2 directory to create (MCAP)')
     parser.add_argument('--topics', nargs='+', metavar='TOPIC',
                         help='topics to record (default: every topic of the contract)')
-    parser.add_argument('--duration', type=str, metavar='S',
+    parser.add_argument('--duration', type=option_type('record.duration'), metavar='S',
                         help='stop after S seconds (default: record until Ctrl-C)')
 
 
 def run(args):
+    twice = next((t for i, t in enumerate(args.topics or ()) if t in args.topics[:i]), None)
+    if twice is not None:  # one connection per topic: a second would record every message twice
+        raise BellowsError(f'--topics: {twice} is given twice')
     from bellows_ros.runtime.record import record_command
-    if args.duration is not None:
-        args.duration = _positive(args.duration)
     return record_command(args)
