@@ -47,7 +47,7 @@ class BagBeingWritten(BellowsError):
 
 
 def _note(fd):
-    """The writer's own line in the lock file ('pid 123, bellows record'), or ''."""
+    """Return the writer's own line in the lock file ('pid 123, bellows record'), or ''."""
     try:
         text = os.pread(fd, _NOTE_BYTES, 0).decode(errors='replace')
     except OSError:

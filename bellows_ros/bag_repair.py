@@ -77,11 +77,21 @@ def _mcap_file(bag):
     return files[0]
 
 
+def _reader(stream, path):
+    """
+    Return a StreamReader of `stream` that takes no record longer than the file.
+
+    A corrupt length field would otherwise allocate up to mcap's default 4 GiB before failing.
+    """
+    return StreamReader(stream, validate_crcs=True,
+                        record_size_limit=max(1, os.path.getsize(path)))
+
+
 def _records(path):
     """Yield the file's records up to the first incomplete or corrupt one; then its offset."""
     with open(path, 'rb') as stream:
         try:
-            for record in StreamReader(stream, validate_crcs=True).records:
+            for record in _reader(stream, path).records:
                 yield record
         except (McapError, struct.error, EOFError, ValueError):
             pass  # the end of what the recorder had flushed
@@ -170,7 +180,7 @@ def _rebuild(bag, source):
 def _used_bytes(path):
     """How many bytes of `path` held complete records (the rest was cut off by the kill)."""
     with open(path, 'rb') as stream:
-        reader = StreamReader(stream)
+        reader = _reader(stream, path)
         try:
             for _ in reader.records:
                 pass

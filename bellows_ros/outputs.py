@@ -35,9 +35,10 @@ Every file the package writes, written so that nothing is lost.
   second, not minutes of fitting.
 Temporary files are named `.<name>.<random>.tmp` and removed on every way out the process has: an
 error, Ctrl-C, and SIGTERM or SIGHUP (`signals_as_exceptions`, which the `bellows` command turns
-on, makes those run the clean-up). Only SIGKILL leaves one behind: while a temporary file is being
-written its writer holds a lock on it, and the next write of the same output removes the ones no
-process holds (`_remove_orphans`). Nothing else is ever removed.
+on, makes those run the clean-up). Only SIGKILL leaves one behind: while a temporary file (or a
+report directory being built) is written its writer holds a lock on it, and the next write of the
+same output removes the ones no process holds (`_remove_orphans`, `_remove_orphan_directories`).
+Nothing else is ever removed.
 """
 import contextlib
 import ctypes
@@ -87,7 +88,7 @@ def _kind(mode):
 
 def _target(path, what):
     """
-    The path an output named `path` is written to; BellowsError if it is no regular file.
+    Return the path an output named `path` is written to; BellowsError if no regular file.
 
     A new path is itself; a regular file is itself; a link to a regular file (or to a new path in
     an existing directory) is the path it names, so the link stays a link. Anything else would be
@@ -361,7 +362,9 @@ def report_directory(path):
     written last. On failure the new directory is removed and the old one stays.
     """
     path = check_report_directory(path)
+    _remove_orphan_directories(path)
     building = Path(tempfile.mkdtemp(dir=path.parent, prefix=f'.{path.name}.', suffix='.new'))
+    holder = _hold_directory(building)
     try:
         yield building
         write_manifest(building)
@@ -372,6 +375,8 @@ def report_directory(path):
         check_report_directory(path)  # a file put there while the report was built stays
         if not _exchange(building, path):
             aside = Path(tempfile.mkdtemp(dir=path.parent, prefix=f'.{path.name}.', suffix='.old'))
+            os.close(holder)
+            holder = _hold_directory(aside)
             os.rename(path, aside / 'report')
             os.rename(building, path)
             building = aside
@@ -380,6 +385,40 @@ def report_directory(path):
     except BaseException:
         shutil.rmtree(building, ignore_errors=True)  # our own unfinished directory
         raise
+    finally:
+        os.close(holder)
+
+
+def _hold_directory(directory):
+    """Lock a directory this process builds (flock), so no other run takes it for an orphan."""
+    fd = os.open(directory, os.O_RDONLY | os.O_DIRECTORY)
+    fcntl.flock(fd, fcntl.LOCK_EX)
+    return fd
+
+
+def _remove_orphan_directories(path):
+    """Remove the unfinished or set-aside report directories of `path` a SIGKILL left behind."""
+    prefix = f'.{path.name}.'
+    try:
+        names = [entry.name for entry in os.scandir(path.parent)
+                 if entry.name.startswith(prefix) and entry.name[-4:] in ('.new', '.old')
+                 and entry.is_dir(follow_symlinks=False)]
+    except OSError:
+        return
+    for name in names:
+        orphan = path.parent / name
+        try:
+            fd = os.open(orphan, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW)
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            continue  # a run building it now
+        else:
+            shutil.rmtree(orphan, ignore_errors=True)
+        finally:
+            os.close(fd)
 
 
 _RENAME_EXCHANGE = 2

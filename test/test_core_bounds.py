@@ -176,7 +176,7 @@ def test_plain_decimal_numbers_are_read(tmp_path, cell, value):
 
 # --- files that are no regular file, or too large -----------------------------------------------
 def fifo_with_endless_writer(path):
-    """A FIFO whose writer sends a header and then rows, forever: a read never ends."""
+    """Make a FIFO whose writer sends a header and then rows, forever: a read never ends."""
     os.mkfifo(path)
     stop = threading.Event()
 

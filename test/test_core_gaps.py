@@ -36,7 +36,7 @@ K = 1900.0     # N/m
 
 
 def spring_record(cycles=2):
-    """A stiffness experiment: chamber still, spring cycling 0-14 mm, f = K x_s + an offset."""
+    """Return a stiffness experiment: chamber still, spring cycling 0-14 mm, f = K x_s + c."""
     t = np.arange(int(cycles * PERIOD * RATE)) / RATE
     phase = (t / PERIOD) % 1.0
     x_s = 0.014 * (1.0 - np.abs(2.0 * phase - 1.0))
@@ -47,7 +47,7 @@ def spring_record(cycles=2):
 
 
 def write_bag(path, data, wrench=None, chambers=None):
-    """`data` as the actuator's topics; `wrench`/`chambers`: rows that have that message."""
+    """Write `data` as the actuator's topics; `wrench`/`chambers`: rows with that message."""
     n = len(data['t'])
     wrench = np.ones(n, bool) if wrench is None else wrench
     chambers = np.ones(n, bool) if chambers is None else chambers

@@ -58,7 +58,7 @@ def _wrench(ns, force_z):
 
 
 def write_bag(path, n=400, wrench_rows=None):
-    """An actuator bag of `n` rows at 1 kHz; the wrench only on the rows `wrench_rows` gives."""
+    """Write an actuator bag of `n` rows at 1 kHz; the wrench only on the rows `wrench_rows`."""
     start = 5 * 10 ** 9
     wrench_rows = range(n) if wrench_rows is None else wrench_rows
     with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
@@ -81,7 +81,7 @@ def write_bag(path, n=400, wrench_rows=None):
 
 
 def kill_bag(bag):
-    """What a SIGKILL leaves: no metadata.yaml, the MCAP cut inside its last records."""
+    """Leave what a SIGKILL leaves: no metadata.yaml, the MCAP cut inside its last records."""
     (bag / 'metadata.yaml').unlink()
     mcap = next(bag.glob('*.mcap'))
     os.truncate(mcap, int(mcap.stat().st_size * 0.7))

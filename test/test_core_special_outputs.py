@@ -261,3 +261,22 @@ def test_an_orphan_temporary_file_goes_with_the_next_write_a_held_one_stays(tmp_
         with atomic_file(out) as stream:
             stream.write('new\n')
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted([held.name, other.name, 'o.csv'])
+
+
+def test_a_report_build_a_sigkill_left_goes_with_the_next_report(tmp_path):
+    report = tmp_path / 'report'
+    orphan = tmp_path / '.report.x1y2.new'          # a diagnosis killed while it wrote
+    orphan.mkdir()
+    (orphan / 'report.json').write_text('{}')
+    building = tmp_path / '.report.z3.new'          # another run, building now: it holds it
+    building.mkdir()
+    other = tmp_path / '.notes.a.new'               # not a report of this path: not judged here
+    other.mkdir()
+    held = os.open(building, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        fcntl.flock(held, fcntl.LOCK_EX)
+        fake_report(report, {'report.json': '{}'})
+    finally:
+        os.close(held)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([building.name, other.name,
+                                                                 'report'])

@@ -22,6 +22,7 @@ left behind; the exit status is then 128 + the signal's number, as the shell rep
 """
 import argparse
 import importlib
+import signal
 import sys
 
 from bellows_ros.errors import BellowsError
@@ -59,8 +60,11 @@ def build_parser():
 def main(argv=None):
     args = build_parser().parse_args(argv)
     module = importlib.import_module(f'bellows_ros.cli.{args.command}')
+    # `record` takes SIGINT and SIGTERM itself (runtime/record.py): an exception raised into its
+    # writer would corrupt the chunk being written.
+    signals = () if args.command == 'record' else (signal.SIGTERM, signal.SIGHUP)
     try:
-        with signals_as_exceptions():
+        with signals_as_exceptions(signals):
             return module.run(args) or 0
     except Signalled as exc:
         print(f'bellows {args.command}: stopped by {exc}; nothing half written was kept',

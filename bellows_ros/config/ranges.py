@@ -262,7 +262,7 @@ def check_effects(system, effects):
 
 
 def option_type(name):
-    """An argparse type for the option `name` of OPTIONS: a finite number in its range."""
+    """Return an argparse type for the option `name` of OPTIONS: a finite number in range."""
     import argparse
     import math
     rule = OPTIONS[name]

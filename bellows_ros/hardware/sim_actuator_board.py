@@ -116,7 +116,7 @@ def _stale_board_link(port):
 
 
 def port_serial(port):
-    """The serial number of the simulated board on `port`: the same path, the same board."""
+    """Return the serial number of the simulated board on `port`: one path, one board."""
     digest = hashlib.sha256(os.path.abspath(port).encode()).digest()
     return int.from_bytes(digest[:8], 'little')
 
