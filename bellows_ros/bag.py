@@ -19,7 +19,10 @@ The rows are the joint-state samples of the wanted device group (the arm's on `/
 the actuator's on `/actuator/joint_states`); pressures (`/bellows/chambers`,
 `/actuator/chambers`) and the force/torque sensor (`/bellows/wrench`) are aligned onto them by
 stamp, zero-order hold: each row takes the latest message stamped at or before it (the first
-message for rows before any). `t` is the sample stamp in seconds from the first row.
+message for rows before any). A row whose channel was silent for longer than
+`table.MAX_HELD_STEPS` sample steps is marked (`Table.held`), and the readers refuse it
+(`table.check_held`): a channel that stops, starts late or has a hole is never filled in.
+`t` is the sample stamp in seconds from the first row.
 A recording made before the actuator had topics of its own holds its samples on `/joint_states`
 and `/bellows/chambers`: where the bag has no `/actuator/...` topic, that one is read instead.
 
@@ -39,7 +42,9 @@ from rosbags.typesys import get_types_from_msg, get_typestore, Stores
 import yaml
 
 from bellows_ros import interfaces
+from bellows_ros.bag_lock import check_not_written
 from bellows_ros.errors import DataError
+from bellows_ros.params import load_bounded, MAX_YAML_BYTES
 from bellows_ros.table import check_increasing, COLUMNS, Table
 
 SEGMENT = interfaces.segment_joint(1)
@@ -74,6 +79,9 @@ TYPESTORE = get_typestore(Stores.ROS2_JAZZY)
 for _name, _text in EXTRA_DEFINITIONS.items():
     TYPESTORE.register(get_types_from_msg(_text, _name))
 
+# Messages a bag's table is read from, at most: the reader holds them all (~150 bytes each);
+# 30 million is about three hours of the three actuator topics at 1 kHz.
+MAX_BAG_MESSAGES = 30_000_000
 # The actuator's topics, and where a recording from before they existed held its samples.
 ACTUATOR_FALLBACK = {ACTUATOR_JOINT_STATES: JOINT_STATES, ACTUATOR_CHAMBERS: CHAMBERS}
 
@@ -159,21 +167,43 @@ def _wrench_rows(path, reader, typestore, frame, axis):
     return np.array(stamps, dtype=np.int64), np.array(values, dtype=float)[:, None]
 
 
+def _median_step(stamps):
+    return float(np.median(np.diff(stamps))) if len(stamps) > 1 else 0.0
+
+
 def _hold(sample_stamps, stamps, values):
-    """Zero-order hold of (stamps, values) onto sample_stamps; the first value fills the start."""
+    """
+    Zero-order hold of (stamps, values) onto sample_stamps: (values, (age s, step s)).
+
+    The first value fills the rows before it. The age of a row's value is how far its message's
+    stamp lies from the row's (before the first message: after it), the step the larger of the
+    rows' and the channel's median steps: `table.check_held` refuses a row older than
+    MAX_HELD_STEPS steps (the channel had a gap there).
+    """
     order = np.argsort(stamps, kind='stable')
     stamps, values = stamps[order], values[order]
     index = np.searchsorted(stamps, sample_stamps, side='right') - 1
-    return values[np.clip(index, 0, len(stamps) - 1)]
+    taken = np.clip(index, 0, len(stamps) - 1)
+    step = max(_median_step(sample_stamps), _median_step(stamps)) * 1e-9
+    age = np.abs(sample_stamps - stamps[taken]).astype(float) * 1e-9
+    return values[taken], (age, step)
 
 
 def _check_metadata(path):
     """Parse metadata.yaml first, so that a broken one is named with its line, not a traceback."""
     metadata = path / 'metadata.yaml'
     try:
-        document = yaml.safe_load(metadata.read_bytes())
+        if metadata.exists() and not metadata.is_file():
+            raise DataError(metadata, 'not a regular file')
+        with open(metadata, 'rb') as stream:
+            raw = stream.read(MAX_YAML_BYTES + 1)
+        document = load_bounded(raw, yaml.SafeLoader)
     except FileNotFoundError:
-        raise DataError(path, 'not a rosbag2 directory (it has no metadata.yaml)') from None
+        storage = any(p.suffix in ('.mcap', '.db3') for p in path.iterdir())
+        hint = (f'; a recording that was killed lacks it: `bellows reindex {path}` rebuilds it'
+                if storage else '')
+        raise DataError(path, f'not a rosbag2 directory (it has no metadata.yaml){hint}') \
+            from None
     except OSError as exc:
         raise DataError(metadata, f'cannot read file ({exc.strerror})') from None
     except yaml.YAMLError as exc:  # also for bytes that are not text
@@ -188,6 +218,7 @@ def _check_metadata(path):
 
 def _open(path):
     """Open a rosbags Reader of `path`, or raise DataError naming what is wrong."""
+    check_not_written(path)  # a bag being recorded would be read in part (bag_lock)
     _check_metadata(path)
     try:
         reader = Reader(path)
@@ -203,6 +234,11 @@ def read_bag_table(path, system):
     typestore = TYPESTORE
     reader = _open(path)
     try:
+        messages = sum(c.msgcount for c in reader.connections if c.topic in TYPES)
+        if messages > MAX_BAG_MESSAGES:  # said before reading, not after minutes of it
+            raise DataError(path, f'{messages:,} messages on the topics read: over '
+                                  f'{MAX_BAG_MESSAGES:,} (bag.MAX_BAG_MESSAGES), more than '
+                                  'this reader holds in memory; record shorter parts')
         if system == 'segment':
             stamps, joints = _joint_rows(path, reader, typestore, JOINT_STATES, [SEGMENT],
                                          ('position', 'velocity'))
@@ -210,10 +246,12 @@ def read_bag_table(path, system):
                 path, reader, typestore, CHAMBERS,
                 [interfaces.chain_chamber(1, 1), interfaces.chain_chamber(1, 2)], ('effort',))
             wrench_stamps, torque = _wrench_rows(path, reader, typestore, SEGMENT, ('torque', 'z'))
-            pressures = _hold(stamps, chamber_stamps, chambers)
+            pressures, pressure_gaps = _hold(stamps, chamber_stamps, chambers)
+            torque, torque_gaps = _hold(stamps, wrench_stamps, torque)
             columns = {'psi': joints[:, 0], 'psi_dot': joints[:, 1], 'p1': pressures[:, 0],
-                       'p2': pressures[:, 1],
-                       'tau_ext': _hold(stamps, wrench_stamps, torque)[:, 0]}
+                       'p2': pressures[:, 1], 'tau_ext': torque[:, 0]}
+            held = {'p1': (CHAMBERS, *pressure_gaps), 'p2': (CHAMBERS, *pressure_gaps),
+                    'tau_ext': (WRENCH, *torque_gaps)}
         elif system == 'actuator':
             topic, named = _actuator_topic(reader, ACTUATOR_JOINT_STATES)
             stamps, joints = _joint_rows(path, reader, typestore, topic,
@@ -222,11 +260,14 @@ def read_bag_table(path, system):
             chamber_stamps, pressure = _joint_rows(path, reader, typestore, topic,
                                                    [interfaces.ACTUATOR_CHAMBER], ('effort',),
                                                    named)
+            chamber_topic = topic
             wrench_stamps, force = _wrench_rows(path, reader, typestore, interfaces.ACTUATOR_FRAME,
                                                 ('force', 'z'))
-            columns = {'x_c': joints[:, 0], 'x_s': joints[:, 1],
-                       'p': _hold(stamps, chamber_stamps, pressure)[:, 0],
-                       'f': _hold(stamps, wrench_stamps, force)[:, 0]}
+            pressure, pressure_gaps = _hold(stamps, chamber_stamps, pressure)
+            force, force_gaps = _hold(stamps, wrench_stamps, force)
+            columns = {'x_c': joints[:, 0], 'x_s': joints[:, 1], 'p': pressure[:, 0],
+                       'f': force[:, 0]}
+            held = {'p': (chamber_topic, *pressure_gaps), 'f': (WRENCH, *force_gaps)}
         else:
             raise DataError(path, f"unknown system '{system}' (segment or actuator)")
     finally:
@@ -235,7 +276,7 @@ def read_bag_table(path, system):
     values = {'t': (stamps - stamps[0]) * 1e-9}
     values.update(columns)
     names = [n for n in required + optional if n in values]
-    table = Table(str(path), names, {n: values[n] for n in names})
+    table = Table(str(path), names, {n: values[n] for n in names}, held=held)
     check_increasing(table, 't')
     for name in names:
         bad = np.flatnonzero(~np.isfinite(table[name]))

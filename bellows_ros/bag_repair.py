@@ -22,12 +22,18 @@ the file record by record up to the first incomplete one, writes the messages in
 with a summary, checks that a reader opens it with every message, then puts it in place and
 writes metadata.yaml. Nothing is deleted: the damaged file is kept beside it as
 `<name>.mcap.damaged`, and a bag that readers already open is left alone.
+
+A bag that is still being written is refused, not cut short: reindex takes the bag's writer lock
+(`bag_lock.hold`; a recorder holds it while it records), and, for a writer that takes no lock,
+refuses a storage file that grows while it looks (`_check_still`). So the metadata.yaml it writes
+counts exactly the messages the rebuilt file holds, read back before anything is moved.
 """
 from dataclasses import dataclass
 import os
 from pathlib import Path
 import struct
 import tempfile
+import time
 
 from mcap.exceptions import McapError
 from mcap.records import Channel, Message, Schema
@@ -37,6 +43,7 @@ from rosbags.rosbag2.enums import StoragePlugin
 import yaml
 
 from bellows_ros.bag import TYPESTORE
+from bellows_ros.bag_lock import check_not_written, hold
 from bellows_ros.errors import BellowsError
 from bellows_ros.outputs import write_text
 
@@ -70,23 +77,64 @@ def _mcap_file(bag):
     return files[0]
 
 
+def _reader(stream, path):
+    """
+    Return a StreamReader of `stream` that takes no record longer than the file.
+
+    A corrupt length field would otherwise allocate up to mcap's default 4 GiB before failing.
+    """
+    return StreamReader(stream, validate_crcs=True,
+                        record_size_limit=max(1, os.path.getsize(path)))
+
+
 def _records(path):
     """Yield the file's records up to the first incomplete or corrupt one; then its offset."""
     with open(path, 'rb') as stream:
         try:
-            for record in StreamReader(stream, validate_crcs=True).records:
+            for record in _reader(stream, path).records:
                 yield record
         except (McapError, struct.error, EOFError, ValueError):
             pass  # the end of what the recorder had flushed
+
+
+# A recorder flushes its chunk every second (runtime/record.py); a file changed more recently than
+# RECENT_S may still be written, and is watched for WATCH_S (over one flush) before it is touched.
+RECENT_S = 3.0
+WATCH_S = 1.5
+
+
+def _check_still(bag, source):
+    """Refuse a storage file that changes while it is watched (a writer that takes no lock)."""
+    def state():
+        info = source.stat()
+        return info.st_size, info.st_mtime_ns
+    before = state()
+    if time.time() - before[1] * 1e-9 > RECENT_S:
+        return
+    end = time.monotonic() + WATCH_S
+    while time.monotonic() < end:
+        time.sleep(0.1)
+        if state() != before:
+            raise BellowsError(f'{bag}: {source.name} is still being written (it grew while '
+                               'reindex looked); reindex a recording once its recorder has '
+                               'ended')
 
 
 def repair(bag):
     """Rebuild what readers need in the bag directory `bag`; returns a `Repair`."""
     bag = Path(bag)
     source = _mcap_file(bag)
+    check_not_written(bag, 'bellows reindex')
     counts = _readable(bag)
     if counts is not None:
         return Repair(bag, counts, repaired=False)
+    with hold(bag, 'bellows reindex'):  # and no second reindex at the same time
+        _check_still(bag, source)
+        return _rebuild(bag, source)
+
+
+def _rebuild(bag, source):
+    """Write the messages of the damaged `source` into a new MCAP with metadata.yaml."""
     aside = source.with_name(source.name + DAMAGED_SUFFIX)
     if os.path.lexists(aside):
         raise BellowsError(f'{aside}: exists already (an earlier reindex?); move it away first')
@@ -132,7 +180,7 @@ def repair(bag):
 def _used_bytes(path):
     """How many bytes of `path` held complete records (the rest was cut off by the kill)."""
     with open(path, 'rb') as stream:
-        reader = StreamReader(stream)
+        reader = _reader(stream, path)
         try:
             for _ in reader.records:
                 pass

@@ -25,9 +25,9 @@ A directory is read as a rosbag2 recording (see `bellows_ros.bag`). Both readers
 import csv
 from dataclasses import dataclass, field
 import io
-import itertools
 import math
 from pathlib import Path
+import re
 import sys
 
 import numpy as np
@@ -35,9 +35,15 @@ from tqdm import tqdm
 
 from bellows_ros.errors import DataError
 from bellows_ros.outputs import atomic_file
-from bellows_ros.table import check_increasing, COLUMNS, Table
+from bellows_ros.table import check_held, check_increasing, COLUMNS, Table
 
 BOM = b'\xef\xbb\xbf'  # the UTF-8 byte-order mark spreadsheets write
+# A number as a CSV reader should take it: ASCII decimal, optional sign, fraction and exponent,
+# blanks around it (spreadsheets pad). Python's float() also takes `1_000`, `infinity`, `nan` and
+# other scripts' digits ('١'), which no instrument writes: a cell like that is a mistake to name.
+NUMBER = re.compile(r'[ \t]*[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?[ \t]*')
+# The bytes a file of such numbers can hold: anything else sends a file to the careful reader.
+_NUMERIC_BYTES = re.compile(rb'[^0-9eE+\-., \t\r\n]')
 # Rows per chunk of a streamed record (`read_chunks`): about 30 MB while a chunk is run and
 # written (its numbers, then their text), whatever the record's length.
 CHUNK_ROWS = 20_000
@@ -74,19 +80,83 @@ MAX_RATE_RATIO = 10.0
 RATE_WINDOWS = 100
 
 
+# Limits of what a file may make a reader do (every one names itself when it is reached):
+# - a line (the header or a row) of the careful reader: a record's row is under 1 kB; 1 MiB is
+#   already a binary file or a missing line end;
+MAX_LINE_BYTES = 1 << 20
+# - a file read whole (`read_table`: export, stiffness): 1 GiB of text is ~10 million rows,
+#   hours at 1 kHz, and several GiB of memory; a longer record is cut first (`export
+#   --start/--end`) or given to a command that streams it (simulate, identify, diagnose);
+MAX_TABLE_BYTES = 1 << 30
+# - a streamed record (`read_chunks`, `read_record`): 200 million rows, over two days at 1 kHz.
+MAX_RECORD_ROWS = 200_000_000
+# What an error shows of a cell or a name: enough to find it, never a screenful of a binary file.
+SHOWN_CHARS = 40
+
+
+def shown(text):
+    """`text` as an error shows it: its repr (control bytes escaped), cut to SHOWN_CHARS."""
+    text = str(text)
+    cut = text[:SHOWN_CHARS]
+    return repr(cut) + ('...' if len(text) > SHOWN_CHARS else '')
+
+
+def check_input_file(path):
+    """Refuse, before reading, an input that is no regular file (a FIFO, /dev/zero, a socket)."""
+    import stat
+    path = Path(path)
+    try:
+        mode = path.stat().st_mode
+    except OSError as exc:
+        raise DataError(path, f'cannot read file ({exc.strerror})') from None
+    except ValueError:  # a NUL byte in the name
+        raise DataError(repr(str(path)), 'not a valid file name') from None
+    if stat.S_ISDIR(mode):
+        raise DataError(path, 'is a directory without metadata.yaml: not a CSV file nor a '
+                              'rosbag2 recording')
+    if not stat.S_ISREG(mode):
+        raise DataError(path, 'is not a regular file (a device, FIFO or socket): an input is '
+                              'read from a file, whose end is known')
+    return path
+
+
+def _check_text(path, raw):
+    """Refuse bytes that are no CSV text (a NUL, or not UTF-8) before they reach a message."""
+    nul = raw.find(b'\0')
+    if nul >= 0:
+        raise DataError(path, f'not a CSV text file (binary data: a NUL byte at offset {nul})')
+    try:
+        raw.decode()
+    except UnicodeDecodeError as exc:
+        if exc.start < len(raw) - 4:  # a block may end inside a character: only that is allowed
+            raise DataError(path, f'not a CSV text file (bytes that are not UTF-8 at offset '
+                                  f'{exc.start})') from None
+
+
 def read_csv(path, required, optional=()):
     """
     Read a CSV file, checking that `required` columns exist and hold finite numbers.
 
     Returns a `Table`. Raises `DataError` on a missing file, a missing column, a short row, a
-    non-number, NaN or infinity.
+    non-number, NaN or infinity, binary data, and a file over MAX_TABLE_BYTES.
     """
-    path = Path(path)
+    path = check_input_file(path)
+    size = path.stat().st_size
+    if size > MAX_TABLE_BYTES:
+        raise DataError(path, f'{size / 2 ** 30:.1f} GiB: over the {MAX_TABLE_BYTES >> 30} GiB '
+                              'this command reads whole (data.MAX_TABLE_BYTES); cut the record '
+                              '(`bellows export --start/--end`) or split it')
     try:
-        raw = path.read_bytes()
+        with open(path, 'rb') as stream:
+            raw = stream.read(MAX_TABLE_BYTES + 1)
     except OSError as exc:
         raise DataError(path, f'cannot read file ({exc.strerror})') from None
-    return _parse(path, raw.removeprefix(BOM), required, optional)
+    if len(raw) > MAX_TABLE_BYTES:
+        raise DataError(path, f'over the {MAX_TABLE_BYTES >> 30} GiB this command reads whole '
+                              '(data.MAX_TABLE_BYTES)')
+    raw = raw.removeprefix(BOM)
+    _check_text(path, raw)
+    return _parse(path, raw, required, optional)
 
 
 def _parse(path, raw, required, optional, skipped=0):
@@ -95,6 +165,13 @@ def _parse(path, raw, required, optional, skipped=0):
     if fast is not None:
         return fast
     reader = csv.reader(io.StringIO(raw.decode(errors='replace'), newline=''))
+    # The csv module's own field limit (128 KiB) would name no line; a line over MAX_LINE_BYTES
+    # is found first, with its line.
+    long_line = _long_line(raw)
+    if long_line is not None:
+        raise DataError(path, f'a line longer than {MAX_LINE_BYTES >> 20} MiB '
+                              '(data.MAX_LINE_BYTES): not a record of samples',
+                        line=long_line + skipped)
     try:
         header, rows, lines = _split_rows(path, reader, required, skipped)
     except csv.Error as exc:  # e.g. a field longer than the csv module's limit
@@ -109,6 +186,20 @@ def _parse(path, raw, required, optional, skipped=0):
     return Table(str(path), header, values, extras, lines)
 
 
+def _long_line(raw):
+    """1-based line of the first line of `raw` longer than MAX_LINE_BYTES, or None."""
+    if len(raw) <= MAX_LINE_BYTES:
+        return None
+    start, line = 0, 1
+    while start < len(raw):
+        end = raw.find(b'\n', start)
+        end = len(raw) if end < 0 else end
+        if end - start > MAX_LINE_BYTES:
+            return line
+        start, line = end + 1, line + 1
+    return None
+
+
 def _split_rows(path, reader, required, skipped=0):
     """Header (checked against `required`) and the non-blank rows of a CSV with their lines."""
     header = next(reader, None)
@@ -118,11 +209,12 @@ def _split_rows(path, reader, required, skipped=0):
     duplicate = next((name for i, name in enumerate(header) if name in header[:i]), None)
     if duplicate is not None:
         # Which of the two is meant cannot be known; taking either would be a silent guess.
-        raise DataError(path, f"column '{duplicate}' appears twice in the header", line=1)
+        raise DataError(path, f'column {shown(duplicate)} appears twice in the header', line=1)
     for name in required:
         if name not in header:
-            raise DataError(path, f"missing column '{name}' (header has: {', '.join(header)})",
-                            line=1)
+            names = ', '.join(header)
+            names = names if len(names) <= 3 * SHOWN_CHARS else shown(names)
+            raise DataError(path, f"missing column '{name}' (header has: {names})", line=1)
     rows, lines = [], []
     for row in reader:
         if not row or all(not cell.strip() for cell in row):
@@ -152,6 +244,8 @@ def _read_numeric(path, raw, required, optional, skipped=0):
     rows = body.rstrip(b'\r\n').count(b'\n') + 1 if body.strip() else 0
     if rows == 0:
         return None  # loadtxt would warn about the empty body before the careful reader's error
+    if _NUMERIC_BYTES.search(body):
+        return None  # a byte no plain number has: the careful reader names the cell
     try:
         # comments=None: a '#' in a cell is an error for both readers, never a silent cut.
         array = np.loadtxt(io.BytesIO(body), delimiter=',', dtype=float, ndmin=2, comments=None)
@@ -164,18 +258,14 @@ def _read_numeric(path, raw, required, optional, skipped=0):
 
 
 def _parse_column(path, name, cells, lines):
-    try:
-        column = np.array(cells, dtype=float)
-    except ValueError:
-        # Find the culprit; a cell only NumPy refuses (Python's float is the more lenient) is read
-        # as Python reads it.
-        parsed = []
-        for cell, line in zip(cells, lines):
-            try:
-                parsed.append(float(cell))
-            except ValueError:
-                raise DataError(path, f'not a number: {cell.strip()!r}', line, name) from None
-        column = np.array(parsed)
+    match = NUMBER.fullmatch
+    for cell, line in zip(cells, lines):
+        if not match(cell):
+            text = cell.strip()
+            problem = (f'{text} is not a finite number' if text.lower().lstrip('+-') in
+                       ('nan', 'inf', 'infinity') else f'not a number: {shown(text)}')
+            raise DataError(path, problem, line, name)
+    column = np.array(cells, dtype=float)
     bad = ~np.isfinite(column)
     if bad.any():
         first = int(np.argmax(bad))
@@ -232,19 +322,24 @@ def read_chunks(path, system, required=None, rows=None):
         return
     rows = rows or CHUNK_ROWS
     required, optional = _columns(system, required)
-    path = Path(path)
+    path = check_input_file(path)
     try:
         stream = path.open('rb')
     except OSError as exc:
         raise DataError(path, f'cannot read file ({exc.strerror})') from None
     with stream, tqdm(total=path.stat().st_size, unit='B', unit_scale=True, disable=None,
                       file=sys.stderr, leave=False, desc=path.name) as bar:
-        header = stream.readline().removeprefix(BOM)
+        header = _bounded_lines(path, stream, 1, 0)
+        header = header[0].removeprefix(BOM) if header else b''
         skipped, last, any_rows = 0, None, False
         while True:
-            block = list(itertools.islice(stream, rows))
+            block = _bounded_lines(path, stream, rows, skipped + 1)
             if not block:
                 break
+            if skipped + len(block) > MAX_RECORD_ROWS:
+                raise DataError(path, f'over {MAX_RECORD_ROWS:,} rows (data.MAX_RECORD_ROWS): '
+                                      'split the record', line=MAX_RECORD_ROWS + 2)
+            _check_text(path, header + b''.join(block))
             bar.update(sum(map(len, block)) + (len(header) if skipped == 0 else 0))
             if not any(line.strip() for line in block):  # blank lines only: nothing to parse
                 skipped += len(block)
@@ -258,6 +353,25 @@ def read_chunks(path, system, required=None, rows=None):
     if not any_rows:
         raise DataError(path, 'no data rows after the header' if header.strip() else
                         'empty file: expected a header row', line=2 if header.strip() else 1)
+
+
+def _bounded_lines(path, stream, count, before):
+    """Up to `count` lines of `stream`, each at most MAX_LINE_BYTES; `before`: lines read."""
+    lines = []
+    for _ in range(count):
+        try:
+            line = stream.readline(MAX_LINE_BYTES + 1)
+        except OSError as exc:  # EIO of a failing disk or a dropped mount, half-way through
+            raise DataError(path, f'cannot read file ({exc.strerror})',
+                            line=before + len(lines) + 1) from None
+        if not line:
+            break
+        if len(line) > MAX_LINE_BYTES:
+            raise DataError(path, f'a line longer than {MAX_LINE_BYTES >> 20} MiB '
+                                  '(data.MAX_LINE_BYTES): not a record of samples',
+                            line=before + len(lines) + 1)
+        lines.append(line)
+    return lines
 
 
 @dataclass
@@ -338,10 +452,14 @@ def read_record(path, system, required=None, per_chunk=None, max_rows=None):
     if Path(path).is_dir():
         table = read_table(path, system, required)
         return _whole(table, per_chunk)
+    check_input_file(path)
     try:
         lines = count_lines(path)
     except OSError as exc:
         raise DataError(path, f'cannot read file ({exc.strerror})') from None
+    if lines > MAX_RECORD_ROWS:  # said before any work, not after hours of reading
+        raise DataError(path, f'{lines:,} lines: over {MAX_RECORD_ROWS:,} rows '
+                              '(data.MAX_RECORD_ROWS); split the record')
     factor = max(1, math.ceil(lines / max_rows))
     stats, chunks, rows = {}, [], 0
     parts, pending = [], None
@@ -414,23 +532,40 @@ def _columns(system, required):
     return required, tuple(name for name in mandatory + optional if name not in required)
 
 
-def read_table(path, system, required=None):
+def read_table(path, system, required=None, span=None):
     """
     Read a `system` ('segment' or 'actuator') file: CSV, or a rosbag2 directory.
 
     `required` narrows the required columns of a CSV (e.g. a simulation input has no measured
-    torque); the system's other columns are then optional. A bag always yields the full set.
+    torque); the system's other columns are then optional. A bag always yields the full set, and
+    is refused where a channel has a gap its last value would fill (`table.check_held`).
+    `span` = (start, end), s: keep only the rows with start <= t <= end, before those checks
+    (`bellows export --start/--end`); DataError if none is left.
     """
     if Path(path).is_dir():
         from bellows_ros.bag import read_bag_table
-        table = read_bag_table(path, system)
+        table = _span(read_bag_table(path, system), span)
+        check_held(table)
         check_units(table, system)
         return table
     required, optional = _columns(system, required)
     table = read_csv(path, required, optional)
     check_increasing(table, 't')
+    table = _span(table, span)
     check_units(table, system, required)
     return table
+
+
+def _span(table, span):
+    if span is None:
+        return table
+    start, end = span
+    t = table['t']
+    kept = table.rows((t >= start) & (t <= end))
+    if not len(kept):
+        raise DataError(table.path, f'no rows with {start:g} s <= t <= {end:g} s (t runs '
+                                    f'from {t[0]:g} to {t[-1]:g} s)', column='t')
+    return kept
 
 
 def check_units(table, system, names=None):

@@ -18,24 +18,41 @@ Every file the package writes, written so that nothing is lost.
 - An output is written to a temporary file in its own directory (so on the same file system),
   flushed to disk, then renamed over the old one: a reader, a crash or a signal sees the whole
   old file or the whole new one, never a shorter one (`atomic_file`, `write_text`).
+- An output is a regular file or a new path. A rename replaces whatever has the name: a device
+  node, a FIFO, a socket, `/dev/stdout` would become a regular file (as root, for the whole
+  machine), so anything else that exists there is refused (`check_output`, and again just before
+  the rename). A link to a regular file is followed: the file it names is replaced, the link
+  stays.
 - A report directory is built beside the old one and swapped in whole (`report_directory`): never
-  a new report.json beside old plots. An existing directory is replaced only when it is a report
-  this package wrote (it holds report.json and nothing a report does not hold); anything else is
-  refused, because the package never deletes what it did not create.
+  a new report.json beside old plots. An existing directory is replaced only when every entry in
+  it is one the package wrote, as the report's manifest (`MANIFEST`: each file's name and
+  SHA-256) records; a file a user put there, or a report file a user edited, makes it refused,
+  because the package never deletes what it did not create. A report directory given as a link
+  is resolved (the link stays, the directory it names is replaced).
 - Before any work (a fit, a diagnosis), `check_output` refuses an output that is one of the
   inputs (the same path or the same file through a link), and one that cannot be written (no such
   directory, a read-only file system, a directory where a file should go), so a mistake costs a
   second, not minutes of fitting.
-Temporary files are named `.<name>.<random>.tmp` and removed when the write fails; nothing else is
-ever removed.
+Temporary files are named `.<name>.<random>.tmp` and removed on every way out the process has: an
+error, Ctrl-C, and SIGTERM or SIGHUP (`signals_as_exceptions`, which the `bellows` command turns
+on, makes those run the clean-up). Only SIGKILL leaves one behind: while a temporary file (or a
+report directory being built) is written its writer holds a lock on it, and the next write of the
+same output removes the ones no process holds (`_remove_orphans`, `_remove_orphan_directories`).
+Nothing else is ever removed.
 """
 import contextlib
 import ctypes
 import ctypes.util
+import fcntl
+import hashlib
+import json
 import os
 from pathlib import Path
 import shutil
+import signal
+import stat
 import tempfile
+import threading
 
 from bellows_ros.errors import BellowsError
 
@@ -60,21 +77,97 @@ def _writable_directory(directory, what):
             probe.close()
 
 
+_KINDS = ((stat.S_ISCHR, 'a character device'), (stat.S_ISBLK, 'a block device'),
+          (stat.S_ISFIFO, 'a FIFO (named pipe)'), (stat.S_ISSOCK, 'a socket'),
+          (stat.S_ISDIR, 'a directory'))
+
+
+def _kind(mode):
+    return next((name for test, name in _KINDS if test(mode)), 'not a regular file')
+
+
+def _target(path, what):
+    """
+    Return the path an output named `path` is written to; BellowsError if no regular file.
+
+    A new path is itself; a regular file is itself; a link to a regular file (or to a new path in
+    an existing directory) is the path it names, so the link stays a link. Anything else would be
+    replaced by the rename: refused.
+    """
+    text = os.fspath(path)
+    path = Path(path)
+    if text.endswith(os.sep) or text.endswith(os.sep + '.') or path.name in ('', '.', '..'):
+        raise BellowsError(f'{what} {text}: names a directory; give a file name')
+    if not os.path.lexists(path):
+        return path
+    resolved = Path(os.path.realpath(path))
+    try:
+        mode = os.stat(resolved).st_mode
+    except FileNotFoundError:
+        if not resolved.parent.is_dir():
+            raise BellowsError(f'{what} {text}: a link to {resolved}, in no existing '
+                               'directory') from None
+        return resolved
+    except OSError as exc:
+        raise BellowsError(f'{what} {text}: cannot look at it ({exc.strerror})') from None
+    if stat.S_ISDIR(mode):
+        raise BellowsError(f'{what} {text}: is a directory; give a file name')
+    if not stat.S_ISREG(mode):
+        through = f' (through a link to {resolved})' if resolved != path.absolute() else ''
+        raise BellowsError(f'{what} {text}: is {_kind(mode)}{through}, not a regular file; the '
+                           'package writes an output as a new file and would replace it: give '
+                           'a file name')
+    return resolved
+
+
 def check_output(path, inputs=(), what='--output'):
     """
     Check, before any work, that `path` can be written and is none of `inputs`; return a Path.
 
-    `inputs` are the paths the command reads (None entries are skipped). BellowsError otherwise.
+    `inputs` are the paths the command reads (None entries are skipped). An existing output must
+    be a regular file (or a link to one). BellowsError otherwise.
     """
+    target = _target(path, what)
     path = Path(path)
     for source in inputs:
         if source is not None and _same_file(path, source):
             raise BellowsError(f'{what} {path}: that is an input of this command ({source}); '
                                'write the result to another file')
-    if path.is_dir():
-        raise BellowsError(f'{what} {path}: is a directory; give a file name')
-    _writable_directory(path.parent if str(path.parent) else Path('.'), f'{what} {path}')
+    _writable_directory(target.parent if str(target.parent) else Path('.'), f'{what} {path}')
     return path
+
+
+def _locked(path):
+    """Tell whether a process holds the writer's lock on the temporary file `path`."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+    except OSError:
+        return True  # gone, or not ours to judge: leave it
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            return True
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        return False
+    except OSError:
+        return True
+    finally:
+        os.close(fd)
+
+
+def _remove_orphans(path):
+    """Remove temporary files of `path` that no writer holds (left by a SIGKILL)."""
+    prefix = f'.{path.name}.'
+    try:
+        names = [entry.name for entry in os.scandir(path.parent)
+                 if entry.name.startswith(prefix) and entry.name.endswith('.tmp')
+                 and entry.is_file(follow_symlinks=False)]
+    except OSError:
+        return
+    for name in names:
+        orphan = path.parent / name
+        if not _locked(orphan):
+            with contextlib.suppress(OSError):
+                os.unlink(orphan)
 
 
 @contextlib.contextmanager
@@ -84,21 +177,26 @@ def atomic_file(path, mode='w', check=None, **open_args):
 
     `check(temporary_path)`, when given, reads the finished file before it replaces anything; an
     exception from it leaves `path` as it was (a writer never leaves a file its reader refuses).
+    An existing `path` that is not a regular file (a device, a FIFO, a socket) is refused before
+    and again just before the rename; a link to a regular file has its file replaced.
     """
-    path = Path(path)
+    path = _target(path, 'output')
+    _remove_orphans(path)
     fd, temporary = tempfile.mkstemp(dir=path.parent, prefix=f'.{path.name}.', suffix='.tmp')
     try:
+        fcntl.flock(fd, fcntl.LOCK_EX)  # ours while we write: never taken for an orphan
         with os.fdopen(fd, mode, **open_args) as stream:
             yield stream
             stream.flush()
             os.fsync(stream.fileno())
-        if check is not None:
-            check(temporary)
-        if path.exists():  # keep the old file's permissions
-            os.chmod(temporary, path.stat().st_mode & 0o7777)
-        else:
-            os.chmod(temporary, 0o666 & ~_umask())
-        os.replace(temporary, path)
+            if check is not None:
+                check(temporary)
+            _target(path, 'output')  # it may have changed while we wrote
+            if path.exists():  # keep the old file's permissions
+                os.chmod(temporary, path.stat().st_mode & 0o7777)
+            else:
+                os.chmod(temporary, 0o666 & ~_umask())
+            os.replace(temporary, path)
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(temporary)  # our own temporary file, never the output
@@ -117,33 +215,139 @@ def _umask():
     return mask
 
 
-# What a report directory may hold: the files `bellows diagnose` writes.
-REPORT_FILES = ('report.json', 'details.json', 'report.md', 'extended.yaml')
+class Signalled(BaseException):
+    """SIGTERM or SIGHUP arrived (`signals_as_exceptions`): unwind, cleaning up, then exit."""
+
+    def __init__(self, signum):
+        self.signum = signum
+        super().__init__(signal.Signals(signum).name)
+
+
+def _raise_signalled(signum, frame):
+    raise Signalled(signum)
+
+
+@contextlib.contextmanager
+def signals_as_exceptions(signums=(signal.SIGTERM, signal.SIGHUP)):
+    """
+    While the block runs, SIGTERM and SIGHUP raise `Signalled` in the main thread.
+
+    Their default action ends the process at once, so no `finally` runs and a temporary file or
+    an unfinished report directory stays behind; as an exception they unwind like Ctrl-C. Outside
+    the main thread (where Python cannot set handlers) it does nothing.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {}
+    try:
+        for signum in signums:
+            if signal.getsignal(signum) in (signal.SIG_DFL, None):
+                previous[signum] = signal.signal(signum, _raise_signalled)
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+
+
+# The report's own record of what it wrote: each file's name and SHA-256 (`report_directory`).
+MANIFEST = '.bellows-report.json'
+# A manifest lists a report's handful of files; a larger one is not ours.
+MANIFEST_BYTES = 1 << 20
+
+
+def _sha256(path):
+    digest = hashlib.sha256()
+    with open(path, 'rb') as stream:
+        for block in iter(lambda: stream.read(1 << 20), b''):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def write_manifest(directory):
+    """Record every file of the report built in `directory` (called last, before the swap)."""
+    directory = Path(directory)
+    names = sorted(entry.name for entry in os.scandir(directory) if entry.name != MANIFEST)
+    files = {name: _sha256(directory / name) for name in names}
+    (directory / MANIFEST).write_text(json.dumps({'bellows_report': 1, 'files': files},
+                                                 indent=1) + '\n')
+
+
+def _foreign(directory):
+    """Return the first entry of `directory` the package did not write as it is, or None."""
+    directory = Path(directory)
+    names = sorted(entry.name for entry in os.scandir(directory))
+    manifest = directory / MANIFEST
+    written = {}
+    try:
+        if manifest.is_symlink() or manifest.stat().st_size > MANIFEST_BYTES:
+            return MANIFEST
+        document = json.loads(manifest.read_text())
+        written = document['files'] if isinstance(document, dict) else {}
+    except FileNotFoundError:
+        return next((name for name in names), None)
+    except (OSError, ValueError, KeyError, TypeError):
+        return MANIFEST
+    if not isinstance(written, dict):
+        return MANIFEST
+    for name in names:
+        if name == MANIFEST:
+            continue
+        entry = directory / name
+        try:
+            ours = (name in written and not entry.is_symlink() and entry.is_file()
+                    and _sha256(entry) == written[name])
+        except OSError:
+            ours = False
+        if not ours:
+            return name
+    return None
 
 
 def is_report(directory):
-    """Tell whether `directory` is a report this package wrote (report.json, report files only)."""
-    names = [p.name for p in Path(directory).iterdir()]
-    return 'report.json' in names and all(
-        name in REPORT_FILES or name.endswith('.png') for name in names)
+    """Tell whether every entry of `directory` is a report file the package wrote, unchanged."""
+    return _foreign(directory) is None
+
+
+def _report_path(path, what):
+    """`path`, or the directory it links to (resolved before any work); BellowsError if neither."""
+    path = Path(path)
+    if os.path.islink(path):
+        resolved = Path(os.path.realpath(path))
+        if os.path.lexists(resolved) and not resolved.is_dir():
+            raise BellowsError(f'{what} {path}: a link to {resolved}, which is not a directory')
+        if not resolved.parent.is_dir():
+            raise BellowsError(f'{what} {path}: a link to {resolved}, in no existing directory')
+        return resolved
+    return path
 
 
 def check_report_directory(path, inputs=(), what='--report'):
-    """Check, before any work, that the report directory `path` can be written or replaced."""
-    path = Path(path)
+    """
+    Check, before any work, that the report directory `path` can be written or replaced.
+
+    Returns the directory the report goes to: `path`, or where it links to.
+    """
+    given = Path(path)
+    path = _report_path(given, what)
     for source in inputs:
         if source is not None and (_same_file(path, source)
-                                   or Path(os.path.abspath(source)).is_relative_to(
-                                       os.path.abspath(path))):
-            raise BellowsError(f'{what} {path}: holds an input of this command ({source})')
-    if path.exists():
+                                   or Path(os.path.realpath(source)).is_relative_to(
+                                       os.path.realpath(path))):
+            raise BellowsError(f'{what} {given}: holds an input of this command ({source})')
+    if os.path.lexists(path):
         if not path.is_dir():
-            raise BellowsError(f'{what} {path}: is a file, not a directory')
-        if any(path.iterdir()) and not is_report(path):
-            raise BellowsError(f'{what} {path}: holds files that are not a bellows report; '
-                               'give a new or empty directory (nothing is deleted that the '
-                               'package did not write)')
-    _writable_directory(path.parent if str(path.parent) else Path('.'), f'{what} {path}')
+            raise BellowsError(f'{what} {given}: is a file, not a directory')
+        foreign = _foreign(path)
+        if foreign is not None:
+            why = ('it has no bellows report manifest' if foreign != MANIFEST
+                   and not (path / MANIFEST).exists() else
+                   'its manifest is damaged' if foreign == MANIFEST else
+                   'the report did not write it, or it changed since')
+            raise BellowsError(f'{what} {given}: holds files that are not a bellows report '
+                               f'({foreign!r}: {why}); give a new or empty directory (nothing '
+                               'is deleted that the package did not write)')
+    _writable_directory(path.parent if str(path.parent) else Path('.'), f'{what} {given}')
     return path
 
 
@@ -152,21 +356,27 @@ def report_directory(path):
     """
     Yield a new directory beside `path` to write the report into; swap it in whole on success.
 
-    The old report (checked by `check_report_directory`) goes only once the new one is complete:
-    the two are exchanged in one step where the kernel can (renameat2 RENAME_EXCHANGE), else the
-    old one is renamed aside first. On failure the new directory is removed and the old one stays.
+    The old report (checked by `check_report_directory`) goes only once the new one is complete
+    and only if it is still all the package's: the two are exchanged in one step where the kernel
+    can (renameat2 RENAME_EXCHANGE), else the old one is renamed aside first. The manifest is
+    written last. On failure the new directory is removed and the old one stays.
     """
-    path = Path(path)
-    check_report_directory(path)
+    path = check_report_directory(path)
+    _remove_orphan_directories(path)
     building = Path(tempfile.mkdtemp(dir=path.parent, prefix=f'.{path.name}.', suffix='.new'))
+    holder = _hold_directory(building)
     try:
         yield building
+        write_manifest(building)
         os.chmod(building, 0o777 & ~_umask())
-        if not path.exists():
+        if not os.path.lexists(path):
             os.rename(building, path)
             return
+        check_report_directory(path)  # a file put there while the report was built stays
         if not _exchange(building, path):
             aside = Path(tempfile.mkdtemp(dir=path.parent, prefix=f'.{path.name}.', suffix='.old'))
+            os.close(holder)
+            holder = _hold_directory(aside)
             os.rename(path, aside / 'report')
             os.rename(building, path)
             building = aside
@@ -175,6 +385,40 @@ def report_directory(path):
     except BaseException:
         shutil.rmtree(building, ignore_errors=True)  # our own unfinished directory
         raise
+    finally:
+        os.close(holder)
+
+
+def _hold_directory(directory):
+    """Lock a directory this process builds (flock), so no other run takes it for an orphan."""
+    fd = os.open(directory, os.O_RDONLY | os.O_DIRECTORY)
+    fcntl.flock(fd, fcntl.LOCK_EX)
+    return fd
+
+
+def _remove_orphan_directories(path):
+    """Remove the unfinished or set-aside report directories of `path` a SIGKILL left behind."""
+    prefix = f'.{path.name}.'
+    try:
+        names = [entry.name for entry in os.scandir(path.parent)
+                 if entry.name.startswith(prefix) and entry.name[-4:] in ('.new', '.old')
+                 and entry.is_dir(follow_symlinks=False)]
+    except OSError:
+        return
+    for name in names:
+        orphan = path.parent / name
+        try:
+            fd = os.open(orphan, os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW)
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            continue  # a run building it now
+        else:
+            shutil.rmtree(orphan, ignore_errors=True)
+        finally:
+            os.close(fd)
 
 
 _RENAME_EXCHANGE = 2

@@ -167,9 +167,81 @@ def _construct_python_sequence(loader, suffix, node):
 _RosLoader.add_multi_constructor('tag:yaml.org,2002:python/', _construct_python_sequence)
 
 
+# Limits of a YAML file the package reads (a parameter file, a bag's metadata.yaml), each named
+# when reached: the config files are a few kB and a dozen levels deep. Aliases are counted as
+# what they expand to, since flattening a parameter tree walks every copy: a "billion laughs"
+# file of a few hundred bytes would otherwise expand to 10**9 nodes.
+MAX_YAML_BYTES = 1 << 20
+MAX_YAML_DEPTH = 64
+MAX_YAML_NODES = 200_000
+
+
+def _expanded_nodes(root):
+    """Nodes of the tree `root` spans with every alias expanded (memoised: no expansion made)."""
+    sizes, stack = {}, [(root, False)]
+    while stack:
+        node, done = stack.pop()
+        if id(node) in sizes:
+            continue
+        children = ([child for pair in node.value for child in pair]
+                    if isinstance(node, yaml.MappingNode) else
+                    list(node.value) if isinstance(node, yaml.SequenceNode) else [])
+        if done:
+            sizes[id(node)] = min(1 + sum(sizes[id(child)] for child in children),
+                                  MAX_YAML_NODES + 1)
+            continue
+        stack.append((node, True))
+        stack.extend((child, False) for child in children if id(child) not in sizes)
+    return sizes[id(root)]
+
+
+class YamlLimit(yaml.YAMLError):
+    """A YAML file beyond MAX_YAML_BYTES, MAX_YAML_DEPTH or MAX_YAML_NODES."""
+
+    def __init__(self, problem, mark=None):
+        super().__init__(problem)
+        self.problem, self.problem_mark = problem, mark
+
+
+def load_bounded(text, loader_class):
+    """
+    Load YAML `text` with `loader_class`, refusing one beyond the limits above (`YamlLimit`).
+
+    The nesting is checked while composing (the composer recurses: a deep file would otherwise
+    end in RecursionError), the alias expansion before anything is constructed.
+    """
+    if len(text) > MAX_YAML_BYTES:
+        raise YamlLimit(f'over {MAX_YAML_BYTES >> 20} MiB (params.MAX_YAML_BYTES)')
+
+    class Bounded(loader_class):
+        depth = 0
+
+        def compose_node(self, parent, index):
+            self.depth += 1
+            try:
+                if self.depth > MAX_YAML_DEPTH:
+                    raise YamlLimit(f'nested deeper than {MAX_YAML_DEPTH} levels '
+                                    '(params.MAX_YAML_DEPTH)', self.peek_event().start_mark)
+                return super().compose_node(parent, index)
+            finally:
+                self.depth -= 1
+
+    loader = Bounded(text)
+    try:
+        root = loader.get_single_node()
+        if root is None:
+            return None
+        if _expanded_nodes(root) > MAX_YAML_NODES:
+            raise YamlLimit(f'more than {MAX_YAML_NODES} values with its aliases expanded '
+                            '(params.MAX_YAML_NODES)')
+        return loader.construct_document(root)
+    finally:
+        loader.dispose()
+
+
 def parse_yaml(text):
     """Parse YAML text with rcl's reading of scalars (`yaml.YAMLError` on a syntax error)."""
-    return yaml.load(text, Loader=_RosLoader)
+    return load_bounded(text, _RosLoader)
 
 
 def read_sections(path):
@@ -181,7 +253,16 @@ def read_sections(path):
     """
     path = Path(path)
     try:
-        text = path.read_text()
+        if not path.is_file() and path.exists():  # a FIFO or /dev/zero: no end to read to
+            raise ParameterError(f'{path}: not a regular file (a parameter file is a file)')
+        with open(path, 'rb') as stream:
+            raw = stream.read(MAX_YAML_BYTES + 1)
+        if len(raw) > MAX_YAML_BYTES:
+            raise ParameterError(f'{path}: over {MAX_YAML_BYTES >> 20} MiB '
+                                 '(params.MAX_YAML_BYTES): not a parameter file')
+        text = raw.decode()
+    except IsADirectoryError:
+        raise ParameterError(f'{path}: is a directory, not a parameter file') from None
     except OSError as exc:
         raise ParameterError(f'{path}: cannot read parameter file ({exc.strerror})') from None
     except UnicodeDecodeError:

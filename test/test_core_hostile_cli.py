@@ -21,6 +21,7 @@ stderr is one line that names the option or the file, and there is no traceback.
 """
 import csv
 import hashlib
+import os
 import shlex
 
 from hypothesis import given, HealthCheck, settings, strategies as st
@@ -51,12 +52,17 @@ def workdir(tmp_path_factory):
     (root / 'p.yaml').write_text('/**:\n  ros__parameters:\n    actuator:\n      gas:\n'
                                  '        v_tube: 5.0e-6\n')
     (root / 'dir').mkdir()
+    (root / 'notreport').mkdir()      # a user's directory that looks like a report by its names
+    (root / 'notreport' / 'report.json').write_text('{}')
+    (root / 'notreport' / 'rig_photo.png').write_bytes(b'a photo')
+    os.mkfifo(root / 'fifo')          # a named pipe: never read or replaced by a mistake
     return root
 
 
 def snapshot(root):
     return {str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest()
-            for p in sorted(root.rglob('*')) if p.is_file()}
+            if p.is_file() else os.lstat(p).st_mode
+            for p in sorted(root.rglob('*')) if p.is_file() or p.is_fifo()}
 
 
 # (arguments, a fragment the one error line must hold)
@@ -112,6 +118,24 @@ CASES = [
     ('stiffness r.csv --window -1', 'window'),
     ('stiffness r.csv', 'no window'),
     ('stiffness r.csv --params missing.yaml', 'missing.yaml'),
+    # issue #30: special outputs, bounds, doubles
+    ('simulate actuator --input r.csv --output fifo', 'not a regular file'),
+    ('simulate actuator --input r.csv --output o.csv/', 'names a directory'),
+    ('export actuator r.csv --output fifo', 'not a regular file'),
+    ('identify actuator r.csv --output fifo', 'not a regular file'),
+    ('simulate actuator --input fifo --output o.csv', 'regular file'),
+    ('stiffness r.csv --window inf', '--window'),
+    ('stiffness r.csv --window 1e-9', '--window'),
+    ('stiffness r.csv --setpoint nan', '--setpoint'),
+    ('stiffness r.csv --setpoint -1', '--setpoint'),
+    ('record --output bag --duration inf', '--duration'),
+    ('record --output bag --topics /joint_states /joint_states', 'twice'),
+    ('simulate actuator --input r.csv --output o.csv --effect air_leak:conductance=1e30',
+     'conductance'),
+    ('simulate actuator --input r.csv --output o.csv --effect backlash:width=1', 'width'),
+    ('simulate actuator --input r.csv --output o.csv --effect air_leak --effect air_leak',
+     'twice'),
+    ('diagnose actuator r.csv --report notreport', 'not a bellows report'),
 ]
 
 
@@ -152,7 +176,9 @@ def test_every_subcommand_is_in_the_table():
 WORDS = ['simulate', 'identify', 'diagnose', 'record', 'reindex', 'bench', 'segment', 'actuator',
          '--input', '--output', '--params', '--effect', '--seed', '--report', '--duration',
          '--topics', '--only', 'r.csv', 's.csv', 'p.yaml', 'old.csv', 'dir', 'missing.csv', '-1',
-         'nan', '1e400', 'air_leak:conductance=-1', '/joint_states', '', '\x00', '--quiet']
+         'nan', '1e400', 'air_leak:conductance=-1', '/joint_states', '', '\x00', '--quiet',
+         'fifo', 'o.csv/', 'inf', '--window', '--setpoint', 'stiffness',
+         'backlash:width=1', 'notreport']
 
 
 @settings(max_examples=150, deadline=None,

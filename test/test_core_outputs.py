@@ -33,7 +33,7 @@ from bellows_ros.cli import main
 from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.errors import BellowsError
 from bellows_ros.models.actuator_experiments import actuator_record
-from bellows_ros.outputs import atomic_file, report_directory
+from bellows_ros.outputs import atomic_file, MANIFEST, report_directory
 
 BELLOWS = [str(Path(sys.executable).parent / 'bellows')]
 
@@ -173,26 +173,27 @@ def test_a_failed_write_keeps_the_old_file_and_leaves_no_temporary(tmp_path):
 
 def test_a_report_is_replaced_whole(tmp_path):
     report = tmp_path / 'report'
-    report.mkdir()
-    (report / 'report.json').write_text('{"old": true}')
-    (report / 'old_plot.png').write_bytes(b'old')
+    with report_directory(report) as building:  # the old report, with its manifest
+        (building / 'report.json').write_text('{"old": true}')
+        (building / 'old_plot.png').write_bytes(b'old')
     with report_directory(report) as building:
         (building / 'report.json').write_text('{"new": true}')
         (building / 'new_plot.png').write_bytes(b'new')
-    assert sorted(p.name for p in report.iterdir()) == ['new_plot.png', 'report.json']
+    assert sorted(p.name for p in report.iterdir()) == sorted([MANIFEST, 'new_plot.png',
+                                                               'report.json'])
     assert (report / 'report.json').read_text() == '{"new": true}'
     assert sorted(p.name for p in tmp_path.iterdir()) == ['report']
 
 
 def test_an_interrupted_report_leaves_the_old_one(tmp_path):
     report = tmp_path / 'report'
-    report.mkdir()
-    (report / 'report.json').write_text('{"old": true}')
+    with report_directory(report) as building:
+        (building / 'report.json').write_text('{"old": true}')
     with pytest.raises(KeyboardInterrupt):
         with report_directory(report) as building:
             (building / 'report.json').write_text('{"new": true}')
             raise KeyboardInterrupt
-    assert [p.name for p in report.iterdir()] == ['report.json']
+    assert sorted(p.name for p in report.iterdir()) == sorted([MANIFEST, 'report.json'])
     assert (report / 'report.json').read_text() == '{"old": true}'
     assert sorted(p.name for p in tmp_path.iterdir()) == ['report']
 

@@ -17,12 +17,16 @@ The `bellows` command (docs/interfaces.md): one entry point, one module per subc
 
 Each subcommand module has `add_arguments(parser)` and `run(args) -> int`. A `BellowsError` (a user
 mistake: bad file, bad parameter, absent device) becomes one line on stderr and exit status 2.
+SIGTERM and SIGHUP unwind like Ctrl-C (outputs.signals_as_exceptions), so no temporary file is
+left behind; the exit status is then 128 + the signal's number, as the shell reports a signal.
 """
 import argparse
 import importlib
+import signal
 import sys
 
 from bellows_ros.errors import BellowsError
+from bellows_ros.outputs import Signalled, signals_as_exceptions
 
 SUBCOMMANDS = {
     'simulate': 'run the model or the plant over an input file',
@@ -56,8 +60,16 @@ def build_parser():
 def main(argv=None):
     args = build_parser().parse_args(argv)
     module = importlib.import_module(f'bellows_ros.cli.{args.command}')
+    # `record` takes SIGINT and SIGTERM itself (runtime/record.py): an exception raised into its
+    # writer would corrupt the chunk being written.
+    signals = () if args.command == 'record' else (signal.SIGTERM, signal.SIGHUP)
     try:
-        return module.run(args) or 0
+        with signals_as_exceptions(signals):
+            return module.run(args) or 0
+    except Signalled as exc:
+        print(f'bellows {args.command}: stopped by {exc}; nothing half written was kept',
+              file=sys.stderr)
+        return 128 + exc.signum
     except BellowsError as exc:
         print(f'bellows {args.command}: error: {exc}', file=sys.stderr)
         return 2

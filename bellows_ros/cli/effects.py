@@ -13,11 +13,17 @@
 # limitations under the License.
 
 """Parsing of `--effect NAME[:k=v,...]` arguments."""
+from bellows_ros.data import NUMBER
 from bellows_ros.errors import ParameterError
 
 
 def parse_effect(text):
-    """'air_leak:conductance=2e-9,p_ambient=101325' -> ('air_leak', {'conductance': 2e-9, ...})."""
+    """
+    'air_leak:conductance=2e-9,p_ambient=101325' -> ('air_leak', {'conductance': 2e-9, ...}).
+
+    A value is a plain decimal number (as a CSV cell is read: no `1_0`, `0x10`, `nan` or `inf`);
+    a parameter given twice is refused (which one was meant cannot be known).
+    """
     name, _, rest = text.partition(':')
     name = name.strip()
     if not name:
@@ -25,11 +31,33 @@ def parse_effect(text):
     options = {}
     for item in filter(None, (part.strip() for part in rest.split(','))):
         key, sep, value = item.partition('=')
-        if not sep or not key.strip():
+        key = key.strip()
+        if not sep or not key:
             raise ParameterError(f'--effect {text!r}: expected k=v, got {item!r}')
-        try:
-            options[key.strip()] = float(value)
-        except ValueError:
+        if key in options:
+            raise ParameterError(f'--effect {text!r}: {key} is given twice')
+        if not NUMBER.fullmatch(value.strip()):
             raise ParameterError(
-                f'--effect {text!r}: {key.strip()} must be a number, got {value!r}') from None
+                f'--effect {text!r}: {key} must be a finite decimal number, got {value!r}')
+        options[key] = float(value)
     return name, options
+
+
+def parse_effects(texts, system):
+    """
+    {effect: {key: value}} of the `--effect` arguments `texts` of `system`, checked before work.
+
+    The same effect given twice is refused, as the nodes refuse it in their `effects` list; each
+    value must lie in the range of the parameter it sets (`config.ranges.effect_range`, the
+    nodes' range too).
+    """
+    from bellows_ros.config.ranges import check_effects
+    effects = {}
+    for text in texts:
+        name, options = parse_effect(text)
+        if name in effects:
+            raise ParameterError(f'--effect {name}: given twice; give each effect once, with '
+                                 'all its parameters (NAME:k=v,k=v)')
+        effects[name] = options
+    check_effects(system, effects)
+    return effects

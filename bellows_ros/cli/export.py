@@ -48,20 +48,17 @@ def run(args):
     import sys
 
     from bellows_ros.data import read_table, write_csv
-    from bellows_ros.errors import DataError, ParameterError
+    from bellows_ros.errors import ParameterError
     from bellows_ros.outputs import check_output
     start = -math.inf if args.start is None else args.start
     end = math.inf if args.end is None else args.end
     if not start < end:
         raise ParameterError(f'--start {args.start:g} s must be before --end {args.end:g} s')
     check_output(args.output, inputs=(args.data,))  # before any work
-    table = read_table(args.data, args.system)
-    if args.start is not None or args.end is not None:
-        t = table['t']
-        table = table.rows((t >= start) & (t <= end))
-        if not len(table):
-            raise DataError(args.data, f'no rows with {start:g} s <= t <= {end:g} s (t runs '
-                                       f'from {t[0]:g} to {t[-1]:g} s)', column='t')
+    # The rows between --start and --end are cut before a channel's gaps are looked for: how a
+    # record whose wrench stopped is exported up to where it stopped.
+    span = None if args.start is None and args.end is None else (start, end)
+    table = read_table(args.data, args.system, span=span)
     write_csv(args.output, table, {})
     print(f'bellows export {args.system}: {len(table)} rows ({", ".join(table.names)}) -> '
           f'{args.output}', file=sys.stderr)

@@ -12,18 +12,8 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""`bellows record --output DIR [--topics T ...] [--namespace NS] [--duration S]`: rosbag2 (MCAP)."""
-from bellows_ros.errors import BellowsError
-
-
-def _positive(text):
-    try:
-        value = float(text)
-    except ValueError:
-        raise BellowsError(f'--duration: not a number: {text!r}') from None
-    if not value > 0:
-        raise BellowsError(f'--duration: must be positive, got {text}')
-    return value
+"""`bellows record --output DIR [--topics T ...] [--namespace NS] [--duration S]`: rosbag2."""
+from bellows_ros.config.ranges import option_type
 
 
 def add_arguments(parser):
@@ -34,12 +24,10 @@ def add_arguments(parser):
     parser.add_argument('--namespace', default='/', metavar='NS',
                         help="the graph's namespace: its relative topics are recorded under it "
                         "(default: '/')")
-    parser.add_argument('--duration', type=str, metavar='S',
+    parser.add_argument('--duration', type=option_type('record.duration'), metavar='S',
                         help='stop after S seconds (default: record until Ctrl-C)')
 
 
 def run(args):
     from bellows_ros.runtime.record import record_command
-    if args.duration is not None:
-        args.duration = _positive(args.duration)
     return record_command(args)

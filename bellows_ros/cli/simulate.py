@@ -20,7 +20,7 @@
 """
 import importlib
 
-from bellows_ros.cli.effects import parse_effect
+from bellows_ros.cli.effects import parse_effects
 from bellows_ros.outputs import check_output
 
 
@@ -38,6 +38,6 @@ def add_arguments(parser):
 
 def run(args):
     check_output(args.output, inputs=(args.input, args.params))  # before any work
-    effects = dict(parse_effect(text) for text in args.effect)
+    effects = parse_effects(args.effect, args.system)
     system = importlib.import_module(f'bellows_ros.cli.{args.system}')
     return system.simulate(args.input, args.output, args.params, effects)

@@ -15,6 +15,9 @@
 """`bellows stiffness DATA [--setpoint K]`: the actuator stiffness a record measured, per cycle."""
 
 
+from bellows_ros.config.ranges import option_type
+
+
 def add_arguments(parser):
     parser.add_argument('data', metavar='DATA', help='actuator CSV file or rosbag2 directory '
                         '(t, x_c, x_s, p, f; the spring cycled over 0-12 mm)')
@@ -22,9 +25,10 @@ def add_arguments(parser):
                         help='parameters laid over config/actuator.yaml (only the spring range '
                              'of the stiffness figure, actuator.stiffness.x_s_low/x_s_high, is '
                              'read)')
-    parser.add_argument('--window', type=float, default=4.0, metavar='S',
+    parser.add_argument('--window', type=option_type('stiffness.window'), default=4.0,
+                        metavar='S',
                         help='window length, s: one period of the spring motion (default 4.0)')
-    parser.add_argument('--setpoint', type=float, metavar='K',
+    parser.add_argument('--setpoint', type=option_type('stiffness.setpoint'), metavar='K',
                         help='stiffness set-point, N/m: also print the error against it')
 
 

@@ -209,3 +209,75 @@ def check_ranges(flat, source):
 def load(name, params_path=None):
     """Load a parameter file as `params.load` does, every value checked against its range."""
     return param_files.load(name, params_path, check=check_ranges)
+
+
+# --- the `bellows` command's numbers: the same table as the nodes' parameters -------------------
+# `--effect NAME:k=v`: each effect parameter is the YAML parameter it sets, so it has that one's
+# range; an effect's strength, which the simulated nodes offer live (0 = off), is never negative.
+# (system, effect, key) -> (parameter of RANGES, lowest value or None for the parameter's own).
+# The simulated nodes' live strengths (nodes/sim_*_node.py `_strength_spec`) take the same
+# ranges; `effect_range` is the one place to read them from.
+_SEGMENT_EFFECTS = {
+    ('pressure_friction', 'c_fp'): ('segment.friction.c_fp', 0.0),
+    ('natural_curvature', 'c_psi0'): ('segment.restoring.c_psi0', None),
+    ('natural_curvature', 'c_psi0_p'): ('segment.restoring.c_psi0_p', None),
+    ('natural_curvature', 'k_sp'): ('segment.restoring.k_sp', None),
+    ('sensor_lag', 'tau'): ('segment.plant.sensor_lag_tau', 0.0),
+}
+# Options of the `bellows` command that take a number, with the reason of each range.
+OPTIONS = {
+    # one period of the spring motion: from a fast test rig (10 ms) to an hour; a shorter window
+    # than 20 samples measures nothing (`measured_stiffness` says so)
+    'stiffness.window': Range(0.01, 3600.0, 's'),
+    # a spring's stiffness: soft foam springs to steel, N/m
+    'stiffness.setpoint': Range(1.0, 1e6, 'N/m'),
+    # a recording: from a millisecond to thirty days (a bag beyond that outgrows any reader)
+    'record.duration': Range(1e-3, 30 * 86400.0, 's'),
+}
+
+
+def effect_range(system, effect, key):
+    """`Range` of `--effect effect:key=...` of `system`, or None for a parameter with none."""
+    if system == 'actuator':
+        return RANGES.get(f'actuator.effects.{effect}.{key}')
+    name, low = _SEGMENT_EFFECTS.get((effect, key), (None, None))
+    if name is None:
+        return None
+    rule = RANGES[name]
+    return rule if low is None else rule._replace(low=max(rule.low, low))
+
+
+def _outside(rule, value):
+    hint = f' ({rule.hint})' if rule.hint else ''
+    return f'{value:g} is outside its range {rule.low:g}..{rule.high:g} {rule.unit}{hint}'
+
+
+def check_effects(system, effects):
+    """Raise ParameterError for an `--effect` value ({effect: {key: float}}) outside its range."""
+    for effect, values in effects.items():
+        for key, value in values.items():
+            rule = effect_range(system, effect, key)
+            if rule is not None and not rule.low <= value <= rule.high:
+                raise ParameterError(f'--effect {effect}:{key}={value:g}: {_outside(rule, value)}')
+
+
+def option_type(name):
+    """Return an argparse type for the option `name` of OPTIONS: a finite number in range."""
+    import argparse
+    import math
+    rule = OPTIONS[name]
+
+    def parse(text):
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f'expected a number in {rule.unit}, got '
+                                             f'{text!r}') from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f'expected a finite number in {rule.unit}, got '
+                                             f'{text!r}')
+        if not rule.low <= value <= rule.high:
+            raise argparse.ArgumentTypeError(_outside(rule, value))
+        return value
+    parse.__name__ = name  # argparse names the type in some messages
+    return parse

@@ -31,6 +31,13 @@ API
   the duty actually sent after the safety limits.
 - ``.connected``, ``.stale`` (bool); ``.counters() -> dict[str, int]``; ``.close()``.
 
+Identity: after it opens the port the driver sends nothing and delivers nothing until the board
+has named itself (IDENTITY, `serial_protocol`); the first board it hears is the one it keeps
+(``.serial``), and on every reconnect it takes only that serial number again. A port that gives no
+IDENTITY within IDENTITY_TIMEOUT (a tty the kernel gave to another program after the board died,
+a wrong device) or another serial number is closed and counted (`identity_refusals`), and the
+driver keeps looking for its board.
+
 Safety: |duty| <= duty_max; no duty into an end stop (board status flags or the x_c soft limits);
 duty 0 while the data is stale; duty 0 when no command arrives for `command_timeout` (watchdog);
 the board itself stops after `BOARD_HEARTBEAT_TIMEOUT` without heartbeats. A sample that failed any
@@ -89,11 +96,16 @@ class ActuatorBoard:
         self._duty = 0.0
         self._watchdog = Watchdog(config.command_timeout, time.monotonic())
         self._watchdog_tripped = True       # nothing commanded yet
+        self.serial = None          # the board's serial number, from its first IDENTITY
+        self._identified = False    # the open port has named itself as that board
+        self._opened_at = None      # time.monotonic() the port was opened
+        self._refusal_reported = False  # a refused port was logged in this outage
         self.latched = False    # stopped on request (stop()): duties refused until release()
         self._counts = dict.fromkeys(
             ['samples', 'callback_errors', 'dropped', 'duplicates', 'sequence_resets',
              'reconnects', 'disconnects', 'tx_errors', 'duty_clamps', 'duty_invalid',
-             'end_stop_stops', 'stale_stops', 'watchdog_stops', 'refused_while_stopped'], 0)
+             'end_stop_stops', 'stale_stops', 'watchdog_stops', 'refused_while_stopped',
+             'identity_refusals', 'unidentified_frames'], 0)
         self._reader = threading.Thread(target=self._read_loop, name='actuator-reader',
                                         daemon=True)
         self._heart = threading.Thread(target=self._heartbeat_loop, name='actuator-heartbeat',
@@ -104,7 +116,8 @@ class ActuatorBoard:
     # -- state for the next layer ---------------------------------------------------------------
     @property
     def connected(self):
-        return self._serial is not None
+        """The port is open and the board on it has named itself as this driver's board."""
+        return self._serial is not None and self._identified
 
     @property
     def stale(self):
@@ -168,7 +181,7 @@ class ActuatorBoard:
     def _send(self, make):
         """Send `make(seq)`; the sequence number is taken under the lock shared by both threads."""
         with self._io_lock:
-            if self._serial is None:
+            if self._serial is None or not self._identified:  # not a byte to an unknown device
                 return
             self._tx_seq = (self._tx_seq + 1) & 0xFFFF
             try:
@@ -196,13 +209,44 @@ class ActuatorBoard:
             return False
         with self._io_lock:
             self._serial = port
+            self._identified = False
+        self._opened_at = time.monotonic()
         self._last_seq = None  # a re-plugged board restarts its sequence and clock
         self._last_t_us = None
+        return True
+
+    def _refuse_port(self, why):
+        """Close a port whose device is not this driver's board; count it, say it once."""
+        with self._io_lock:
+            port, self._serial = self._serial, None
+            self._identified = False
+        try:
+            port.close()
+        except Exception:  # a port that vanished may not close cleanly; it is closed either way
+            pass
+        self._counts['identity_refusals'] += 1
+        if not self._refusal_reported:
+            log.error('actuator board: %s %s; not using it (retrying every %.2f s)',
+                      self.config.port, why, self.config.reconnect_interval)
+            self._refusal_reported = True
+        self._stop.wait(self.config.reconnect_interval)
+
+    def _identify(self, identity):
+        """Take IDENTITY: True if the open port's board is this driver's board (learnt first)."""
+        if self.serial is None:
+            self.serial = identity.serial
+        if identity.serial != self.serial:
+            self._refuse_port(f'is another board (serial {identity.serial:016x}, this '
+                              f'driver has board {self.serial:016x})')
+            return False
+        with self._io_lock:
+            self._identified = self._serial is not None
         return True
 
     def _drop_port(self, error):
         with self._io_lock:
             port, self._serial = self._serial, None
+            self._identified = False
         try:
             port.close()
         except Exception:  # closing a vanished port may fail; it is gone either way
@@ -221,12 +265,12 @@ class ActuatorBoard:
                         outage_reported = True
                     self._stop.wait(self.config.reconnect_interval)
                     continue
-                if ever_opened:
-                    self._counts['reconnects'] += 1
-                    log.warning('actuator board: reconnected to %s', self.config.port)
-                else:
-                    log.info('actuator board: opened %s', self.config.port)
-                ever_opened, outage_reported = True, False
+            if not self._identified and \
+                    time.monotonic() - self._opened_at > sp.IDENTITY_TIMEOUT:
+                self._refuse_port(f'gives no IDENTITY within {sp.IDENTITY_TIMEOUT:g} s: not a '
+                                  'bellows actuator board (a tty of another program, a wrong '
+                                  'device)')
+                continue
             try:
                 data = self._serial.read(max(1, self._serial.in_waiting))
             except (serial.SerialException, OSError, TypeError) as error:
@@ -236,8 +280,22 @@ class ActuatorBoard:
                 self._drop_port(error)
                 continue
             for message in self._decoder.feed(data):
-                if isinstance(message, sp.Telemetry):
-                    self._accept(message)
+                if isinstance(message, sp.Identity) and not self._identified:
+                    if not self._identify(message):
+                        break
+                    if ever_opened:
+                        self._counts['reconnects'] += 1
+                        log.warning('actuator board: reconnected to %s (board %016x)',
+                                    self.config.port, self.serial)
+                    else:
+                        log.info('actuator board: opened %s (board %016x)', self.config.port,
+                                 self.serial)
+                    ever_opened, outage_reported, self._refusal_reported = True, False, False
+                elif isinstance(message, sp.Telemetry):
+                    if self._identified:
+                        self._accept(message)
+                    else:  # from a device that has not named itself: never a sample
+                        self._counts['unidentified_frames'] += 1
 
     def _accept(self, t):
         now = time.monotonic()

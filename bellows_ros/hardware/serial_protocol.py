@@ -26,7 +26,10 @@ COBS (the `cobs` package) keeps 0x00 out of the frame, so a receiver resynchroni
 API
 ---
 - Messages (wire units, exact integers): ``Telemetry(seq, t_us, encoder_counts, pressure_pa,
-  spring_um, force_mn, status)``, ``MotorCommand(seq, duty_q15)``, ``Heartbeat(seq)``.
+  spring_um, force_mn, status)``, ``Identity(seq, serial)``, ``MotorCommand(seq, duty_q15)``,
+  ``Heartbeat(seq)``.
+- ``IDENTITY_PERIOD``: the board sends IDENTITY at least this often; ``IDENTITY_TIMEOUT``: a host
+  that has heard none this long after opening a port is not talking to a board and closes it.
 - ``encode(message) -> bytes`` (one complete frame including the trailing 0x00).
 - ``FrameDecoder().feed(data: bytes) -> list[message]``; counters ``crc_errors``,
   ``framing_errors``, ``version_errors``, ``unknown_types`` and ``frames``. Never raises on any
@@ -45,6 +48,13 @@ VERSION = 1
 BOARD_HEARTBEAT_TIMEOUT = 0.1  # s without MOTOR or HEARTBEAT from the host before the board stops
 
 TYPE_TELEMETRY = 0x01
+TYPE_IDENTITY = 0x02
+# The board names itself (its serial number, as a USB device does in its descriptor) at least every
+# IDENTITY_PERIOD, and at once when a host speaks after a silence. A host sends nothing to a port
+# until it has heard the board's IDENTITY there, and closes a port that gives none within
+# IDENTITY_TIMEOUT: a tty number or a link the kernel gave to another program is never driven.
+IDENTITY_PERIOD = 0.05
+IDENTITY_TIMEOUT = 0.5
 TYPE_MOTOR = 0x10
 TYPE_HEARTBEAT = 0x11
 
@@ -58,6 +68,7 @@ _HEADER = struct.Struct('<BBH')
 _CRC = struct.Struct('<I')
 _BODIES = {
     TYPE_TELEMETRY: struct.Struct('<IiIiiH'),
+    TYPE_IDENTITY: struct.Struct('<Q'),
     TYPE_MOTOR: struct.Struct('<h'),
     TYPE_HEARTBEAT: struct.Struct(''),
 }
@@ -84,6 +95,19 @@ class Telemetry:
 
 
 @dataclasses.dataclass(frozen=True)
+class Identity:
+    """
+    Board -> host, every IDENTITY_PERIOD: the board's serial number (u64).
+
+    seq: the sequence number of the last TELEMETRY sent; IDENTITY does not advance it, so the
+    host's gap count of telemetry stays a count of lost samples.
+    """
+
+    seq: int
+    serial: int
+
+
+@dataclasses.dataclass(frozen=True)
 class MotorCommand:
     """Host -> board. duty_q15: motor duty x 32767 (-32767..32767); also counts as a heartbeat."""
 
@@ -98,7 +122,8 @@ class Heartbeat:
     seq: int
 
 
-_TYPES = {Telemetry: TYPE_TELEMETRY, MotorCommand: TYPE_MOTOR, Heartbeat: TYPE_HEARTBEAT}
+_TYPES = {Telemetry: TYPE_TELEMETRY, Identity: TYPE_IDENTITY, MotorCommand: TYPE_MOTOR,
+          Heartbeat: TYPE_HEARTBEAT}
 _CLASSES = {code: cls for cls, code in _TYPES.items()}
 
 

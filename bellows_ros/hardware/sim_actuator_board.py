@@ -21,9 +21,18 @@ that link when the USB device vanishes and creates it again, pointing at a new t
 back. ``unplug()`` and ``replug()`` do exactly that with a fresh pty, so the driver's reconnect
 path is the real one.
 
+The link points at the board's own open slave, ``/proc/<pid>/fd/<n>``, not at ``/dev/pts/<n>``:
+a board that dies (SIGKILL, a crash) leaves a link to nothing, never one to the tty the kernel
+hands the next program under that number. A board started on a link of that form whose process
+is gone takes it over (its own stale link); every other thing at the port is refused. The board
+names itself on the wire (IDENTITY, `serial_protocol`) with a serial number that is the same for
+the same port (``serial``, default from the port's path), so a restarted board is the board the
+driver had, and anything else is not.
+
 API
 ---
-- ``SimActuatorBoard(step, config=None, link_path=None, faults=None, period=1e-3, record=False)``
+- ``SimActuatorBoard(step, config=None, link_path=None, faults=None, period=1e-3, record=False,
+  serial=None)``
   ``step(dt: float, duty: float) -> state`` advances the plant by dt seconds with the motor duty
   the board applies and returns any object with attributes ``x_c`` (m), ``p`` (Pa abs), ``x_s``
   (m), ``f`` (N) -- e.g. ``ActuatorState``. `config` (ActuatorBoardConfig, default from
@@ -41,8 +50,10 @@ heartbeat.
 import collections
 import dataclasses
 import errno
+import hashlib
 import logging
 import os
+import re
 import shutil
 import tempfile
 import threading
@@ -82,8 +93,43 @@ class ActuatorState:
     f: float
 
 
+# The link a simulated board makes: its own open pty slave, through /proc.
+_OWN_LINK = re.compile(r'/proc/(\d+)/fd/(\d+)')
+
+
+def _stale_board_link(port):
+    """Tell whether `port` is the link of a simulated board whose process is gone."""
+    try:
+        target = os.readlink(port)
+    except OSError:
+        return False
+    match = _OWN_LINK.fullmatch(target)
+    if match is None or int(match.group(1)) == os.getpid():
+        return False
+    try:
+        os.kill(int(match.group(1)), 0)
+    except ProcessLookupError:
+        return True
+    except PermissionError:  # a process of another user holds that pid: not our dead board
+        return False
+    return False
+
+
+def port_serial(port):
+    """Return the serial number of the simulated board on `port`: one path, one board."""
+    digest = hashlib.sha256(os.path.abspath(port).encode()).digest()
+    return int.from_bytes(digest[:8], 'little')
+
+
 def _check_free(port):
-    """Raise ParameterError unless `port` names nothing yet, in an existing directory."""
+    """
+    Raise ParameterError unless `port` names nothing yet, in an existing directory.
+
+    The one exception: the link a simulated board left when its process died (`_stale_board_link`)
+    is free to take over.
+    """
+    if os.path.islink(port) and _stale_board_link(port):
+        return
     if os.path.lexists(port):
         kind = ('a directory' if os.path.isdir(port) else 'a link' if os.path.islink(port)
                 else 'a device node' if not os.path.isfile(port) else 'a file')
@@ -94,7 +140,8 @@ def _check_free(port):
 
 
 class SimActuatorBoard:
-    def __init__(self, step, config=None, link_path=None, faults=None, period=1e-3, record=False):
+    def __init__(self, step, config=None, link_path=None, faults=None, period=1e-3, record=False,
+                 serial=None):
         if config is None:
             config = actuator_board_config()
         self._step = step
@@ -110,6 +157,8 @@ class SimActuatorBoard:
             link_path = os.path.join(self._tmpdir, 'actuator_board')
         self.port = str(link_path)
         _check_free(self.port)
+        self.serial = port_serial(self.port) if serial is None else int(serial)
+        self._identity_due = 0.0  # time.monotonic() when the next IDENTITY goes out
         self._tty = None  # where the link this board made points; None while it has none
         self._fd_lock = threading.Lock()
         self._master = self._slave = None
@@ -146,7 +195,8 @@ class SimActuatorBoard:
         master, slave = os.openpty()
         tty.setraw(slave)  # no echo or line editing: the driver sees the bytes the board sends
         os.set_blocking(master, False)
-        name = os.ttyname(slave)
+        # The slave as this process holds it: gone with the process, never another program's tty.
+        name = f'/proc/{os.getpid()}/fd/{slave}'
         # A fresh name beside the port (symlink() never replaces), then one atomic rename.
         tmp_link = f'{self.port}.{os.getpid()}.{uuid.uuid4().hex[:8]}.new'
         os.symlink(name, tmp_link)
@@ -212,6 +262,17 @@ class SimActuatorBoard:
                     status=status)
                 self._transmit(seq, telemetry)
                 seq += 1
+            if time.monotonic() >= self._identity_due:
+                self._identify((seq - 1) & 0xFFFF)
+
+    def _identify(self, seq):
+        """Send IDENTITY (the board's serial number) now; the next one within IDENTITY_PERIOD."""
+        self._identity_due = time.monotonic() + sp.IDENTITY_PERIOD
+        with self._fd_lock:
+            if self._master is None:
+                return
+            self._tx.append(sp.encode(sp.Identity(seq, self.serial)))
+            self._flush()
 
     def _end_stops(self, x_c):
         return ((sp.END_STOP_LOW if x_c <= self.config.x_c_min else 0)
@@ -242,6 +303,8 @@ class SimActuatorBoard:
                     raise
                 return
         for message in self._decoder.feed(data):
+            if self._host_seen is None or time.monotonic() - self._host_seen > sp.IDENTITY_PERIOD:
+                self._identity_due = 0.0  # a host (again): it hears who this is at once
             self._last_host = self._host_seen = time.monotonic()
             if isinstance(message, sp.MotorCommand):
                 self._counts['motor_commands'] += 1

@@ -24,6 +24,7 @@ spring covered the range, fits F(x_s) by a cubic (the load cell's noise averages
 (F(x_s_high) - F(x_s_low)) / (x_s_high - x_s_low). No model is involved: this is what the
 controller's model is judged against (docs/workflow.md).
 """
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -42,15 +43,33 @@ class StiffnessWindow(NamedTuple):
     k: float
 
 
+# Samples a window needs for the cubic fit of F(x_s) to average the load cell's noise.
+MIN_WINDOW_SAMPLES = 20
+
+
 def measured_stiffness(table, x_s_low, x_s_high, window):
-    """Return a `StiffnessWindow` per window of `window` s where the stiffness is measurable."""
+    """
+    Return a `StiffnessWindow` per window of `window` s where the stiffness is measurable.
+
+    A window shorter than MIN_WINDOW_SAMPLES median steps is refused (it measures nothing, and
+    a window of nanoseconds would cut the record into billions); each window's rows are found by
+    bisection, so the cost grows with the rows, not with rows times windows.
+    """
     t, x_c, x_s, f = (np.asarray(table[n], dtype=float) for n in ('t', 'x_c', 'x_s', 'f'))
-    if not window > 0:
-        raise DataError(table.path, f'window must be > 0 s, got {window}')
+    if not (math.isfinite(window) and window > 0):
+        raise DataError(table.path, f'window must be a finite time > 0 s, got {window}')
+    step = float(np.median(np.diff(t))) if len(t) > 1 else math.inf
+    if not window >= MIN_WINDOW_SAMPLES * step:
+        raise DataError(table.path, f'a window of {window:g} s holds fewer than '
+                        f'{MIN_WINDOW_SAMPLES} samples (a sample every {step:g} s): give '
+                        'one period of the spring motion', column='t')
     result = []
-    for start in np.arange(t[0], t[-1] - window + 1e-9, window):
-        rows = (t >= start) & (t < start + window)
-        if rows.sum() < 20 or np.ptp(x_c[rows]) > HELD:
+    starts = np.arange(t[0], t[-1] - window + 1e-9, window)
+    firsts = np.searchsorted(t, starts, side='left')
+    ends = np.searchsorted(t, starts + window, side='left')
+    for start, first, end in zip(starts, firsts, ends):
+        rows = slice(first, end)
+        if end - first < MIN_WINDOW_SAMPLES or np.ptp(x_c[rows]) > HELD:
             continue
         xs = x_s[rows]
         if xs.min() > x_s_low + 1e-4 or xs.max() < x_s_high - 1e-4:

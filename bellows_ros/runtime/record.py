@@ -29,6 +29,7 @@ A recording survives being stopped:
   SIGKILL or a crash the file holds every message up to the last flush, and `bellows reindex`
   (bellows_ros/bag_repair.py) rebuilds what readers need from it.
 """
+import contextlib
 import os
 from pathlib import Path
 import signal
@@ -45,6 +46,7 @@ from rosbags.rosbag2.enums import StoragePlugin
 
 from bellows_ros import interfaces
 from bellows_ros.bag import TYPESTORE
+from bellows_ros.bag_lock import hold
 from bellows_ros.errors import BellowsError
 from bellows_ros.outputs import check_output
 from bellows_ros.runtime import messages
@@ -108,8 +110,8 @@ def record(output, topics=None, duration=None, ready=None, namespace='/'):
         raise BellowsError(f"record: unknown topic '{unknown[0]}' (known in namespace "
                            f"{namespace}: {', '.join(known)})")
     twice = sorted({t for t in topics if topics.count(t) > 1})
-    if twice:
-        raise BellowsError(f"record: topic '{twice[0]}' is given twice")
+    if twice:  # one connection per topic: a second would record every message twice
+        raise BellowsError(f'--topics: {twice[0]} is given twice')
     output = Path(output)
     if os.path.lexists(output):
         raise BellowsError(f'{output}: already exists (rosbag2 writes a new directory)')
@@ -137,31 +139,38 @@ def record(output, topics=None, duration=None, ready=None, namespace='/'):
             raise BellowsError(f'{output}: cannot create the bag ({exc.strerror})') from None
         node_executor = executor()
         try:
-            for topic in topics:
-                connection = writer.add_connection(topic, known[topic].ros_type,
-                                                   typestore=TYPESTORE)
-                qos = LATCHED if known[topic].latched else interfaces.SAMPLE_DEPTH
-                node.create_subscription(classes[topic], topic,
-                                         _writer_callback(writer, connection, counts, topic),
-                                         qos, raw=True)
-            node_executor.add_node(node)
-            if ready:
-                ready()
-            end = None if duration is None else time.monotonic() + duration
-            next_flush = time.monotonic() + FLUSH_PERIOD
-            never = Future()
-            while not stop.requested and (end is None or time.monotonic() < end):
-                node_executor.spin_until_future_complete(never, timeout_sec=SPIN_SLICE)
-                if time.monotonic() >= next_flush:
-                    _flush(writer)
-                    next_flush += FLUSH_PERIOD
+            # One writer (bag_lock): readers and `reindex` refuse the bag while this one writes;
+            # the bag is closed (metadata.yaml written) before the lock goes.
+            with hold(output), contextlib.closing(writer):
+                for topic in topics:
+                    connection = writer.add_connection(topic, known[topic].ros_type,
+                                                       typestore=TYPESTORE)
+                    qos = LATCHED if known[topic].latched else interfaces.SAMPLE_DEPTH
+                    node.create_subscription(classes[topic], topic,
+                                             _writer_callback(writer, connection, counts, topic),
+                                             qos, raw=True)
+                node_executor.add_node(node)
+                if ready:
+                    ready()
+                _spin(node_executor, writer, stop, duration)
         except ExternalShutdownException:
             pass
         finally:
-            writer.close()
             node.destroy_node()
             rclpy.try_shutdown()
     return counts
+
+
+def _spin(node_executor, writer, stop, duration):
+    """Spin until a signal or `duration` s; flush the pending chunk every FLUSH_PERIOD."""
+    end = None if duration is None else time.monotonic() + duration
+    next_flush = time.monotonic() + FLUSH_PERIOD
+    never = Future()
+    while not stop.requested and (end is None or time.monotonic() < end):
+        node_executor.spin_until_future_complete(never, timeout_sec=SPIN_SLICE)
+        if time.monotonic() >= next_flush:
+            _flush(writer)
+            next_flush += FLUSH_PERIOD
 
 
 def _writer_callback(writer, connection, counts, topic):
