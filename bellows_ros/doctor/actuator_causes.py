@@ -43,7 +43,11 @@ Each cause adds the missing physics with its own parameters (docs/doctor.md, con
 - buckling: the spring loses force once its load index x_s/x_cr + (P - P_atm)/p_cr passes 1
   (`models.actuator.buckling_force`): stiffness loss k_b, critical pressure p_cr, critical
   compression x_cr, within the physical bounds of `actuator.buckling.bounds` (onset width from the
-  YAML).
+  YAML): the onset from ambient pressure and the start of the travel to where the other variable
+  alone sets it, fitted in decades.
+
+Every bound is derived (docs/doctor.md, "Where every range comes from"), and what a fit pinned at
+each means is `EDGES`: a limit of the physics is a finding, the others say why it is not named.
 """
 import dataclasses
 
