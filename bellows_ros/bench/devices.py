@@ -70,10 +70,10 @@ in the logarithm; the last column says why (notes below the table).
     misses: k_b from 300 N/m (a tenth of paper B's spring's stiffness: below it the loss hides in
     the noise of most records) to the axial stiffness of the spring's straight wall tube; the
     onset anywhere from ambient pressure (p_cr 0.1 kPa) and the start of the travel (x_cr
-    0.1 mm) to where the other variable alone sets it (p_cr 1.1 MPa, x_cr 1 m). Drawn each on
-    its own: past the onset the force falls at k_b in the compression and k_b x_cr / p_cr in the
-    pressure, which at a small p_cr and a large x_cr is far beyond any spring's force (a limit
-    of `buckling_force`'s linear post-buckling branch, not bounded here).
+    0.1 mm) to where the other variable alone sets it (p_cr 1.1 MPa, x_cr 1 m). k_b is then
+    lowered where the spring would lose more force than it carries (`within_carried`): past the
+    onset `buckling_force` falls at k_b in the compression and k_b x_cr / p_cr in the pressure
+    without end, kilonewtons at a small p_cr and a large x_cr.
 19. The onset at ambient pressure (`onset='ambient'`): the free spring buckles within 2 kPa of
     ambient, and compressed (x_cr from 0.5 mm to beyond the record's 20 mm) at or below it;
     paper B's spring buckles "under high pressure and compression", a softer or more slender
@@ -142,6 +142,35 @@ def _draw(rng, kind, low, high):
     return log_uniform(rng, low, high) if kind == 'log' else float(rng.uniform(low, high))
 
 
+# Gauge pressures (Pa) a drawn record's sealed gas spans at most (the chamber's targets within
+# -20..40 mm from the design point; the records seen reach -10..+16 kPa).
+RECORD_GAUGE = (-15e3, 20e3)
+
+
+def within_carried(params, shape, peak):
+    """
+    Return the drawn k_b (N/m), lowered where the spring would lose more force than it carries.
+
+    Past its onset `buckling_force` loses k_b (x_s - x_cr) + k_b x_cr (P - P_atm)/p_cr, linear
+    without end: at a small p_cr and a large x_cr that is kilonewtons on a spring that carries
+    tens of newtons. A buckled bellows cannot lose more force than it carries, at most its
+    material force at the record's top compression `peak` (m) plus the pressure's force on it
+    (equivalent area times the record's highest gauge, `RECORD_GAUGE`). k_b is scaled down until
+    the largest loss over the record's range (x_s 0..peak, gauge over `RECORD_GAUGE`) is that.
+    """
+    from bellows_ros.models.actuator import Buckling, buckling_force, material_terms
+    from bellows_ros.models.actuator_geometry import area, P_ATM
+    x_s, gauge = np.meshgrid(np.linspace(0.0, peak, 41), np.linspace(*RECORD_GAUGE, 71))
+    onset = Buckling(1.0, shape['critical_pressure'], shape['critical_compression'],
+                     params.buckling.onset_width)
+    loss = float(np.max(-buckling_force(onset, x_s, P_ATM + gauge, np.exp)[0]))
+    carried = (float(np.dot(params.f_mts, material_terms(np.array(peak), len(params.f_mts))))
+               + float(area(params.spring, 0.0, P_ATM)[0]) * RECORD_GAUGE[1])
+    if loss <= 0.0:
+        return shape['stiffness_loss']
+    return float(min(shape['stiffness_loss'], carried / loss))
+
+
 def draw_effect(rng, name, ranges=None):
     """Parameters of effect `name` drawn from `ranges` (default `EFFECT_RANGES[name]`, SI)."""
     return {key: _draw(rng, *spec) for key, spec in (ranges or EFFECT_RANGES[name]).items()}
@@ -196,6 +225,9 @@ def draw_actuator(seed, effects=(), onset=None, buckling=None):
                                   name, ranges)
     if onset == 'travel_end' and 'buckling' in drawn:
         drawn['buckling']['critical_compression'] *= spring_range[1]
+    if 'buckling' in drawn and not buckling:
+        drawn['buckling']['stiffness_loss'] = within_carried(
+            params, drawn['buckling'], spring_range[1])
     if 'buckling' in drawn:
         shape = drawn.pop('buckling')
         params = dataclasses.replace(params, buckling=dataclasses.replace(
