@@ -43,7 +43,7 @@ in the logarithm; the last column says why (notes below the table).
 | wall_bulging | E_V × U(0.3, 2) | 15 |
 | sensor_lag | τ logU(5, 150) ms | 16 |
 | backlash | width logU(0.1, 1) mm | 17 |
-| buckling | k_b logU(300, 17000) N/m, x_cr logU(0.1, 1000) mm, p_cr logU(0.1, 1100) kPa | 18 |
+| buckling | k_b logU(300, 17e3) N/m capped, x_cr logU(0.1, 1e3) mm, p_cr logU(0.1, 1100) kPa|18|
 | buckling, onset at ambient | p_cr logU(0.1, 2) kPa, x_cr logU(0.5, 50) mm | 19 |
 | buckling, onset at end of travel | x_cr ×U(0.85, 1) top peak, p_cr logU(300, 1100) kPa | 20 |
 
