@@ -102,7 +102,9 @@ SPECS = {
     # physical ranges (docs/doctor.md, "Where every range comes from"). The onset is fitted in
     # decades: its physical range spans four of them, from an onset at ambient pressure (p_cr
     # 0.1 kPa) or at the start of the travel (x_cr 0.1 mm) to one the other variable alone sets.
-    'buckling': [('stiffness_loss_kn', 2.0, 0.0, 17.0),
+    # k_b too: at such an onset the loss in the pressure, k_b x_cr / p_cr per Pa, is newtons
+    # per kPa with k_b of a few N/m, where a spring that carries tens of newtons ends.
+    'buckling': [('log10_stiffness_loss_kn', 0.3, -5.0, 1.23),
                  ('log10_critical_pressure_kpa', 1.4, -1.0, 3.04),
                  ('log10_critical_compression_mm', 1.3, -1.0, 3.0)],
 }
@@ -130,8 +132,9 @@ EDGES = {
     ('backlash', 'width_mm', 'lower'): ('absent', 'no play'),
     ('backlash', 'width_mm', 'upper'): (
         'bound', 'a play of more than two turns of the lead screw (1.27 mm lead)'),
-    ('buckling', 'stiffness_loss_kn', 'lower'): ('absent', 'no buckling'),
-    ('buckling', 'stiffness_loss_kn', 'upper'): (
+    ('buckling', 'log10_stiffness_loss_kn', 'lower'): (
+        'absent', 'no buckling: a stiffness loss of 0.01 N/m, 0.4 mN over the whole travel'),
+    ('buckling', 'log10_stiffness_loss_kn', 'upper'): (
         'bound', "the axial stiffness of the spring's straight wall tube: no loss is larger"),
     ('buckling', 'log10_critical_pressure_kpa', 'lower'): (
         'limit', 'the onset lies at ambient pressure: the spring buckles as soon as the gas is '
@@ -172,10 +175,13 @@ DETECTABLE = 5.0
 PROFILE_POINTS = 5
 # SI factor of each scaled buckling variable.
 # The onset's variables are fitted as log10 of the scaled value (`_LOG`).
-_BUCKLING_SI = {'stiffness_loss_kn': ('stiffness_loss', 1e3),
+_BUCKLING_SI = {'log10_stiffness_loss_kn': ('stiffness_loss', 1e3),
                 'log10_critical_pressure_kpa': ('critical_pressure', 1e3),
                 'log10_critical_compression_mm': ('critical_compression', 1e-3)}
-_LOG = ('log10_critical_pressure_kpa', 'log10_critical_compression_mm')
+_LOG = ('log10_stiffness_loss_kn', 'log10_critical_pressure_kpa', 'log10_critical_compression_mm')
+# The smallest stiffness loss fitted, N/m (`SPECS`: 1e-5 kN/m); the YAML's lower bound 0 is no
+# buckling, which a fit in decades reaches as this.
+K_B_FLOOR = 0.01
 
 
 def edge_kind(cause, name, side):
@@ -191,7 +197,8 @@ def buckling_specs(params):
         si, factor = _BUCKLING_SI[name]
         if si in bounds:
             if name in _LOG:
-                low, high = (float(np.log10(max(v, 1e-12) / factor)) for v in bounds[si])
+                floor = K_B_FLOOR if si == 'stiffness_loss' else 1e-12
+                low, high = (float(np.log10(max(v, floor) / factor)) for v in bounds[si])
             else:
                 low, high = (max(v / factor, 0.0) for v in bounds[si])
         specs.append((name, min(max(start, low), high), low, high))
@@ -226,7 +233,7 @@ def buckling_profile(record, params, force_scale):
     No nonlinear fit: a few least-squares projections, cheap at any onset.
     """
     specs = {name: (low, high) for name, _, low, high in buckling_specs(params)}
-    k_max = specs['stiffness_loss_kn'][1] * 1e3
+    k_max = 10.0 ** specs['log10_stiffness_loss_kn'][1] * 1e3
     x_s, p, f = record['x_s'], record['p'], record['f']
     known, columns = force_columns(params, (), {}, x_s, p)
     basis, _ = np.linalg.qr(columns / np.sqrt(np.mean(columns ** 2, axis=0) + 1e-300))
@@ -274,7 +281,7 @@ def identifiability(record, params, scales):
     best = max((o.detectable for o in onsets), default=0.0)
     reasons = {'buckling': None}
     if best < DETECTABLE:
-        k_max = buckling_specs(params)[0][3]
+        k_max = 10.0 ** buckling_specs(params)[0][3]
         x_s, gauge = 1e3 * record['x_s'], (record['p'] - P_ATM) / 1e3
         reasons['buckling'] = (
             'at every onset within the bounds that the record reaches (spring '
@@ -589,8 +596,8 @@ def _profile_starts(record, params, scales):
     force_scale = (scales or {}).get('f') or noise_floors(record)['f']
     starts = []
     for onset in buckling_profile(record, params, force_scale)[:PROFILE_STARTS]:
-        k_b = onset.stiffness_loss or 0.25 * specs[0][3] * 1e3
-        start = [k_b / 1e3, np.log10(onset.critical_pressure / 1e3),
+        k_b = onset.stiffness_loss or 0.25 * 10.0 ** specs[0][3] * 1e3
+        start = [np.log10(max(k_b, K_B_FLOOR) / 1e3), np.log10(onset.critical_pressure / 1e3),
                  np.log10(onset.critical_compression / 1e3)]
         # inside the bounds, off their edges (a start on an edge stays there under trf)
         starts.append([min(max(v, low + 0.01 * (high - low)), high - 0.01 * (high - low))
