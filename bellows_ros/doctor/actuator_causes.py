@@ -598,7 +598,7 @@ def _profile_starts(record, params, scales):
     for onset in buckling_profile(record, params, force_scale)[:PROFILE_STARTS]:
         k_b = onset.stiffness_loss or 0.25 * 10.0 ** specs[0][3] * 1e3
         start = [np.log10(max(k_b, K_B_FLOOR) / 1e3), np.log10(onset.critical_pressure / 1e3),
-                 np.log10(onset.critical_compression / 1e3)]
+                 np.log10(onset.critical_compression * 1e3)]
         # inside the bounds, off their edges (a start on an edge stays there under trf)
         starts.append([min(max(v, low + 0.01 * (high - low)), high - 0.01 * (high - low))
                        for v, (_, _, low, high) in zip(start, specs)])
