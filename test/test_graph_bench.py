@@ -17,8 +17,8 @@
 
 No time is asserted (shared machine): only that every figure is measured, is a sane number, and
 that the counts the bench reports agree with each other. One quick run of every graph bench
-(`graph`, `graph_actuator`: the modules `--only graph` selects) serves the tests that read its
-results.
+(`graph`, `graph_actuator`, `graph_floor`: the modules `--only graph` selects) serves the tests
+that read its results.
 """
 import contextlib
 import io
@@ -32,7 +32,7 @@ import time
 import pytest
 
 from bellows_ros import params
-from bellows_ros.bench import graph, graph_actuator, Result
+from bellows_ros.bench import graph, graph_actuator, graph_floor, Result
 from bellows_ros.cli import main
 from bellows_ros.cli.bench import chosen_modules, format_table
 from bellows_ros.runtime import realtime
@@ -81,7 +81,7 @@ def test_fractions_in_extra_are_shown_without_the_figures_unit():
 
 
 def test_the_graph_benches_are_what_only_graph_selects():
-    assert chosen_modules('graph') == ['graph', 'graph_actuator']
+    assert chosen_modules('graph') == ['graph', 'graph_actuator', 'graph_floor']
 
 
 @pytest.fixture(scope='module')
@@ -173,3 +173,62 @@ def test_graph_bench_reports_every_figure_for_each_variant(graph_results):
     assert results['graph_actuator.rate']['extra']['stiffness_control_hz'] > 0.0
     for name in graph_actuator.NODES:
         assert results[f'graph_actuator.cpu.{name}']['value'] > 0.01, name
+
+
+def _documented_whole_graph_names():
+    """Return the figures graph_floor's docstring names, `<node>` for each node of the graph."""
+    names = set()
+    for pattern in re.findall(r'`(graph\.(?:whole|floor)\.[a-z_.<>]+)`', graph_floor.__doc__):
+        if '<node>' in pattern:
+            names.update(pattern.replace('<node>', node) for node in graph_floor.NODES)
+        else:
+            names.add(pattern)
+    return names
+
+
+def test_the_whole_graph_is_launch_sims_graph():
+    # scripts/launch_sim.sh's nodes, each with a floor node of the same name.
+    launch = (Path(__file__).resolve().parent.parent / 'scripts' / 'launch_sim.sh').read_text()
+    started = re.findall(r'start (\w+_node)', launch) + re.findall(r'/(scenario_node)"', launch)
+    assert set(graph_floor.NODES) == set(started)
+    assert set(graph_floor.FLOORS) == set(graph_floor.NODES)
+    assert len(_documented_whole_graph_names()) == 2 * len(graph_floor.NODES) + 4
+
+
+@pytest.mark.slow
+def test_each_node_of_the_whole_graph_has_its_floor_and_ratio(graph_results):
+    whole = {name: r for name, r in graph_results.items()
+             if name.startswith(('graph.whole.', 'graph.floor.'))}
+    # Exactly the figures the module's docstring names.
+    assert set(whole) == _documented_whole_graph_names()
+    for node in graph_floor.NODES:
+        figure, floor = whole[f'graph.whole.cpu.{node}'], whole[f'graph.floor.cpu.{node}']
+        assert figure['unit'] == floor['unit'] == 'core'
+        assert figure['reference'] == f'graph.floor.cpu.{node}'
+        assert floor['reference'] is None
+        # Every process ran through the window and its CPU was read (no speed asserted).
+        assert floor['value'] > 0.0 and figure['value'] > 0.0, node
+        assert figure['ratio'] == pytest.approx(figure['value'] / floor['value'])
+        for result in (figure, floor):
+            extra = result['extra']
+            assert re.fullmatch(r'SCHED_OTHER|SCHED_FIFO \d+', extra['scheduling']), node
+            # Same scheduling for a node and its floor (the config's).
+            assert isinstance(extra['threads'], dict) and extra['threads'], node
+            assert math.isnan(extra['runqueue_wait']) or extra['runqueue_wait'] >= 0.0
+        assert figure['extra']['scheduling'] == floor['extra']['scheduling'], node
+    for kind in ('whole', 'floor'):
+        total = whole[f'graph.{kind}.cpu.total']
+        assert total['target'] == graph_floor.TOTAL_TARGET
+        assert total['value'] == pytest.approx(
+            sum(whole[f'graph.{kind}.cpu.{node}']['value'] for node in graph_floor.NODES))
+        assert total['extra']['window'] > 0.0
+        assert total['extra']['loadavg_before'] and total['extra']['loadavg_after']
+        rate = whole[f'graph.{kind}.torque_rate']
+        assert rate['unit'] == 'Hz' and rate['target'] == graph_floor.TORQUE_TARGET
+        # Messages the bench's own subscriber counted over the window (none asserted: a starved
+        # model node publishes none).
+        assert rate['value'] == pytest.approx(rate['samples'] / total['extra']['window'])
+    assert whole['graph.whole.cpu.total']['reference'] == 'graph.floor.cpu.total'
+    assert whole['graph.whole.torque_rate']['reference'] == 'graph.floor.torque_rate'
+    table = format_table([Result(**r) for r in whole.values()])
+    assert 'graph.whole.cpu.model_node' in table and 'graph.floor.cpu.model_node' in table
