@@ -58,8 +58,9 @@ Figures (CPU: utime + stime from /proc/<pid>/stat over the window, a fraction of
   the graph ran in `extra` (other work on a shared machine shows there);
 - `graph.floor.torque_rate`, `graph.whole.torque_rate` (target 1000 Hz): the messages per
   second an independent client, the bench's own plain rclpy subscriber, received on
-  /bellows/driving_torque over the window (each carries every segment), with the model node's
-  own rate (median of its /diagnostics reports) in `extra`.
+  /bellows/driving_torque over the window (each carries every segment), with, for the whole
+  graph, the model node's own rate (median of its /diagnostics reports in the window; nan when
+  none came, a starved node's) in `extra`.
 Nothing here asserts a time. A node that exits is an error (BellowsError with its log line).
 """
 from array import array
@@ -123,9 +124,11 @@ def run(quick=False):
                        extra_units={'window': 's', 'steal': ''})
         rate = Result(f'graph.{kind}.torque_rate', run_['torque_rate'], 'Hz',
                       run_['torque_messages'], target=TORQUE_TARGET,
-                      extra={'segments_per_message': SEGMENTS,
-                             'model_rate_hz': run_['model_rate']},
-                      extra_units={'segments_per_message': '', 'model_rate_hz': 'Hz'})
+                      extra={'segments_per_message': SEGMENTS},
+                      extra_units={'segments_per_message': ''})
+        if kind == 'whole':  # the model node's own count (nan: no report in the window)
+            rate.extra['model_rate_hz'] = run_['model_rate']
+            rate.extra_units['model_rate_hz'] = 'Hz'
         if kind == 'whole':
             _against(total, sum(floor['cpu'].values()), 'graph.floor.cpu.total')
             _against(rate, floor['torque_rate'], 'graph.floor.torque_rate')
