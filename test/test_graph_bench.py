@@ -16,22 +16,26 @@
 `bellows bench --only graph`: the node graph's figures and the platform reference beside them.
 
 No time is asserted (shared machine): only that every figure is measured, is a sane number, and
-that the counts the bench reports agree with each other.
+that the counts the bench reports agree with each other. One quick run of every graph bench
+(`graph`, `graph_actuator`, `graph_floor`: the modules `--only graph` selects) serves the tests
+that read its results.
 """
+import contextlib
+import io
 import json
 import math
 import os
 from pathlib import Path
+import re
 import time
 
 import pytest
 
 from bellows_ros import params
-from bellows_ros.bench import graph, graph_actuator, Result
+from bellows_ros.bench import graph, graph_actuator, graph_floor, Result
 from bellows_ros.cli import main
-from bellows_ros.cli.bench import format_table
+from bellows_ros.cli.bench import chosen_modules, format_table
 from bellows_ros.runtime import realtime
-from bellows_ros.runtime.node import rclpy_unavailable
 
 
 def latency_requests_held():
@@ -76,20 +80,50 @@ def test_fractions_in_extra_are_shown_without_the_figures_unit():
     assert '    p50:        980 Hz' in table
 
 
+def test_the_graph_benches_are_what_only_graph_selects():
+    assert chosen_modules('graph') == ['graph', 'graph_actuator', 'graph_floor']
+
+
+@pytest.fixture(scope='module')
+def graph_results():
+    """Run `bellows bench --only graph --quick --json` once: {name: result as a dict}."""
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        assert main(['bench', '--only', 'graph', '--quick', '--json']) == 0
+    # Every node process the benches started was stopped and reaped: none is left.
+    assert _children() == []
+    return {r['name']: r for r in json.loads(out.getvalue())}
+
+
+def _children():
+    """Return the processes whose parent is this one (/proc/<pid>/stat, field 4)."""
+    found = []
+    for entry in Path('/proc').iterdir():
+        if entry.name.isdigit():
+            try:
+                text = (entry / 'stat').read_text()
+            except OSError:
+                continue  # ended in between
+            if int(text.rsplit(')', 1)[1].split()[1]) == os.getpid():
+                found.append(text[:text.rindex(')') + 1])
+    return found
+
+
 @pytest.mark.slow
-def test_graph_bench_reports_every_figure_for_each_variant(capsys):
+def test_graph_bench_reports_every_figure_for_each_variant(graph_results):
+    results = graph_results
     configured = params.read_file(graph.CONFIG, 'model_node')['cpu_latency_limit']
-    assert main(['bench', '--only', 'graph', '--quick', '--json']) == 0
-    results = {r['name']: r for r in json.loads(capsys.readouterr().out)}
     assert 'graph.platform.wakeup_lateness' in results
     assert 'graph.platform.wakeup_lateness_no_latency_limit' in results
-    rclpy_missing = rclpy_unavailable()
-    if rclpy_missing:
-        assert results['graph.rclpy.rate']['extra']['skipped'].endswith(rclpy_missing)
-    grid = graph.variants(rclpy_missing)
-    # The whole grid, each variant once: runtimes x privileges x processes x segment counts.
-    assert len({prefix for prefix, *_ in grid}) == len(grid) == (4 if rclpy_missing else 8) * 2
-    for prefix, runtime, _, composed, _ in grid:
+    grid = graph.variants()
+    # The whole grid, each variant once: privileges x processes x segment counts.
+    assert len({prefix for prefix, *_ in grid}) == len(grid) == 8
+    # Named as the module says: graph[.user][.composed][.1seg].*, and no runtime mark left.
+    assert re.search(r'`graph\[\.user\]\[\.composed\]\[\.1seg\]\.\*`', graph.__doc__)
+    assert all(re.fullmatch(r'graph(\.user)?(\.composed)?(\.1seg)?', prefix)
+               for prefix, *_ in grid)
+    assert not [name for name in results if '.rclpy' in name or '.dds' in name]
+    for prefix, _, composed, _ in grid:
         evaluated = results[f'{prefix}.fraction_evaluated']
         # samples flowed (3 s window; the rate is host-bound)
         assert evaluated['extra']['published'] > 100
@@ -100,7 +134,6 @@ def test_graph_bench_reports_every_figure_for_each_variant(capsys):
         assert evaluated['extra']['evaluated'] > 0
         assert 0.0 < evaluated['value'] <= (1.1 if composed else 1.0)
         rate = results[f'{prefix}.rate']
-        assert rate['extra']['runtime'] == runtime
         assert set(rate['extra']['scheduling']) == set(graph.NODES)
         assert rate['extra']['sim_arm_lateness_p99'] >= 0.0    # the stand-in reported its ticks
         assert rate['extra']['sim_arm_deadline_misses'] >= 0
@@ -112,7 +145,7 @@ def test_graph_bench_reports_every_figure_for_each_variant(capsys):
         processes = ('sim_arm_node', graph.COMPOSED) if composed else graph.NODES
         for name in processes:
             assert results[f'{prefix}.cpu.{name}']['value'] > 0.01    # every process worked
-    for prefix, runtime, privilege, composed, segments in grid:
+    for prefix, privilege, composed, segments in grid:
         rate = results[f'{prefix}.rate']
         reference = results[f'{prefix}.latency_p50']['reference']
         assert reference == f'graph.model_step_inprocess_{segments}seg'
@@ -134,9 +167,68 @@ def test_graph_bench_reports_every_figure_for_each_variant(capsys):
     assert user_loop['cpu_latency_requested'] < 0
     assert user_loop['scheduling'] == 'SCHED_OTHER'
     assert latency_requests_held() == []
-    # bench/graph_actuator.py (its module name holds 'graph'): the whole graph, every node worked.
-    for prefix in ('graph_actuator',) + (() if rclpy_missing else ('graph_actuator.rclpy',)):
-        assert 0.0 < results[f'{prefix}.rate']['value'] <= 1100.0
-        assert results[f'{prefix}.rate']['extra']['stiffness_control_hz'] > 0.0
-        for name in graph_actuator.NODES:
-            assert results[f'{prefix}.cpu.{name}']['value'] > 0.01, name
+    # bench/graph_actuator.py (its module name holds 'graph'): the arm and the actuator, every
+    # node worked.
+    assert 0.0 < results['graph_actuator.rate']['value'] <= 1100.0
+    assert results['graph_actuator.rate']['extra']['stiffness_control_hz'] > 0.0
+    for name in graph_actuator.NODES:
+        assert results[f'graph_actuator.cpu.{name}']['value'] > 0.01, name
+
+
+def _documented_whole_graph_names():
+    """Return the figures graph_floor's docstring names, `<node>` for each node of the graph."""
+    names = set()
+    for pattern in re.findall(r'`(graph\.(?:whole|floor)\.[a-z_.<>]+)`', graph_floor.__doc__):
+        if '<node>' in pattern:
+            names.update(pattern.replace('<node>', node) for node in graph_floor.NODES)
+        else:
+            names.add(pattern)
+    return names
+
+
+def test_the_whole_graph_is_launch_sims_graph():
+    # scripts/launch_sim.sh's nodes, each with a floor node of the same name.
+    launch = (Path(__file__).resolve().parent.parent / 'scripts' / 'launch_sim.sh').read_text()
+    started = re.findall(r'start (\w+_node)', launch) + re.findall(r'/(scenario_node)"', launch)
+    assert set(graph_floor.NODES) == set(started)
+    assert set(graph_floor.FLOORS) == set(graph_floor.NODES)
+    assert len(_documented_whole_graph_names()) == 2 * len(graph_floor.NODES) + 4
+
+
+@pytest.mark.slow
+def test_each_node_of_the_whole_graph_has_its_floor_and_ratio(graph_results):
+    whole = {name: r for name, r in graph_results.items()
+             if name.startswith(('graph.whole.', 'graph.floor.'))}
+    # Exactly the figures the module's docstring names.
+    assert set(whole) == _documented_whole_graph_names()
+    for node in graph_floor.NODES:
+        figure, floor = whole[f'graph.whole.cpu.{node}'], whole[f'graph.floor.cpu.{node}']
+        assert figure['unit'] == floor['unit'] == 'core'
+        assert figure['reference'] == f'graph.floor.cpu.{node}'
+        assert floor['reference'] is None
+        # Every process ran through the window and its CPU was read (no speed asserted).
+        assert floor['value'] > 0.0 and figure['value'] > 0.0, node
+        assert figure['ratio'] == pytest.approx(figure['value'] / floor['value'])
+        for result in (figure, floor):
+            extra = result['extra']
+            assert re.fullmatch(r'SCHED_OTHER|SCHED_FIFO \d+', extra['scheduling']), node
+            # Same scheduling for a node and its floor (the config's).
+            assert isinstance(extra['threads'], dict) and extra['threads'], node
+            assert math.isnan(extra['runqueue_wait']) or extra['runqueue_wait'] >= 0.0
+        assert figure['extra']['scheduling'] == floor['extra']['scheduling'], node
+    for kind in ('whole', 'floor'):
+        total = whole[f'graph.{kind}.cpu.total']
+        assert total['target'] == graph_floor.TOTAL_TARGET
+        assert total['value'] == pytest.approx(
+            sum(whole[f'graph.{kind}.cpu.{node}']['value'] for node in graph_floor.NODES))
+        assert total['extra']['window'] > 0.0
+        assert total['extra']['loadavg_before'] and total['extra']['loadavg_after']
+        rate = whole[f'graph.{kind}.torque_rate']
+        assert rate['unit'] == 'Hz' and rate['target'] == graph_floor.TORQUE_TARGET
+        # Messages the bench's own subscriber counted over the window (none asserted: a starved
+        # model node publishes none).
+        assert rate['value'] == pytest.approx(rate['samples'] / total['extra']['window'])
+    assert whole['graph.whole.cpu.total']['reference'] == 'graph.floor.cpu.total'
+    assert whole['graph.whole.torque_rate']['reference'] == 'graph.floor.torque_rate'
+    table = format_table([Result(**r) for r in whole.values()])
+    assert 'graph.whole.cpu.model_node' in table and 'graph.floor.cpu.model_node' in table

@@ -15,9 +15,11 @@
 """
 Benchmark of the node graph over real DDS: sim_arm_node -> driver_node -> model_node.
 
-Measured in one run, over the grid of where a user runs it (`variants`): each runtime (the DDS
-runtime, and rclpy where it imports) x each privilege x separate or composed processes x 4 or 1
-segments, named `graph[.rclpy][.user][.composed][.1seg].*`:
+Measured in one run, over the grid of where a user runs it (`variants`): each privilege x separate
+or composed processes x 4 or 1 segments, named `graph[.user][.composed][.1seg].*`. Every node is a
+plain rclpy node (runtime/node.py) started as a process of its own, as scripts/launch_sim.sh starts
+it; the bench's own participant is a plain rclpy node in the bench process, in a context of its
+own on the bench's domain (GraphRun). Everything stays on this host (LOOPBACK_ENVIRONMENT).
 - privileges: as root (no mark), the host nodes run at the SCHED_FIFO priority
   config/nodes_hw.yaml gives them on a robot and hold the CPU latency limit the configs ask for
   (`cpu_latency_limit`, runtime/realtime.py); `.user` is what an ordinary user's nodes get, every
@@ -81,7 +83,26 @@ from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.loop_timing import LoopStats, PeriodicLoop
 from bellows_ros.models.segment import SegmentModel
 from bellows_ros.runtime import realtime
-from bellows_ros.runtime.node import rclpy_unavailable
+from bellows_ros.runtime.messages import msg
+
+# DDS discovery and traffic on this host only, for the bench's own participant and every node
+# process it starts: ROS 2 Jazzy's own switch (rmw_fastrtps_cpp honours it), no static peers, and
+# Fast DDS over UDP on loopback without the shared-memory files a killed process leaves in
+# /dev/shm. The same as the tests' (test/node_processes.py).
+LOOPBACK_ENVIRONMENT = {'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST', 'ROS_STATIC_PEERS': '',
+                        'FASTDDS_BUILTIN_TRANSPORTS': 'UDPv4'}
+# Each bench's ROS domains (drawn per graph) and simulated CAN groups (239.74.170.x: x drawn),
+# apart from one another and from the tests' (a graph of one bench never hears another's).
+DOMAINS = {'graph': (150, 152), 'graph_actuator': (153, 154), 'graph_floor': (155, 160)}
+CAN_GROUPS = {'graph': '239.74.170', 'graph_actuator': '239.74.171', 'graph_floor': '239.74.172'}
+# s: the longest the bench's executor runs before the bench looks at its node processes again.
+SPIN_SLICE = 0.05
+
+
+def node_environment(domain, **extra):
+    """Return the environment of a node process on `domain`, on loopback, with `extra`."""
+    return dict(os.environ, ROS_DOMAIN_ID=str(domain), **LOOPBACK_ENVIRONMENT, **extra)
+
 
 # The installed config (a pip or colcon install has no source tree beside the package).
 CONFIG = params.default_file('nodes_sim')
@@ -117,19 +138,16 @@ SEGMENTS = (4, 1)     # the arm's four; the default launch's one
 PRIVILEGES = ('root', 'user')
 
 
-def variants(rclpy_missing):
-    """Return the grid measured, (prefix, runtime, privilege, composed, segments) per variant."""
+def variants():
+    """Return the grid measured, (prefix, privilege, composed, segments) per variant."""
     grid = []
-    for runtime in ('dds',) if rclpy_missing else ('dds', 'rclpy'):
-        for privilege in PRIVILEGES:
-            for composed in (False, True):
-                for segments in SEGMENTS:
-                    marks = [mark for mark, on in (('rclpy', runtime == 'rclpy'),
-                                                   ('user', privilege == 'user'),
-                                                   ('composed', composed),
-                                                   (f'{segments}seg', segments != 4)) if on]
-                    grid.append(('.'.join(['graph', *marks]), runtime, privilege, composed,
-                                 segments))
+    for privilege in PRIVILEGES:
+        for composed in (False, True):
+            for segments in SEGMENTS:
+                marks = [mark for mark, on in (('user', privilege == 'user'),
+                                               ('composed', composed),
+                                               (f'{segments}seg', segments != 4)) if on]
+                grid.append(('.'.join(['graph', *marks]), privilege, composed, segments))
     return grid
 
 
@@ -147,31 +165,22 @@ def run(quick=False):
                                      host['model_node'], limit))
     results.append(_wakeup_reference('graph.platform.wakeup_lateness_no_latency_limit', window,
                                      0, -1.0))
-    rclpy_missing = rclpy_unavailable()
-    for prefix, runtime, privilege, composed, segments in variants(rclpy_missing):
-        results += _measure(prefix, runtime, window, segments, scheduling[privilege],
+    for prefix, privilege, composed, segments in variants():
+        results += _measure(prefix, window, segments, scheduling[privilege],
                             latency[privilege], references[segments], composed=composed)
-    if rclpy_missing:
-        results.append(Result('graph.rclpy.rate', float('nan'), 'Hz', 0,
-                              extra={'skipped': f'rclpy not importable: {rclpy_missing}'}))
     return results
 
 
-def _measure(prefix, runtime, window, segments, priorities, latency_limit, reference,
-             composed=False):
+def _measure(prefix, window, segments, priorities, latency_limit, reference, composed=False):
     """
-    Run the three nodes on `runtime` ('dds' or 'rclpy') for `window` s; return their figures.
+    Run the three nodes for `window` s; return their figures.
 
     Each node runs at the given `realtime_priority` and `cpu_latency_limit`; `composed` runs the
     driver and the model node in one process (COMPOSE).
     """
-    from bellows_ros.runtime import dds_node
-    from bellows_ros.runtime.messages import msg
-
-    domain = str(random.randint(231, 232))
-    group = f'239.74.166.{random.randint(2, 250)}'
-    env = dict(os.environ, ROS_DOMAIN_ID=domain, BELLOWS_RUNTIME=runtime,
-               **dds_node.LOOPBACK_ENVIRONMENT)
+    domain = str(random.randint(*DOMAINS['graph']))
+    group = f'{CAN_GROUPS["graph"]}.{random.randint(2, 250)}'
+    env = node_environment(domain)
     given = {'sim_arm_node': {'can.channel': group, 'n_segments': segments},
              'driver_node': {'arm.channel': group, 'arm.n_segments': segments,
                              'actuator.enabled': 'false', 'wait_for_subscribers': 20.0,
@@ -179,8 +188,8 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
              'model_node': {'segments': list(range(1, segments + 1)), 'latency_budget': 0.002}}
     binary = Path(sys.executable).parent
     windows, final = [], {}
-    with GraphRun(dds_node, domain) as graph:
-        node = dds_node.Node('bench_graph')
+    with GraphRun(domain, 'bench_graph') as graph:
+        node = graph.node
 
         def on_diagnostics(array):
             for status in array.status:
@@ -209,20 +218,24 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
                 # (and the driver waits until it has matched it).
                 end = time.monotonic() + 60.0
                 while 'model_node: driving torque' not in final and time.monotonic() < end:
-                    dds_node.spin_once(node, timeout_sec=0.05)
-                    graph.check_alive()
-        _spin(dds_node, node, 4.0)  # start-up and discovery
-        graph.check_alive()
+                    graph.spin(0.05)
+        # The driver publishes once it has matched the model (wait_for_subscribers): on a busy
+        # machine Fast DDS's discovery between two new processes takes seconds.
+        end = time.monotonic() + 60.0
+        while _counts(final)[0] == 0:
+            if time.monotonic() > end:
+                raise BellowsError(f'bench {prefix}: the driver published no sample in 60 s')
+            graph.spin(0.05)
+        graph.spin(4.0)  # the model's first reports, past the start
         counts0 = _counts(final)
         windows.clear()
         limit_in_force = realtime.cpu_latency_in_force()
-        cpu, stolen = graph.cpu_window(node, window)
+        cpu, stolen = graph.cpu_window(window)
         measured = list(windows)
         counts1 = _counts(final)
         if not composed:  # composed, the driver's last count and the model's come together
-            graph.processes['driver_node'].send_signal(signal.SIGINT)
-            graph.processes['driver_node'].wait(timeout=10)
-            _spin(dds_node, node, 2.5)  # the model's next report carries its final count
+            graph.stop('driver_node')  # its close() publishes its final count
+            graph.spin(2.5)  # the model's next report carries its final count
     driver = final.get('driver_node: arm', {})
     model = final.get('model_node: driving torque', {})
     published = int(driver.get('published', 0))
@@ -241,7 +254,7 @@ def _measure(prefix, runtime, window, segments, priorities, latency_limit, refer
     arm_lateness = float(arm.get('lateness_p99_us', 'nan')) * 1e-6
     results = [Result(f'{prefix}.rate', statistics.median(rates) if rates else 0.0, 'Hz',
                       len(rates), target=1000.0,
-                      extra={'runtime': runtime, 'scheduling': scheduling, 'steal': stolen,
+                      extra={'scheduling': scheduling, 'steal': stolen,
                              'cpu_latency_limit': limit_in_force,
                              'cpu_latency_requested': float(latency_limit),
                              'sim_arm_lateness_p99': arm_lateness,
@@ -356,33 +369,61 @@ def _steal_fraction(start, end):
 
 class GraphRun:
     """
-    The bench's side of one node graph, shared by the graph benches (this one, graph_actuator).
+    The bench's side of one node graph, shared by graph, graph_actuator and graph_floor.
 
-    `with GraphRun(dds_node, domain) as graph:` joins `domain` on loopback (the bench's own DDS
-    participant: init it, make its node), `graph.start(name, command, env)` starts a node process
-    logging to `graph.logs/<name>.log`, `graph.check_alive()` raises if one has exited. On exit
-    every process is sent SIGINT (killed after 10 s), the participant leaves, ROS_DOMAIN_ID and
-    the loopback settings are restored, the logs are removed.
+    `with GraphRun(domain, name) as graph:` joins `domain` on loopback: the bench's own
+    participant, a plain rclpy node `graph.node` in a context of its own (`graph.context`), spun
+    on its own executor in bounded slices by `graph.spin(seconds)`. `graph.start(name, command,
+    env)` starts a node process logging to `graph.logs/<name>.log`, `graph.check_alive()` raises
+    if one has exited. On exit every process is sent SIGINT (killed after 10 s), the node and
+    the context are shut down, ROS_DOMAIN_ID and the loopback settings are restored, the logs
+    are removed.
     """
 
-    def __init__(self, dds_node, domain):
-        self.dds_node, self.domain = dds_node, domain
+    def __init__(self, domain, name='bench_graph'):
+        self.domain, self.name = domain, name
         self.processes = {}
         self._logs = tempfile.TemporaryDirectory()
         self.logs = Path(self._logs.name)
         self._files = []
         self._previous = {}
+        self.context = self.node = self.executor = None
 
     def __enter__(self):
-        names = ('ROS_DOMAIN_ID', *self.dds_node.LOOPBACK_ENVIRONMENT)
+        import rclpy
+        import rclpy.node
+        from rclpy.signals import SignalHandlerOptions
+
+        names = ('ROS_DOMAIN_ID', *LOOPBACK_ENVIRONMENT)
         self._previous = {name: os.environ.get(name) for name in names}
-        os.environ.update(ROS_DOMAIN_ID=self.domain, **self.dds_node.LOOPBACK_ENVIRONMENT)
+        # The bench's participant reads these from its own environment (rmw at init).
+        os.environ.update(ROS_DOMAIN_ID=self.domain, **LOOPBACK_ENVIRONMENT)
         try:
-            self.dds_node.init([])
+            self.context = rclpy.Context()
+            # No signal handlers: Ctrl-C stays the bench's (KeyboardInterrupt, then __exit__).
+            rclpy.init(context=self.context, domain_id=int(self.domain),
+                       signal_handler_options=SignalHandlerOptions.NO)
+            self.node = rclpy.node.Node(self.name, context=self.context)
+            self.executor = _bench_executor(self.context)
+            self.executor.add_node(self.node)
         except BaseException:
+            self._leave()
             self._restore()
             raise
         return self
+
+    def spin(self, seconds):
+        """Spin the bench's node for `seconds` s in bounded slices; raises if a node exited."""
+        from rclpy.task import Future
+
+        never = Future()
+        end = time.monotonic() + seconds
+        while True:
+            left = end - time.monotonic()
+            if left <= 0:
+                break
+            self.executor.spin_until_future_complete(never, timeout_sec=min(SPIN_SLICE, left))
+            self.check_alive()
 
     def start(self, name, command, env):
         """Start node process `name` (`command`, in `env`), its output in logs/<name>.log."""
@@ -391,9 +432,9 @@ class GraphRun:
         self.processes[name] = subprocess.Popen(command, env=env, stdout=log,
                                                 stderr=subprocess.STDOUT)
 
-    def cpu_window(self, node, seconds):
+    def cpu_window(self, seconds):
         """
-        Spin `node` for `seconds` s; return (CPU of each node process, steal).
+        Spin the bench's node for `seconds` s; return (CPU of each node process, steal).
 
         CPU: utime + stime over the window, as a fraction of one core; steal: the share of all
         CPU time the hypervisor took meanwhile. Raises if a node process exited.
@@ -401,7 +442,7 @@ class GraphRun:
         cpu0 = {name: _cpu_seconds(p.pid) for name, p in self.processes.items()}
         times = _cpu_times()
         start = time.monotonic()
-        _spin(self.dds_node, node, seconds)
+        self.spin(seconds)
         elapsed = time.monotonic() - start
         stolen = _steal_fraction(times, _cpu_times())
         self.check_alive()
@@ -416,6 +457,17 @@ class GraphRun:
                 raise BellowsError(f'bench graph: {name} exited with status '
                                    f'{process.returncode}' + (f' ({log[-1]})' if log else ''))
 
+    def stop(self, name, timeout=10.0):
+        """Stop node process `name` (SIGINT; killed after `timeout` s); returns its status."""
+        process = self.processes.pop(name)
+        if process.poll() is None:
+            process.send_signal(signal.SIGINT)
+        try:
+            return process.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            process.kill()
+            return process.wait()
+
     def __exit__(self, *exc):
         for process in self.processes.values():
             if process.poll() is None:
@@ -425,11 +477,21 @@ class GraphRun:
                 process.wait(timeout=10)
             except subprocess.TimeoutExpired:
                 process.kill()
-        self.dds_node.shutdown()
+                process.wait()
+        self._leave()
         self._restore()
         for log in self._files:
             log.close()
         self._logs.cleanup()
+
+    def _leave(self):
+        if self.executor is not None:
+            self.executor.shutdown()
+        if self.node is not None:
+            self.node.destroy_node()
+        if self.context is not None:
+            self.context.try_shutdown()
+        self.context = self.node = self.executor = None
 
     def _restore(self):
         for name, value in self._previous.items():
@@ -439,10 +501,15 @@ class GraphRun:
                 os.environ[name] = value
 
 
-def _spin(dds_node, node, seconds):
-    end = time.monotonic() + seconds
-    while time.monotonic() < end:
-        dds_node.spin_once(node, timeout_sec=0.05)
+def _bench_executor(context):
+    """Return the bench's executor: rclpy's EventsExecutor where it has one, as the nodes'."""
+    from rclpy.executors import SingleThreadedExecutor
+
+    from bellows_ros.runtime.node import EventsExecutor
+
+    if EventsExecutor is not None:
+        return EventsExecutor(context=context)
+    return SingleThreadedExecutor(context=context)
 
 
 if __name__ == '__main__':

@@ -13,13 +13,14 @@
 # limitations under the License.
 
 """
-Benchmark of the whole simulated graph, the arm and the actuator together, over real DDS.
+Benchmark of the simulated graph, the arm and the actuator together, over real DDS.
 
 sim_arm_node (one segment, CAN over udp_multicast) and sim_actuator_node (pty) -> driver_node
 (both device groups) -> model_node, arm_controller_node (holding its first angle) and
 stiffness_controller_node (no set-point: holding still), as scripts/launch_sim.sh runs them, with
-config/nodes_sim.yaml's scheduling, on the DDS runtime (`graph_actuator.*`) and, where rclpy
-imports, on rclpy (`graph_actuator.rclpy.*`). What `graph` (bench/graph.py) leaves out: the
+config/nodes_sim.yaml's scheduling, each a plain rclpy node in a process of its own
+(`graph_actuator.*`; the bench's participant and loopback as bench/graph.py's GraphRun). What
+`graph` (bench/graph.py) leaves out: the
 1 kHz arm nodes and the stiffness controller side by side, each a subscriber of the driver's
 sample topics, so that what one node pays for the other group's samples shows in its CPU.
 Figures:
@@ -28,7 +29,6 @@ Figures:
   stiffness controller's control rate and the scheduling each node got in `extra`.
 Nothing here asserts a time. A node that exits is an error (BellowsError with its log).
 """
-import os
 from pathlib import Path
 import random
 import statistics
@@ -37,8 +37,8 @@ import time
 
 from bellows_ros import params
 from bellows_ros.bench import Result
-from bellows_ros.bench.graph import _spin, GraphRun
-from bellows_ros.runtime.node import rclpy_unavailable
+from bellows_ros.bench.graph import CAN_GROUPS, DOMAINS, GraphRun, node_environment
+from bellows_ros.runtime.messages import msg
 
 CONFIG = params.default_file('nodes_sim')
 # In start order: the consumers listen before the driver publishes its first sample.
@@ -50,27 +50,16 @@ CONSUMERS = ('model_node: driving torque', 'stiffness_controller_node: control',
 
 def run(quick=False):
     window = 3.0 if quick else 10.0
-    results = _measure('graph_actuator', 'dds', window)
-    missing = rclpy_unavailable()
-    if missing:
-        results.append(Result('graph_actuator.rclpy.rate', float('nan'), 'Hz', 0,
-                              extra={'skipped': f'rclpy not importable: {missing}'}))
-    else:
-        results += _measure('graph_actuator.rclpy', 'rclpy', window)
-    return results
+    return _measure('graph_actuator', window)
 
 
-def _measure(prefix, runtime, window):
-    """Run the six nodes on `runtime` ('dds' or 'rclpy') for `window` s; return their figures."""
-    from bellows_ros.runtime import dds_node
-    from bellows_ros.runtime.messages import msg
-
-    domain = str(random.randint(40, 59))
-    group = f'239.74.168.{random.randint(2, 250)}'
-    graph = GraphRun(dds_node, domain)
+def _measure(prefix, window):
+    """Run the six nodes for `window` s; return their figures."""
+    domain = str(random.randint(*DOMAINS['graph_actuator']))
+    group = f'{CAN_GROUPS["graph_actuator"]}.{random.randint(2, 250)}'
+    graph = GraphRun(domain, 'bench_graph_actuator')
     port = str(graph.logs / 'actuator')
-    env = dict(os.environ, ROS_DOMAIN_ID=domain, BELLOWS_RUNTIME=runtime,
-               **dds_node.LOOPBACK_ENVIRONMENT)
+    env = node_environment(domain)
     given = {'sim_arm_node': {'can.channel': group},
              'sim_actuator_node': {'port': port},
              'driver_node': {'arm.channel': group, 'actuator.port': port,
@@ -79,7 +68,7 @@ def _measure(prefix, runtime, window):
     binary = Path(sys.executable).parent
     reports, final = {}, {}
     with graph:
-        node = dds_node.Node('bench_graph_actuator')
+        node = graph.node
 
         def on_diagnostics(array):
             for status in array.status:
@@ -94,8 +83,7 @@ def _measure(prefix, runtime, window):
             if name == 'driver_node':
                 end = time.monotonic() + 60.0
                 while not all(c in final for c in CONSUMERS) and time.monotonic() < end:
-                    dds_node.spin_once(node, timeout_sec=0.05)
-                    graph.check_alive()
+                    graph.spin(0.05)
             graph.start(name, [str(binary / name), '--ros-args', '--params-file', str(CONFIG),
                                *arguments], env)
         # The driver publishes once every consumer has matched (wait_for_subscribers).
@@ -103,19 +91,17 @@ def _measure(prefix, runtime, window):
         while time.monotonic() < end and not all(
                 int(final.get(f'driver_node: {group}', {}).get('published', 0)) > 0
                 for group in ('arm', 'actuator')):
-            dds_node.spin_once(node, timeout_sec=0.05)
-            graph.check_alive()
-        _spin(dds_node, node, 3.0)  # settle
-        graph.check_alive()
+            graph.spin(0.05)
+        graph.spin(3.0)  # settle
         reports.clear()
-        cpu, stolen = graph.cpu_window(node, window)
+        cpu, stolen = graph.cpu_window(window)
     model = reports.get('model_node: driving torque', [])
     control = reports.get('stiffness_controller_node: control', [])
     scheduling = {name.split(':')[0]: values['scheduling'] for name, values in final.items()
                   if 'scheduling' in values}
     results = [Result(f'{prefix}.rate', statistics.median(model) if model else 0.0, 'Hz',
                       len(model), target=1000.0,
-                      extra={'runtime': runtime, 'scheduling': scheduling, 'steal': stolen,
+                      extra={'scheduling': scheduling, 'steal': stolen,
                              'stiffness_control_hz': (statistics.median(control) if control
                                                       else 0.0)},
                       extra_units={'steal': '', 'stiffness_control_hz': 'Hz'})]
