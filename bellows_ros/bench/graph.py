@@ -84,13 +84,8 @@ from bellows_ros.hardware.loop_timing import LoopStats, PeriodicLoop
 from bellows_ros.models.segment import SegmentModel
 from bellows_ros.runtime import realtime
 from bellows_ros.runtime.messages import msg
+from bellows_ros.runtime.node import LOOPBACK_ENVIRONMENT
 
-# DDS discovery and traffic on this host only, for the bench's own participant and every node
-# process it starts: ROS 2 Jazzy's own switch (rmw_fastrtps_cpp honours it), no static peers, and
-# Fast DDS over UDP on loopback without the shared-memory files a killed process leaves in
-# /dev/shm. The same as the tests' (test/node_processes.py).
-LOOPBACK_ENVIRONMENT = {'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST', 'ROS_STATIC_PEERS': '',
-                        'FASTDDS_BUILTIN_TRANSPORTS': 'UDPv4'}
 # Each bench's ROS domains (drawn per graph) and simulated CAN groups (239.74.170.x: x drawn),
 # apart from one another and from the tests' (a graph of one bench never hears another's).
 DOMAINS = {'graph': (150, 152), 'graph_actuator': (153, 154), 'graph_floor': (155, 160)}

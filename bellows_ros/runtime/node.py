@@ -64,6 +64,11 @@ try:
 except ImportError:  # rclpy before 7.1.5 (a sourced Jazzy of early 2025)
     EventsExecutor = None
 
+# DDS discovery and traffic on this host only: ROS 2 Jazzy's own switch, which rmw_fastrtps_cpp
+# and rmw_cyclonedds_cpp both honour (Fast DDS then talks over shared memory and UDP on
+# loopback). For the simulated launches, the tests and the benches; a robot's launch leaves the
+# network as the user configured it.
+LOOPBACK_ENVIRONMENT = {'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST', 'ROS_STATIC_PEERS': ''}
 # Reliable, transient local, depth 1: a late joiner gets the last message (a latched state).
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
