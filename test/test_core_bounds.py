@@ -351,3 +351,22 @@ def test_a_bag_over_the_message_limit_is_refused_before_reading(tmp_path, monkey
     monkeypatch.setattr(bag_reader, 'MAX_BAG_MESSAGES', 100)
     with pytest.raises(BellowsError, match=r'150 messages .* over 100'):
         data.read_table(path, 'actuator')
+
+
+@pytest.mark.parametrize('module, system', [('sim_actuator_node', 'actuator'),
+                                            ('sim_arm_node', 'segment')])
+def test_the_nodes_strengths_and_the_cli_effects_share_their_ranges(module, system):
+    """A strength the node takes live is one `--effect` takes too (0 = off only on the node)."""
+    from importlib import import_module
+
+    from bellows_ros.config.ranges import effect_range
+    specs = getattr(import_module(f'bellows_ros.nodes.{module}'), 'PARAMETERS', None)
+    if specs is None:
+        pytest.skip(f'{module} has no PARAMETERS table (rewritten): compare its ranges by hand')
+    strengths = [spec for spec in specs if spec.name.startswith('effect.')]
+    assert strengths
+    for spec in strengths:
+        _, effect, key = spec.name.split('.')
+        rule = effect_range(system, effect, key)
+        assert spec.high == rule.high, spec.name
+        assert spec.low <= rule.low and spec.low in (0.0, rule.low), spec.name

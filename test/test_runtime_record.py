@@ -173,7 +173,7 @@ def test_record_rejects_bad_arguments(tmp_path):
                           (['--output', str(tmp_path / 'b'), '--topics', '/nope'],
                            "unknown topic '/nope'"),
                           (['--output', str(tmp_path / 'b'), '--duration', '-1'],
-                           'must be positive')):
+                           '--duration: -1 is outside its range')):
         result = subprocess.run([BELLOWS, 'record', *args], capture_output=True, text=True,
                                 timeout=30)
         assert result.returncode == 2 and message in result.stderr, result.stderr
