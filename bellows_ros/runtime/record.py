@@ -41,7 +41,7 @@ from rclpy.executors import ExternalShutdownException
 import rclpy.node
 from rclpy.signals import SignalHandlerOptions
 from rclpy.task import Future
-from rosbags.rosbag2 import Writer
+from rosbags.rosbag2 import Writer, WriterError
 from rosbags.rosbag2.enums import StoragePlugin
 
 from bellows_ros import interfaces
@@ -64,7 +64,7 @@ def topics_of(namespace='/'):
 
 class _Stop:
     """
-    SIGINT/SIGTERM only ask the recording to stop; the loop ends at its next turn (<= 0.1 s).
+    SIGINT/SIGTERM/SIGHUP only ask the recording to stop; the loop ends at its next turn.
 
     No exception is raised into the writer: a chunk half written when a signal arrived would
     corrupt the bag. Further signals change nothing; the bag is closed whole.
@@ -75,7 +75,7 @@ class _Stop:
         self.previous = {}
 
     def __enter__(self):
-        for signum in (signal.SIGINT, signal.SIGTERM):
+        for signum in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
             self.previous[signum] = signal.signal(signum, self._on_signal)
         return self
 
@@ -133,10 +133,11 @@ def record(output, topics=None, duration=None, ready=None, namespace='/'):
         writer = Writer(output, version=9, storage_plugin=StoragePlugin.MCAP)
         try:
             writer.open()
-        except OSError as exc:
+        except (OSError, WriterError) as exc:  # WriterError: another recorder made it first
             node.destroy_node()
             rclpy.try_shutdown()
-            raise BellowsError(f'{output}: cannot create the bag ({exc.strerror})') from None
+            why = exc.strerror if isinstance(exc, OSError) else 'it exists already'
+            raise BellowsError(f'{output}: cannot create the bag ({why})') from None
         node_executor = executor()
         try:
             # One writer (bag_lock): readers and `reindex` refuse the bag while this one writes;
@@ -155,6 +156,9 @@ def record(output, topics=None, duration=None, ready=None, namespace='/'):
                 _spin(node_executor, writer, stop, duration)
         except ExternalShutdownException:
             pass
+        except OSError as exc:  # a full disk, a write error: what was flushed stays readable
+            raise BellowsError(f'{output}: {exc.strerror or exc} while recording; the bag holds '
+                               f'what was written before (bellows reindex {output})') from None
         finally:
             node.destroy_node()
             rclpy.try_shutdown()
