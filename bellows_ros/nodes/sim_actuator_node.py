@@ -49,7 +49,7 @@ from rclpy.time import Time
 
 from bellows_ros.config.actuator import load_actuator
 from bellows_ros.config.hardware import actuator_board_config
-from bellows_ros.config.ranges import RANGES
+from bellows_ros.config.ranges import effect_range
 from bellows_ros.hardware.sim_actuator_board import SimActuatorBoard
 from bellows_ros.models import effect_strengths
 from bellows_ros.models.actuator_plant import (ACTUATOR_EFFECTS, ActuatorPlant, effect_parameters,
@@ -61,8 +61,9 @@ from bellows_ros.runtime.parameters import Spec
 
 
 def _strength_spec(effect, key):
-    # The physical range of the YAML's value (config/ranges.py), from 0 = off.
-    rule = RANGES[f'actuator.effects.{effect}.{key}']
+    # The physical range of the YAML's value, as the CLI's --effect takes it (config/ranges.py),
+    # from 0 = off.
+    rule = effect_range('actuator', effect, key)
     return Spec(effect_strengths.parameter_name(effect, key), math.nan,
                 f'strength of the {effect} effect ({key}, {rule.unit}); 0 = off, nan = as effects '
                 'and actuator_params say', low=0.0, high=rule.high, read_only=False)

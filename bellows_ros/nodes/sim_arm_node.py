@@ -42,7 +42,7 @@ import math
 
 from rclpy.time import Time
 
-from bellows_ros.config.ranges import RANGES
+from bellows_ros.config.ranges import effect_range
 from bellows_ros.config.segment import load_segment
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.arm_bus import open_can
@@ -55,20 +55,14 @@ from bellows_ros.nodes.live_effects import LiveEffectStrengths
 from bellows_ros.runtime import Node, realtime, run
 from bellows_ros.runtime.parameters import Spec
 
-# Where each strength's physical range is (config/ranges.py); a natural angle bends either way,
-# friction and a lag are >= 0.
-_RANGE_OF = {'c_fp': ('segment.friction.c_fp', 0.0), 'c_psi0_p': ('segment.restoring.c_psi0_p',
-                                                                  None),
-             'tau': ('segment.plant.sensor_lag_tau', 0.0)}
-
 
 def _strength_spec(effect, key):
-    name, low = _RANGE_OF[key]
-    rule = RANGES[name]
+    # The range the CLI's --effect takes too (config/ranges.py, one home).
+    rule = effect_range('segment', effect, key)
     return Spec(effect_strengths.parameter_name(effect, key), math.nan,
                 f'strength of the {effect} effect on every segment ({key}, {rule.unit}); 0 = off, '
-                'nan = as effects and segment_params say', low=rule.low if low is None else low,
-                high=rule.high, read_only=False)
+                'nan = as effects and segment_params say', low=rule.low, high=rule.high,
+                read_only=False)
 
 
 PARAMETERS = (
