@@ -67,7 +67,7 @@ def test_arm_controller_tracks_on_the_simulated_arm(tmp_path, monkeypatch):
             elif status.name == 'driver_node: arm' and stopping is None:
                 driver.append((time.monotonic(), values))
     try:
-        probe.init([])
+        probe.init()
         node = probe.Node('arm_control_acceptance')
         publisher = node.create_publisher(msg.JointState, '/arm/psi_setpoint', 10)
         node.create_subscription(

@@ -27,7 +27,7 @@ import time
 
 import pytest
 from node_processes import (BIN, launch, logs, node_env, override, require_rclpy, ros2_cli,
-                      SIM_CONFIG, stop_all)
+                        SIM_CONFIG, stop_all)
 
 from bellows_ros import interfaces
 import probe
@@ -53,17 +53,17 @@ def test_the_composed_arm_graph_runs_the_three_nodes(tmp_path, monkeypatch):
          *override('arm_controller_node', 'realtime_priority', 0)],
         env=env, stdout=log, stderr=subprocess.STDOUT)
     torques, pressures = [], []
-    probe.init([])
+    probe.init()
     try:
-        probe = probe.Node('composed_probe')
-        probe.create_subscription(msg.JointState, interfaces.DRIVING_TORQUE.resolved(),
-                                  lambda m: torques.append(m), 1000)
-        probe.create_subscription(msg.JointState, interfaces.CHAMBERS.resolved(),
-                                  lambda m: pressures.append(max(m.effort)), 1000)
+        watcher = probe.Node('composed_probe')
+        watcher.create_subscription(msg.JointState, interfaces.DRIVING_TORQUE.resolved(),
+                                    lambda m: torques.append(m), 1000)
+        watcher.create_subscription(msg.JointState, interfaces.CHAMBERS.resolved(),
+                                    lambda m: pressures.append(max(m.effort)), 1000)
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline and not (
                 torques and pressures and max(pressures) > 1.5e5):
-            probe.spin_once(probe, timeout_sec=0.05)
+            probe.spin_once(watcher, timeout_sec=0.05)
         assert torques, logs(tmp_path)
         assert max(pressures) > 1.5e5, logs(tmp_path)  # the controller commands the chambers
         require_rclpy()

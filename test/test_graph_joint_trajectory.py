@@ -64,7 +64,7 @@ def test_arm_controller_follows_a_joint_trajectory(tmp_path, monkeypatch):
             if status.name == 'arm_controller_node: segment_1':
                 controller.append({kv.key: kv.value for kv in status.values})
     try:
-        probe.init([])
+        probe.init()
         node = probe.Node('joint_trajectory_acceptance')
         publisher = node.create_publisher(msg.JointTrajectory,
                                           interfaces.JOINT_TRAJECTORY.resolved(), 10)

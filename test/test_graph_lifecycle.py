@@ -111,7 +111,7 @@ def rig(runtime, tmp_path, monkeypatch):
                                 env, tmp_path))
         return processes[-1]
 
-    probe.init([])
+    probe.init()
     try:
         yield start_driver, Probe(), env, tmp_path
     finally:

@@ -80,7 +80,7 @@ def test_a_leak_set_mid_run_is_named_within_a_minute_and_no_warn_before(
                 reports.append((time.monotonic(), level_of(status.level), status.message,
                                 {kv.key: kv.value for kv in status.values}))
     try:
-        probe.init([])
+        probe.init()
         node = probe.Node('live_doctor_acceptance')
         setpoint = node.create_publisher(msg.Float64, '/actuator/stiffness_setpoint', 10)
         node.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)

@@ -52,11 +52,11 @@ def test_a_leak_set_mid_run_drains_the_gas_and_a_bad_one_is_refused(
     port = str(tmp_path / 'board')
     given = [('port', port), ('realtime_priority', 0), ('x_c0', 0.04), ('effects', "['']")]
     sim = launch(NODE, sum((override(NODE, k, v) for k, v in given), []), env, tmp_path)
-    probe.init([])
+    probe.init()
     reports = []  # the plant's /diagnostics values, in order
     try:
-        probe = probe.Node('live_effect_probe')
-        probe.create_subscription(
+        watcher = probe.Node('live_effect_probe')
+        watcher.create_subscription(
             msg.DiagnosticArray, '/diagnostics',
             lambda a: reports.extend({kv.key: kv.value for kv in s.values} for s in a.status
                                      if s.name == f'{NODE}: plant'), 50)
@@ -64,7 +64,7 @@ def test_a_leak_set_mid_run_drains_the_gas_and_a_bad_one_is_refused(
         def spin_until(condition, seconds):
             end = time.monotonic() + seconds
             while not condition() and time.monotonic() < end:
-                probe.spin_once(probe, timeout_sec=0.05)
+                probe.spin_once(watcher, timeout_sec=0.05)
             return condition()
 
         def gas(leak):
@@ -116,11 +116,11 @@ def test_a_segment_effect_set_mid_run_is_taken_and_a_bad_one_is_refused(
     given = [('can.channel', f'239.74.172.{random.randint(2, 250)}'), ('n_segments', 2),
              ('realtime_priority', 0), ('effects', '[contact_hysteresis]')]
     sim = launch(arm, sum((override(arm, k, v) for k, v in given), []), env, tmp_path)
-    probe.init([])
+    probe.init()
     reports = []
     try:
-        probe = probe.Node('live_segment_effect_probe')
-        probe.create_subscription(
+        watcher = probe.Node('live_segment_effect_probe')
+        watcher.create_subscription(
             msg.DiagnosticArray, '/diagnostics',
             lambda a: reports.extend({kv.key: kv.value for kv in s.values} for s in a.status
                                      if s.name == f'{arm}: plant'), 50)
@@ -131,7 +131,7 @@ def test_a_segment_effect_set_mid_run_is_taken_and_a_bad_one_is_refused(
         def spin_until(condition, seconds):
             end = time.monotonic() + seconds
             while not condition() and time.monotonic() < end:
-                probe.spin_once(probe, timeout_sec=0.05)
+                probe.spin_once(watcher, timeout_sec=0.05)
             return condition()
 
         assert spin_until(lambda: reported('0'), 40), (reports[-1:], logs(tmp_path))

@@ -88,15 +88,15 @@ def test_live_parameters_set_refuse_and_take_effect(graph):
     # A probe listens from the start: /diagnostics, and /parameter_events, where every change
     # taken is announced (a refused one is not).
     seen, changed = {}, []
-    probe.init([])
+    probe.init()
     try:
-        probe = probe.Node('live_parameter_probe')
-        probe.create_subscription(
+        watcher = probe.Node('live_parameter_probe')
+        watcher.create_subscription(
             msg.DiagnosticArray, '/diagnostics',
             lambda a: seen.update({kv.key: kv.value for s in a.status
                                    if s.name.startswith('arm_controller_node')
                                    for kv in s.values}), 50)
-        probe.create_subscription(
+        watcher.create_subscription(
             message_class('rcl_interfaces/msg/ParameterEvent'), '/parameter_events',
             lambda e: changed.extend((e.node.lstrip('/'), p.name, str(from_message(p.value)))
                                      for p in e.changed_parameters), 1000)
@@ -118,7 +118,7 @@ def test_live_parameters_set_refuse_and_take_effect(graph):
         deadline = time.monotonic() + 15
         while (seen.get('feedforward') != 'previous' or len(changed) < len(LIVE)) \
                 and time.monotonic() < deadline:
-            probe.spin_once(probe, timeout_sec=0.1)
+            probe.spin_once(watcher, timeout_sec=0.1)
     finally:
         probe.shutdown()
     assert seen.get('feedforward') == 'previous', seen

@@ -70,7 +70,7 @@ def test_a_load_set_mid_run_leaves_the_floor_and_no_warn_before(tmp_path, monkey
                 reports.append((time.monotonic(), level_of(status.level), status.message,
                                 {kv.key: kv.value for kv in status.values}))
     try:
-        probe.init([])
+        probe.init()
         node = probe.Node('model_health_acceptance')
         node.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
 

@@ -132,23 +132,23 @@ def graph(runtime, tmp_path, monkeypatch):
     port = str(tmp_path / 'actuator')
     env = node_env(ROS_DOMAIN_ID=domain)
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
-    probe.init([])
-    probe = probe.Node('acceptance_probe')
+    probe.init()
+    watcher = probe.Node('acceptance_probe')
     final = {}
 
     def on_diagnostics(array):
         for status in array.status:
             final[status.name] = {kv.key: kv.value for kv in status.values}
-    probe.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
+    watcher.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
     # Every message on the four sample topics, by the names it carries (subscribed before the
     # driver starts: it waits for a subscriber on each).
     seen = {topic.resolved(): Counter() for topic in (
         interfaces.JOINT_STATES, interfaces.CHAMBERS, interfaces.ACTUATOR_JOINT_STATES,
         interfaces.ACTUATOR_CHAMBERS)}
     for name, counter in seen.items():
-        probe.create_subscription(msg.JointState, name,
-                                  lambda m, counter=counter: counter.update([tuple(m.name)]),
-                                  interfaces.SAMPLE_DEPTH)
+        watcher.create_subscription(msg.JointState, name,
+                                    lambda m, counter=counter: counter.update([tuple(m.name)]),
+                                    interfaces.SAMPLE_DEPTH)
     # One scheduling class for the whole path: config/nodes_sim.yaml runs the simulated arm and
     # the driver SCHED_FIFO above a model node at normal priority, which on a loaded machine then
     # falls behind and drops samples, and this test counts every sample through the model.
@@ -170,7 +170,7 @@ def graph(runtime, tmp_path, monkeypatch):
         # samples published before anyone listened.
         end = time.monotonic() + 60.0
         while 'model_node: driving torque' not in final and time.monotonic() < end:
-            probe.spin_once(probe, timeout_sec=0.05)
+            probe.spin_once(watcher, timeout_sec=0.05)
         assert 'model_node: driving torque' in final, logs(tmp_path)
         driver = [override('driver_node', name, value) for name, value in (
             ('arm.channel', group), ('arm.n_segments', 2), ('actuator.port', port),
@@ -252,7 +252,7 @@ def test_a_driver_stopped_for_half_a_second_stamps_its_backlog_on_the_arms_clock
     """
     processes, domain, tmp_path, probe, final, seen = graph
     stamps = []
-    probe.create_subscription(
+    watcher.create_subscription(
         msg.JointState, interfaces.JOINT_STATES.resolved(),
         lambda m: stamps.append(m.header.stamp.sec * 10**9 + m.header.stamp.nanosec),
         interfaces.SAMPLE_DEPTH)
@@ -260,7 +260,7 @@ def test_a_driver_stopped_for_half_a_second_stamps_its_backlog_on_the_arms_clock
     def spin(seconds):
         end = time.monotonic() + seconds
         while time.monotonic() < end:
-            probe.spin_once(probe, timeout_sec=0.05)
+            probe.spin_once(watcher, timeout_sec=0.05)
     end = time.monotonic() + 30.0
     while len(stamps) < 1000 and time.monotonic() < end:
         spin(0.1)

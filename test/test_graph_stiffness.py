@@ -84,7 +84,7 @@ def test_stiffness_step_and_leak_hold(tmp_path, monkeypatch):
                           if kv.key in ('x_c', 'gas_p_ref', 'end_stop_hits')}
                 plant.append((time.monotonic(), values))
     try:
-        probe.init([])
+        probe.init()
         node = probe.Node('stiffness_acceptance')
         setpoint = node.create_publisher(msg.Float64, '/actuator/stiffness_setpoint', 10)
         node.create_subscription(msg.Float64, '/actuator/stiffness',

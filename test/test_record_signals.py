@@ -83,7 +83,7 @@ def recording(tmp_path, monkeypatch):
     recorder = subprocess.Popen([BELLOWS, 'record', '--output', str(bag), '--topics', TOPIC],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                 env=dict(os.environ, ROS_DOMAIN_ID=domain))
-    probe.init([])
+    probe.init()
     publisher = NumberedPublisher()
     try:
         end = time.monotonic() + 30

@@ -63,7 +63,7 @@ def test_record_then_read_back(tmp_path, monkeypatch):
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
         env=dict(os.environ, ROS_DOMAIN_ID=DOMAIN))
     try:
-        probe.init([])
+        probe.init()
         node = probe.Node('synthetic_driver')
         publishers = {topic: node.create_publisher(type(m), topic, 200)
                       for topic, m in segment_messages(0, 0).items()}
@@ -195,7 +195,7 @@ def test_a_recorder_stalled_for_seconds_loses_nothing(tmp_path):
     n = 4000
     try:
         os.environ['ROS_DOMAIN_ID'] = domain
-        probe.init([])
+        probe.init()
         node = probe.Node('synthetic_driver')
         publishers = {topic: node.create_publisher(type(m), topic, interfaces.SAMPLE_DEPTH)
                       for topic, m in segment_messages(0, 0).items()}
