@@ -28,8 +28,8 @@ its own process (`probe.init(['--ros-args', ...])` for its parameters) spins it 
 """
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
-from rclpy.task import Future
 import rclpy.node
+from rclpy.task import Future
 
 from bellows_ros.runtime.messages import msg  # noqa: F401 (the ROS packages' classes)
 from bellows_ros.runtime.node import LATCHED  # noqa: F401 (the probes' QoS for latched topics)

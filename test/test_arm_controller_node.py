@@ -22,13 +22,13 @@ from array import array
 import math
 import time
 
+import probe
 import pytest
 
 from bellows_ros import interfaces
 from bellows_ros.config.segment import load_segment_params
 from bellows_ros.nodes import diagnostics
 from bellows_ros.nodes.arm_controller_node import ArmControllerNode, ArmControllerTask
-import probe
 
 MS = 1_000_000  # ns
 

@@ -30,11 +30,11 @@ import math
 import random
 import time
 
-import pytest
 from node_processes import launch_arm, node_env, override, stop_all
+import probe
+import pytest
 
 from bellows_ros.control import angle_trajectory
-import probe
 from bellows_ros.runtime.messages import msg
 
 

@@ -29,11 +29,11 @@ import math
 import random
 import time
 
-import pytest
 from node_processes import launch_arm, logs, node_env, stop_all
+import probe
+import pytest
 
 from bellows_ros import interfaces
-import probe
 from bellows_ros.runtime.messages import msg
 
 END = -0.4  # rad, trajectory B's last point

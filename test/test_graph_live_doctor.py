@@ -29,13 +29,13 @@ import os
 import random
 import time
 
-import pytest
 from node_processes import launch, logs, node_env, override, ros2_cli, stop_all
+import probe
+import pytest
 
 from bellows_ros.config.actuator import load_actuator_params
 from bellows_ros.models.stiffness_map import compression_for_stiffness
 from bellows_ros.nodes.diagnostics import level_of, WARN
-import probe
 from bellows_ros.runtime.messages import msg
 
 pytestmark = pytest.mark.slow   # three node processes for ~2 min per runtime

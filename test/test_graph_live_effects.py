@@ -27,10 +27,10 @@ import os
 import random
 import time
 
-import pytest
 from node_processes import launch, logs, node_env, override, ros2_cli, stop_all
-
 import probe
+import pytest
+
 from bellows_ros.runtime.messages import msg
 
 pytestmark = pytest.mark.slow  # a node process and ~8 ros2 CLI calls per runtime

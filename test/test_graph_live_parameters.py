@@ -24,10 +24,10 @@ a change reaches the running node (its /diagnostics show the new feedforward).
 import random
 import time
 
-import pytest
 from node_processes import launch, logs, node_env, ros2_cli, stop_all
-
 import probe
+import pytest
+
 from bellows_ros.runtime.messages import message_class, msg
 from bellows_ros.runtime.parameter_services import from_message
 

@@ -26,11 +26,11 @@ Runs twice: the nodes on rclpy (`[rclpy]`) and on the DDS runtime (`[dds]`).
 import random
 import time
 
-import pytest
 from node_processes import launch, logs, node_env, override, ros2_cli, stop_all
+import probe
+import pytest
 
 from bellows_ros.nodes.diagnostics import level_of, WARN
-import probe
 from bellows_ros.runtime.messages import msg
 
 pytestmark = pytest.mark.slow   # three node processes for ~40 s per runtime

@@ -35,12 +35,12 @@ import sys
 import textwrap
 import time
 
-from plain_cyclone import JOINT_STATE_SUBSCRIBER
-import pytest
 from node_processes import launch, logs, node_env, override, SIM_CONFIG
+from plain_cyclone import JOINT_STATE_SUBSCRIBER
+import probe
+import pytest
 
 from bellows_ros import interfaces, params
-import probe
 from bellows_ros.runtime import realtime
 from bellows_ros.runtime.messages import msg
 

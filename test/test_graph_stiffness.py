@@ -35,14 +35,14 @@ the range instead (reported in the assertion messages).
 import random
 import time
 
-import pytest
 from node_processes import launch, node_env, override, stop_all
+import probe
+import pytest
 
 from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.config.hardware import actuator_board_config
 from bellows_ros.models.actuator import stiffness
 from bellows_ros.models.stiffness_map import compression_for_stiffness, stiffness_range
-import probe
 from bellows_ros.runtime.messages import msg
 
 K_HIGH = 1900.0

@@ -31,8 +31,8 @@ import sys
 import threading
 import time
 
-import pytest
 from node_processes import LOOPBACK_ENVIRONMENT, require_rclpy
+import pytest
 import yaml
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -26,6 +26,7 @@ import math
 import random
 import time
 
+import probe
 import pytest
 import yaml
 
@@ -35,7 +36,6 @@ from bellows_ros.models.derivatives import rate
 from bellows_ros.models.segment import external_torque, SegmentModel
 from bellows_ros.nodes import diagnostics
 from bellows_ros.nodes.model_node import MAX_MISSED_GAP, ModelNode
-import probe
 
 DOMAIN = '194'
 DYNAMICS = {'segment': {'dynamics': {'inertia': 0.02, 'damping': 0.1, 'gravity': 0.3}}}

@@ -30,11 +30,11 @@ import threading
 import time
 
 from mcap.reader import make_reader
+import probe
 import pytest
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import get_typestore, Stores
 
-import probe
 from bellows_ros.runtime.messages import msg
 
 pytestmark = pytest.mark.slow  # each case records for a few seconds

@@ -21,6 +21,7 @@ import sys
 import time
 
 import numpy as np
+import probe
 import pytest
 from rosbags.rosbag2 import Reader, Writer
 from rosbags.typesys import get_typestore, Stores
@@ -28,7 +29,6 @@ from rosbags.typesys import get_typestore, Stores
 from bellows_ros import interfaces
 from bellows_ros.data import read_table
 from bellows_ros.errors import DataError
-import probe
 from bellows_ros.runtime.messages import msg, to_typestore
 
 DOMAIN = '193'
