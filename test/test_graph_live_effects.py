@@ -13,10 +13,10 @@
 # limitations under the License.
 
 """
-A leak switched on mid-run with `ros2 param set`, on both runtimes (#20 point 3, #21 point 4).
+A leak switched on mid-run with `ros2 param set` (#20 point 3, #21 point 4).
 
-A running sim_actuator_node (on the runtime under test, its chamber compressed so the gas is
-above ambient) is sealed: the gas amount its /diagnostics report holds still. `ros2 param set` of
+A running sim_actuator_node (a node process, its chamber compressed so the gas is above
+ambient) is sealed: the gas amount its /diagnostics report holds still. `ros2 param set` of
 `effect.air_leak.conductance` switches the leak on; the gas amount then falls in the reports
 that show the plant stepping with it. A conductance
 outside its physical range is refused with the Spec's words and changes nothing; 0 switches the
@@ -33,7 +33,7 @@ import pytest
 
 from bellows_ros.runtime.messages import msg
 
-pytestmark = pytest.mark.slow  # a node process and ~8 ros2 CLI calls per runtime
+pytestmark = pytest.mark.slow  # a node process and ~8 ros2 CLI calls
 
 NODE = 'sim_actuator_node'
 LEAK = 'effect.air_leak.conductance'
@@ -45,7 +45,7 @@ def ros2_param(env, *args):
 
 
 def test_a_leak_set_mid_run_drains_the_gas_and_a_bad_one_is_refused(
-        runtime, tmp_path, monkeypatch):
+        tmp_path, monkeypatch):
     domain = str(random.randint(100, 180))
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     env = node_env(ROS_DOMAIN_ID=domain)
@@ -107,7 +107,7 @@ def test_a_leak_set_mid_run_drains_the_gas_and_a_bad_one_is_refused(
 
 
 def test_a_segment_effect_set_mid_run_is_taken_and_a_bad_one_is_refused(
-        runtime, tmp_path, monkeypatch):
+        tmp_path, monkeypatch):
     """sim_arm_node: the strength reaches the running plants (their /diagnostics say so)."""
     domain = str(random.randint(100, 180))
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
