@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-Acceptance: the arm controller tracks an angle trajectory on the simulated arm over DDS.
+Acceptance: the arm controller tracks an angle trajectory on the simulated arm over ROS 2.
 
 Processes: sim_arm_node (paper A's full physics, sensor noise, valve lag; udp_multicast CAN),
 driver_node (arm only), arm_controller_node (paper A feedforward, config/nodes_sim.yaml gains).

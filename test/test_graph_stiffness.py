@@ -21,7 +21,6 @@ Processes: sim_actuator_node (pty; effects wall_bulging + air_leak + buckling), 
 plant's true chamber compression and gas amount, from which the true stiffness follows with paper
 B's model).
 
-Runs twice: the nodes on rclpy (`[rclpy]`) and on the DDS runtime (`[dds]`).
 
 Criteria (issue): after a step to 1900 N/m, within 2 % of the target in <= 1.2x the lead screw's
 minimum travel time, overshoot <= 5 % of the step, end stops never hit; with air_leak on, held
