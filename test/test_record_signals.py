@@ -50,6 +50,23 @@ def numbers_in_rosbags(bag):
                 for c, _, raw in reader.messages()]
 
 
+def disorder(bag):
+    """
+    Where the file's messages (in file order) are out of number order: for a failure's message.
+
+    Each as (index, (log time ns, number) before, at), with the chunks' time ranges.
+    """
+    (path,) = [p for p in Path(bag).iterdir() if p.suffix == '.mcap']
+    with open(path, 'rb') as stream:
+        reader = make_reader(stream)
+        rows = [(m.log_time, STORE.deserialize_cdr(m.data, 'std_msgs/msg/Float64').data)
+                for _, _, m in reader.iter_messages(log_time_order=False)]
+        chunks = [(c.message_start_time, c.message_end_time)
+                  for c in reader.get_summary().chunk_indexes]
+    return ([(i, rows[i - 1], rows[i]) for i in range(1, len(rows))
+             if rows[i][1] < rows[i - 1][1]][:5], chunks)
+
+
 def count_in_mcap(bag):
     """Messages the official MCAP reader finds (it reads the summary the footer points to)."""
     (path,) = [p for p in Path(bag).iterdir() if p.suffix == '.mcap']
@@ -123,7 +140,8 @@ def test_a_stopped_recording_opens_with_every_message_received(recording, signal
     received = recorded_count(out)
     numbers = numbers_in_rosbags(bag)
     assert len(numbers) == received == count_in_mcap(bag)
-    assert numbers == sorted(numbers) and received > 500
+    assert numbers == sorted(numbers), disorder(bag)  # seen once (08:20 UTC run), not since
+    assert received > 500
     print(f'{[signal.Signals(s).name for s in signals]}: published {len(publisher.sent)}, '
           f'received and kept {received}')
 
