@@ -183,7 +183,7 @@ class Probe:
         return [p for t, p in self.pressures if t > start]
 
     def later(self, seconds, settle=1.0):
-        """The pressures of the `seconds` of flooding from now, once `settle` s have gone."""
+        """Flood for `seconds`; return the pressures seen once `settle` s had gone."""
         start = time.monotonic()
         self.flood(seconds)
         return self.since(start + settle)

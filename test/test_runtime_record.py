@@ -109,7 +109,7 @@ def ros_type(message):
 
 
 def to_store(message):
-    """The rosbags message (STORE's class) with the fields of an rclpy `message`."""
+    """Return the rosbags message (STORE's class) with the fields of an rclpy `message`."""
     def value(v):
         if hasattr(v, 'get_fields_and_field_types'):
             return to_store(v)
