@@ -30,8 +30,8 @@ import time
 
 import pytest
 
-# DDS discovery and traffic on this host only (ROS 2 Jazzy's own switch, which rmw_fastrtps_cpp
-# and rmw_cyclonedds_cpp both honour); Fast DDS over UDP on loopback, without the shared-memory
+# DDS discovery and traffic on this host only (ROS 2 Jazzy's own switch, which every Jazzy RMW
+# honours); Fast DDS over UDP on loopback, without the shared-memory
 # files a killed process leaves in /dev/shm.
 LOOPBACK_ENVIRONMENT = {'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST', 'ROS_STATIC_PEERS': '',
                         'FASTDDS_BUILTIN_TRANSPORTS': 'UDPv4'}
@@ -104,6 +104,13 @@ def logs(log_dir):
     return '\n'.join(f'--- {p.name}\n{p.read_text()[-1500:]}' for p in log_dir.glob('*.log'))
 
 
+def _cpu_seconds(pid):
+    """Return utime + stime of a process, s (fields 14 and 15 of /proc/<pid>/stat)."""
+    with open(f'/proc/{pid}/stat') as stream:
+        fields = stream.read().rsplit(')', 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+
+
 def process_states(processes):
     """
     One line per process: its program, whether it runs, its scheduling and the CPU it has used.
@@ -111,7 +118,6 @@ def process_states(processes):
     For the message of a test whose process did not end in time: a process that used seconds of
     CPU was working, one that used next to none was starved or blocked.
     """
-    from bellows_ros.bench.graph import _cpu_seconds  # the graph bench's CPU per process
     lines = []
     for process in processes:
         program = Path(process.args[0]).name

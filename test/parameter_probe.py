@@ -13,12 +13,13 @@
 # limitations under the License.
 
 r"""
-A node that reports what its runtime made of its `--ros-args`: name, parameters, topics.
+A bellows node that reports what rcl made of its `--ros-args`: name, parameters, topics.
 
-    BELLOWS_RUNTIME=rclpy|dds PROBE_SPEC='{"parameters": {...}, "topics": [...]}' \
+    PROBE_SPEC='{"parameters": {...}, "bounds": {...}, "topics": [...]}' \
         python parameter_probe.py --ros-args ...
 
-Declares the spec's parameters with their defaults (the default's type is the parameter's type),
+Declares the spec's parameters as a bellows node does (`declare_specs`: a Spec per parameter, its
+default's type is the parameter's type, `bounds` {name: [low, high]} its inclusive bounds),
 creates a Float64 publisher on each topic, and prints one JSON line: the node's name and namespace,
 every declared parameter's value (and `use_sim_time`), and each topic as the publisher resolved it.
 Mistakes end as any node's do: one line on stderr, exit status 2 (`run`).
@@ -28,6 +29,7 @@ import os
 import sys
 
 from bellows_ros.runtime import Node, run
+from bellows_ros.runtime.parameters import Spec
 
 
 class Probe(Node):
@@ -38,14 +40,16 @@ class Probe(Node):
     def __init__(self, **kwargs):
         spec = json.loads(os.environ['PROBE_SPEC'])
         super().__init__(spec.get('node', 'probe'), **kwargs)
-        self.values = {name: self.declare_parameter(name, default).value
-                       for name, default in spec['parameters'].items()}
+        bounds = spec.get('bounds', {})
+        self.values = self.declare_specs([
+            Spec(name, default, f"the probe's {name}", *bounds.get(name, (None, None)))
+            for name, default in spec['parameters'].items()])
         self.topics = {topic: self.create_publisher(self.msg.Float64, topic, 10).topic_name
                        for topic in spec.get('topics', [])}
 
     def finish(self):
         self.values['use_sim_time'] = self.get_parameter('use_sim_time').value
-        print(json.dumps({'runtime': self.runtime.NAME, 'name': self.get_name(),
+        print(json.dumps({'name': self.get_name(),
                           'namespace': self.get_namespace(), 'parameters': self.values,
                           'topics': self.topics}), flush=True)
 

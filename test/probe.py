@@ -17,34 +17,46 @@ The tests' own ROS 2 participant: an rclpy node in the pytest process, on the te
 
     probe.init()                    # rclpy on $ROS_DOMAIN_ID (the test sets it)
     node = probe.Node('estop_probe')    # an rclpy.node.Node
-    node.create_subscription(msg.Bool, '/bellows/vented', seen.append, probe.LATCHED)
+    node.create_subscription(probe.msg.Bool, '/bellows/vented', seen.append, probe.LATCHED)
     probe.spin_once(node, timeout_sec=0.05)
     probe.shutdown()                # every probe node destroyed, rclpy shut down
 
-Plain rclpy, nothing of bellows_ros's node base: what any ROS 2 user's node sees of the graph.
+Plain rclpy, nothing of bellows_ros's node base: what any ROS 2 user's node sees of the graph
+(`probe.msg` are the ROS packages' own message classes). A test that builds a bellows node in
+its own process (`probe.init(['--ros-args', ...])` for its parameters) spins it with
+`probe.adopt(node)` and `probe.spin_once(node)`.
 """
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 import rclpy.node
 from rclpy.task import Future
 
+from bellows_ros.runtime.messages import msg  # noqa: F401 (the ROS packages' classes)
 from bellows_ros.runtime.node import LATCHED  # noqa: F401 (the probes' QoS for latched topics)
 
 _executors = {}
 _NEVER = Future()  # spin_until_future_complete of it: spin for the timeout
 
 
-def init():
-    """rclpy.init on the domain of $ROS_DOMAIN_ID (once per test; `shutdown` ends it)."""
-    rclpy.init(args=[])
+def init(args=()):
+    """
+    rclpy.init on the domain of $ROS_DOMAIN_ID (once per test; `shutdown` ends it).
+
+    `args` ('--ros-args', ...) apply to every node of this process, as a node process's do.
+    """
+    rclpy.init(args=['probe', *args])
+
+
+def adopt(node):
+    """Spin `node` (a node built in this process) with `spin_once`/`spin_for`; return it."""
+    _executors[node] = SingleThreadedExecutor()
+    _executors[node].add_node(node)
+    return node
 
 
 def Node(name):  # noqa: N802 (stands for the class, as rclpy.create_node does)
     """Return a new rclpy node `name` in the probe's context."""
-    node = rclpy.node.Node(name)
-    _executors[node] = SingleThreadedExecutor()
-    _executors[node].add_node(node)
-    return node
+    return adopt(rclpy.node.Node(name))
 
 
 def spin_once(node, timeout_sec=0.05):

@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-arm_controller_node in one process over the DDS runtime: it never commands from an old sample.
+arm_controller_node in the test's process: it never commands from an old sample.
 
 The samples are handed to the node's own callbacks, stamped in the past or now on the node's
 clock; what it publishes is read back by a peer node.
@@ -22,13 +22,13 @@ from array import array
 import math
 import time
 
+import probe
 import pytest
 
 from bellows_ros import interfaces
 from bellows_ros.config.segment import load_segment_params
 from bellows_ros.nodes import diagnostics
 from bellows_ros.nodes.arm_controller_node import ArmControllerNode, ArmControllerTask
-import probe
 
 MS = 1_000_000  # ns
 
@@ -36,8 +36,8 @@ MS = 1_000_000  # ns
 @pytest.fixture
 def controller(monkeypatch):
     monkeypatch.setenv('ROS_DOMAIN_ID', '196')
-    probe.init([])
-    node = ArmControllerNode.on(dds_node)()
+    probe.init()
+    node = probe.adopt(ArmControllerNode())
     peer = probe.Node('peer')
     commands = []
     peer.create_subscription(probe.msg.JointState, interfaces.PRESSURE_COMMAND.resolved(),
@@ -57,9 +57,9 @@ def feed(node, stamps, psi=0.1):
     for stamp in stamps:
         stamp = node.get_clock().now().nanoseconds if stamp is None else stamp
         state = probe.msg.JointState(name=['segment_1'], position=array('d', [psi]),
-                                        velocity=array('d', [0.0]))
+                                     velocity=array('d', [0.0]))
         chambers = probe.msg.JointState(name=['segment_1/chain_1', 'segment_1/chain_2'],
-                                           effort=array('d', [p0 + 1e5, p0 + 1e5]))
+                                        effort=array('d', [p0 + 1e5, p0 + 1e5]))
         for half in (state, chambers):
             half.header.stamp.sec, half.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
         node.on_joint_states(state)

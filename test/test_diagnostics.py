@@ -16,7 +16,7 @@
 The diagnostics updater (nodes/diagnostics.py) against diagnostic_updater's conventions.
 
 Unit tests on a stand-in node (the bellows Node interface: publisher, timer, name, clock, logger,
-message classes), then one node process per runtime read back from /diagnostics.
+message classes), then one node process read back from /diagnostics by a plain rclpy probe.
 """
 import subprocess
 import sys
@@ -24,22 +24,28 @@ import textwrap
 import time
 import types
 
-import pytest
+from builtin_interfaces.msg import Time
 from node_processes import node_env
+import probe
+import pytest
 
 from bellows_ros import interfaces
 from bellows_ros.nodes import diagnostics as d
-from bellows_ros.runtime import cdr, dds_node
-from bellows_ros.runtime.messages import msg as dds_msg
+from bellows_ros.runtime.messages import msg as ros_msg
 
-PLAIN_MSG = types.SimpleNamespace(**{short: cdr.plain_class(ros_name)
-                                     for short, ros_name in cdr.USED_TYPES.items()})
+# The ROS packages' classes the nodes use, and Time for the stand-in node's clock.
+NODE_MSG = types.SimpleNamespace(Time=Time, **vars(ros_msg))
+# A message class whose `byte` level is an int (rosbags' and other non-rclpy classes).
+INT_LEVEL_MSG = types.SimpleNamespace(
+    DiagnosticStatus=type('DiagnosticStatus', (), {
+        'OK': 0, '__init__': lambda self, **kw: self.__dict__.update(kw)}),
+    KeyValue=ros_msg.KeyValue)
 
 
 class FakeNode:
     """The part of the bellows Node the updater uses; records what it publishes."""
 
-    def __init__(self, name='probe_node', msg=PLAIN_MSG):
+    def __init__(self, name='probe_node', msg=NODE_MSG):
         self.msg, self.name = msg, name
         self.published, self.timers, self.topics, self.logged = [], [], [], []
 
@@ -190,20 +196,16 @@ def test_merge_summary_follows_diagnostic_updater():
     assert (stat.level, stat.message) == (d.OK, '')
 
 
-def test_levels_as_the_runtimes_messages_want_them():
-    """A `byte` field: int in the DDS and plain classes, bytes in rclpy's generated ones."""
+def test_levels_as_the_message_classes_want_them():
+    """A `byte` field: bytes in rclpy's generated classes, int in classes that hold an int."""
     stat = d.DiagnosticStatusWrapper(d.WARN, 'x', 'late', 'can0')
     stat.add('k', 1.5)
-    for msg in (PLAIN_MSG, dds_msg):
-        out = stat.to_msg(msg)
-        assert d.level_of(out.level) == d.WARN and out.values[0].value == '1.5'
-    as_bytes = types.SimpleNamespace(
-        DiagnosticStatus=type('DiagnosticStatus', (), {
-            'OK': b'\x00', '__init__': lambda self, **kw: self.__dict__.update(kw)}),
-        KeyValue=PLAIN_MSG.KeyValue)
-    assert stat.to_msg(as_bytes).level == b'\x01'
+    out = stat.to_msg(ros_msg)
+    assert out.level == b'\x01' and d.level_of(out.level) == d.WARN
+    assert out.values[0].value == '1.5' and out.hardware_id == 'can0'
+    assert stat.to_msg(INT_LEVEL_MSG).level == 1
     assert d.level_of(b'\x03') == d.STALE
-    assert d.level_of(PLAIN_MSG.DiagnosticStatus.STALE) == d.STALE
+    assert d.level_of(ros_msg.DiagnosticStatus.STALE) == d.STALE
 
 
 class Clock:
@@ -274,7 +276,7 @@ def test_loop_summary_says_what_is_wrong():
     assert summary(1000.0, 0) == (d.OK, 'running at 1000 Hz')
 
 
-# A node with an updater, as the bellows nodes build theirs; run on either runtime.
+# A node with an updater, as the bellows nodes build theirs.
 NODE = textwrap.dedent("""
     import sys
     from bellows_ros.nodes import diagnostics as d
@@ -299,8 +301,8 @@ NODE = textwrap.dedent("""
 
 
 @pytest.mark.slow  # a node process
-def test_a_node_on_each_runtime_reports_on_diagnostics(tmp_path, monkeypatch):
-    domain = '193' if runtime == 'dds' else '194'
+def test_a_node_reports_on_diagnostics(tmp_path, monkeypatch):
+    domain = '193'
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     script = tmp_path / 'probe.py'
     script.write_text(NODE)
@@ -308,11 +310,11 @@ def test_a_node_on_each_runtime_reports_on_diagnostics(tmp_path, monkeypatch):
                                stderr=subprocess.STDOUT, text=True,
                                env=node_env(ROS_DOMAIN_ID=domain))
     seen = {}
-    probe.init([])
+    probe.init()
     try:
         reader = probe.Node('diag_reader')
         reader.create_subscription(
-            dds_msg.DiagnosticArray, '/diagnostics',
+            ros_msg.DiagnosticArray, '/diagnostics',
             lambda a: seen.update({s.name: (d.level_of(s.level), s.message, s.hardware_id,
                                             {kv.key: kv.value for kv in s.values})
                                    for s in a.status}), 10)

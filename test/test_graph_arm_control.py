@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-Acceptance: the arm controller tracks an angle trajectory on the simulated arm over DDS.
+Acceptance: the arm controller tracks an angle trajectory on the simulated arm over ROS 2.
 
 Processes: sim_arm_node (paper A's full physics, sensor noise, valve lag; udp_multicast CAN),
 driver_node (arm only), arm_controller_node (paper A feedforward, config/nodes_sim.yaml gains).
@@ -30,11 +30,11 @@ import math
 import random
 import time
 
-import pytest
 from node_processes import launch_arm, node_env, override, stop_all
+import probe
+import pytest
 
 from bellows_ros.control import angle_trajectory
-import probe
 from bellows_ros.runtime.messages import msg
 
 
@@ -67,7 +67,7 @@ def test_arm_controller_tracks_on_the_simulated_arm(tmp_path, monkeypatch):
             elif status.name == 'driver_node: arm' and stopping is None:
                 driver.append((time.monotonic(), values))
     try:
-        probe.init([])
+        probe.init()
         node = probe.Node('arm_control_acceptance')
         publisher = node.create_publisher(msg.JointState, '/arm/psi_setpoint', 10)
         node.create_subscription(

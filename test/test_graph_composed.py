@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-arm_graph: driver, model and arm controller composed in one process, on both runtimes.
+arm_graph: driver, model and arm controller composed in one process, on one executor.
 
 Beside a simulated arm, the composed process must do what the three processes do: the driver
 reaches `active` (by autostart, from the shared parameter file's sections), the model publishes
@@ -25,12 +25,12 @@ import signal
 import subprocess
 import time
 
+from node_processes import (BIN, launch, logs, node_env, override, require_ros2_cli, ros2_cli,
+                            SIM_CONFIG, stop_all)
+import probe
 import pytest
-from node_processes import (BIN, launch, logs, node_env, override, require_rclpy, ros2_cli,
-                      SIM_CONFIG, stop_all)
 
 from bellows_ros import interfaces
-import probe
 from bellows_ros.runtime.messages import msg
 
 pytestmark = pytest.mark.slow  # two node processes, ~20 s per runtime
@@ -53,20 +53,20 @@ def test_the_composed_arm_graph_runs_the_three_nodes(tmp_path, monkeypatch):
          *override('arm_controller_node', 'realtime_priority', 0)],
         env=env, stdout=log, stderr=subprocess.STDOUT)
     torques, pressures = [], []
-    probe.init([])
+    probe.init()
     try:
-        probe = probe.Node('composed_probe')
-        probe.create_subscription(msg.JointState, interfaces.DRIVING_TORQUE.resolved(),
-                                  lambda m: torques.append(m), 1000)
-        probe.create_subscription(msg.JointState, interfaces.CHAMBERS.resolved(),
-                                  lambda m: pressures.append(max(m.effort)), 1000)
+        watcher = probe.Node('composed_probe')
+        watcher.create_subscription(msg.JointState, interfaces.DRIVING_TORQUE.resolved(),
+                                    lambda m: torques.append(m), 1000)
+        watcher.create_subscription(msg.JointState, interfaces.CHAMBERS.resolved(),
+                                    lambda m: pressures.append(max(m.effort)), 1000)
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline and not (
                 torques and pressures and max(pressures) > 1.5e5):
-            probe.spin_once(probe, timeout_sec=0.05)
+            probe.spin_once(watcher, timeout_sec=0.05)
         assert torques, logs(tmp_path)
         assert max(pressures) > 1.5e5, logs(tmp_path)  # the controller commands the chambers
-        require_rclpy()
+        require_ros2_cli()
         for node, name in (('driver_node', 'startup_timeout'), ('model_node', 'latency_budget'),
                            ('arm_controller_node', 'pid.kp')):
             answer = ros2_cli(['param', 'get', f'/{node}', name], env)

@@ -14,13 +14,12 @@
 """
 The stop that latches, under load: `/bellows/estop` and `~/vent` vent the arm until `~/release`.
 
-A simulated arm and the driver run on the runtime under test; this process floods pressure
-commands (4 bar on every chamber, 1 kHz) and watches `/bellows/chambers`. Once the chambers
-are up, it publishes `/bellows/estop` True (latched, from the DDS runtime: across runtimes when
-the driver runs on rclpy). The chambers must fall to ambient and stay there while the commands
-keep coming; `False` alone must not release them, and `~/release` is refused while the stop is
-held. Then `~/vent` and `~/release` (std_srvs/Trigger, called with the real `ros2 service call`
-of ROS 2: across runtimes when the driver runs on the DDS runtime) vent and release it.
+A simulated arm and the driver run as node processes; this process (a plain rclpy node) floods
+pressure commands (4 bar on every chamber, 1 kHz) and watches `/bellows/chambers`. Once the
+chambers are up, it publishes `/bellows/estop` True (latched). The chambers must fall to ambient
+and stay there while the commands keep coming; `False` alone must not release them, and
+`~/release` is refused while the stop is held. Then `~/vent` and `~/release` (std_srvs/Trigger,
+called with the real `ros2 service call` of ROS 2) vent and release it.
 The driver's /diagnostics say it is vented, and its `bellows/vented` says when it starts and
 stops holding the chambers vented.
 """
@@ -28,14 +27,14 @@ import random
 import subprocess
 import time
 
-import pytest
 from node_processes import launch, logs, node_env, override, ros2_cli
+import probe
+import pytest
 
 from bellows_ros import interfaces
-import probe
 from bellows_ros.runtime.messages import msg
 
-pytestmark = pytest.mark.slow  # two node processes, ~15 s per runtime
+pytestmark = pytest.mark.slow  # two node processes, ~15 s
 
 AMBIENT = 101325.0
 COMMAND = 4.0e5
@@ -49,8 +48,7 @@ def call(service, env):
     return result.stdout
 
 
-def test_estop_vents_under_a_command_flood_and_false_does_not_release(
-        runtime, tmp_path, monkeypatch):
+def test_estop_vents_under_a_command_flood_and_false_does_not_release(tmp_path, monkeypatch):
     domain = str(random.randint(100, 180))
     group = f'239.74.168.{random.randint(2, 250)}'
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
@@ -64,22 +62,22 @@ def test_estop_vents_under_a_command_flood_and_false_does_not_release(
                                    [('arm.channel', group), ('arm.n_segments', 1),
                                     ('actuator.enabled', 'false')] + normal), []),
                env, tmp_path)]
-    probe.init([])
+    probe.init()
     try:
-        probe = probe.Node('estop_probe')
+        watcher = probe.Node('estop_probe')
         pressures, status, vented = [], {}, []
-        probe.create_subscription(msg.Bool, interfaces.VENTED.resolved(),
-                                  lambda m: vented.append(m.data), probe.LATCHED)
-        probe.create_subscription(msg.JointState, interfaces.CHAMBERS.resolved(),
-                                  lambda m: pressures.append((time.monotonic(), max(m.effort))),
-                                  1000)
-        probe.create_subscription(
+        watcher.create_subscription(msg.Bool, interfaces.VENTED.resolved(),
+                                    lambda m: vented.append(m.data), probe.LATCHED)
+        watcher.create_subscription(msg.JointState, interfaces.CHAMBERS.resolved(),
+                                    lambda m: pressures.append((time.monotonic(), max(m.effort))),
+                                    1000)
+        watcher.create_subscription(
             msg.DiagnosticArray, '/diagnostics',
             lambda a: status.update({s.name: {kv.key: kv.value for kv in s.values}
                                      for s in a.status}), 50)
-        commands = probe.create_publisher(msg.JointState, interfaces.PRESSURE_COMMAND.resolved(),
-                                          10)
-        estop = probe.create_publisher(msg.Bool, interfaces.ESTOP.resolved(), probe.LATCHED)
+        commands = watcher.create_publisher(msg.JointState, interfaces.PRESSURE_COMMAND.resolved(),
+                                            10)
+        estop = watcher.create_publisher(msg.Bool, interfaces.ESTOP.resolved(), probe.LATCHED)
         command = msg.JointState(name=[interfaces.chain_chamber(1, 1),
                                        interfaces.chain_chamber(1, 2)],
                                  effort=[COMMAND, COMMAND])
@@ -88,7 +86,7 @@ def test_estop_vents_under_a_command_flood_and_false_does_not_release(
             end = time.monotonic() + seconds
             while time.monotonic() < end:
                 commands.publish(command)
-                probe.spin_once(probe, timeout_sec=0.001)
+                probe.spin_once(watcher, timeout_sec=0.001)
 
         flood(0.5)
         deadline = time.monotonic() + 40

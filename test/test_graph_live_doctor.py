@@ -22,23 +22,21 @@ two values every few seconds (the chamber moves, as in use) and listens to the c
 watches HEALTHY s of the healthy rig (no WARN allowed: a shorter watch than the issue's 10 min,
 which docs/bench_log.md records once by hand), then `ros2 param set` switches the plant's leak
 on; a WARN `model_health` naming air_leak must follow within DEADLINE s.
-
-Runs twice: the nodes on rclpy (`[rclpy]`) and on the DDS runtime (`[dds]`).
 """
 import os
 import random
 import time
 
-import pytest
 from node_processes import launch, logs, node_env, override, ros2_cli, stop_all
+import probe
+import pytest
 
 from bellows_ros.config.actuator import load_actuator_params
 from bellows_ros.models.stiffness_map import compression_for_stiffness
 from bellows_ros.nodes.diagnostics import level_of, WARN
-import probe
 from bellows_ros.runtime.messages import msg
 
-pytestmark = pytest.mark.slow   # three node processes for ~2 min per runtime
+pytestmark = pytest.mark.slow   # three node processes for ~2 min
 
 SETPOINTS = (2100.0, 2300.0)    # N/m: 2.5-6.5 kPa above ambient, the gas leaks out
 SWITCH = 4.0                    # s between set-point changes
@@ -52,7 +50,7 @@ STATUS = 'stiffness_controller_node: model_health'
 
 @pytest.mark.timeout(370 + HEALTHY)
 def test_a_leak_set_mid_run_is_named_within_a_minute_and_no_warn_before(
-        runtime, tmp_path, monkeypatch):
+        tmp_path, monkeypatch):
     params = load_actuator_params()
     domain = str(random.randint(181, 200))
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
@@ -80,7 +78,7 @@ def test_a_leak_set_mid_run_is_named_within_a_minute_and_no_warn_before(
                 reports.append((time.monotonic(), level_of(status.level), status.message,
                                 {kv.key: kv.value for kv in status.values}))
     try:
-        probe.init([])
+        probe.init()
         node = probe.Node('live_doctor_acceptance')
         setpoint = node.create_publisher(msg.Float64, '/actuator/stiffness_setpoint', 10)
         node.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
@@ -123,7 +121,7 @@ def test_a_leak_set_mid_run_is_named_within_a_minute_and_no_warn_before(
                 if t > t_set and level == WARN and 'air_leak' in message)
     warn = next(r for r in reports if r[0] == first)
     left = min(t for t, level, _, _ in reports if t > t_set and level == WARN)
-    info = (f'[{runtime}] healthy {watched:.0f} s without WARN; residual out of the floor '
+    info = (f'healthy {watched:.0f} s without WARN; residual out of the floor '
             f'{left - t_set:.1f} s and air_leak named {first - t_set:.1f} s after the leak was '
             f'set: {warn[2]!r}; cost per sample {warn[3]["cost_per_sample_us"]} us (max '
             f'{warn[3]["cost_per_sample_max_us"]} us), diagnosis {warn[3]["diagnosis_s"]} s, '

@@ -13,10 +13,10 @@
 # limitations under the License.
 
 """
-A leak switched on mid-run with `ros2 param set`, on both runtimes (#20 point 3, #21 point 4).
+A leak switched on mid-run with `ros2 param set` (#20 point 3, #21 point 4).
 
-A running sim_actuator_node (on the runtime under test, its chamber compressed so the gas is
-above ambient) is sealed: the gas amount its /diagnostics report holds still. `ros2 param set` of
+A running sim_actuator_node (a node process, its chamber compressed so the gas is above
+ambient) is sealed: the gas amount its /diagnostics report holds still. `ros2 param set` of
 `effect.air_leak.conductance` switches the leak on; the gas amount then falls in the reports
 that show the plant stepping with it. A conductance
 outside its physical range is refused with the Spec's words and changes nothing; 0 switches the
@@ -27,13 +27,13 @@ import os
 import random
 import time
 
-import pytest
 from node_processes import launch, logs, node_env, override, ros2_cli, stop_all
-
 import probe
+import pytest
+
 from bellows_ros.runtime.messages import msg
 
-pytestmark = pytest.mark.slow  # a node process and ~8 ros2 CLI calls per runtime
+pytestmark = pytest.mark.slow  # a node process and ~8 ros2 CLI calls
 
 NODE = 'sim_actuator_node'
 LEAK = 'effect.air_leak.conductance'
@@ -45,18 +45,18 @@ def ros2_param(env, *args):
 
 
 def test_a_leak_set_mid_run_drains_the_gas_and_a_bad_one_is_refused(
-        runtime, tmp_path, monkeypatch):
+        tmp_path, monkeypatch):
     domain = str(random.randint(100, 180))
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     env = node_env(ROS_DOMAIN_ID=domain)
     port = str(tmp_path / 'board')
     given = [('port', port), ('realtime_priority', 0), ('x_c0', 0.04), ('effects', "['']")]
     sim = launch(NODE, sum((override(NODE, k, v) for k, v in given), []), env, tmp_path)
-    probe.init([])
+    probe.init()
     reports = []  # the plant's /diagnostics values, in order
     try:
-        probe = probe.Node('live_effect_probe')
-        probe.create_subscription(
+        watcher = probe.Node('live_effect_probe')
+        watcher.create_subscription(
             msg.DiagnosticArray, '/diagnostics',
             lambda a: reports.extend({kv.key: kv.value for kv in s.values} for s in a.status
                                      if s.name == f'{NODE}: plant'), 50)
@@ -64,7 +64,7 @@ def test_a_leak_set_mid_run_drains_the_gas_and_a_bad_one_is_refused(
         def spin_until(condition, seconds):
             end = time.monotonic() + seconds
             while not condition() and time.monotonic() < end:
-                probe.spin_once(probe, timeout_sec=0.05)
+                probe.spin_once(watcher, timeout_sec=0.05)
             return condition()
 
         def gas(leak):
@@ -107,7 +107,7 @@ def test_a_leak_set_mid_run_drains_the_gas_and_a_bad_one_is_refused(
 
 
 def test_a_segment_effect_set_mid_run_is_taken_and_a_bad_one_is_refused(
-        runtime, tmp_path, monkeypatch):
+        tmp_path, monkeypatch):
     """sim_arm_node: the strength reaches the running plants (their /diagnostics say so)."""
     domain = str(random.randint(100, 180))
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
@@ -116,11 +116,11 @@ def test_a_segment_effect_set_mid_run_is_taken_and_a_bad_one_is_refused(
     given = [('can.channel', f'239.74.172.{random.randint(2, 250)}'), ('n_segments', 2),
              ('realtime_priority', 0), ('effects', '[contact_hysteresis]')]
     sim = launch(arm, sum((override(arm, k, v) for k, v in given), []), env, tmp_path)
-    probe.init([])
+    probe.init()
     reports = []
     try:
-        probe = probe.Node('live_segment_effect_probe')
-        probe.create_subscription(
+        watcher = probe.Node('live_segment_effect_probe')
+        watcher.create_subscription(
             msg.DiagnosticArray, '/diagnostics',
             lambda a: reports.extend({kv.key: kv.value for kv in s.values} for s in a.status
                                      if s.name == f'{arm}: plant'), 50)
@@ -131,7 +131,7 @@ def test_a_segment_effect_set_mid_run_is_taken_and_a_bad_one_is_refused(
         def spin_until(condition, seconds):
             end = time.monotonic() + seconds
             while not condition() and time.monotonic() < end:
-                probe.spin_once(probe, timeout_sec=0.05)
+                probe.spin_once(watcher, timeout_sec=0.05)
             return condition()
 
         assert spin_until(lambda: reported('0'), 40), (reports[-1:], logs(tmp_path))

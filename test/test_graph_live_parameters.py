@@ -13,25 +13,25 @@
 # limitations under the License.
 
 """
-Live parameters with ROS 2's own `ros2 param`, on both runtimes and across them.
+Live parameters with ROS 2's own `ros2 param`.
 
-The controllers and the model node run on the runtime under test; `ros2 param` is rclpy, so on
-the DDS runtime every call crosses runtimes through the parameter services the DDS runtime
-serves (runtime/parameter_services.py). Table-driven: a live parameter is set and reads back;
-a value outside its Spec is refused with the reason; a read-only one is refused as read-only;
-a change reaches the running node (its /diagnostics show the new feedforward).
+The controllers and the model node run as node processes (rclpy, on the EventsExecutor in
+bounded slices, so their parameter services answer). Table-driven: a live parameter is set and
+reads back; a value outside its Spec is refused with the reason; a read-only one is refused as
+read-only; a refused one changes nothing (it is not announced on /parameter_events); a change
+reaches the running node (its /diagnostics show the new feedforward).
 """
 import random
 import time
 
-import pytest
 from node_processes import launch, logs, node_env, ros2_cli, stop_all
-
 import probe
-from bellows_ros.runtime.messages import message_class, msg
-from bellows_ros.runtime.parameter_services import from_message
+import pytest
+from rclpy.parameter import parameter_value_to_python as python_value
 
-pytestmark = pytest.mark.slow  # three nodes and ~20 ros2 CLI calls per runtime
+from bellows_ros.runtime.messages import message_class, msg
+
+pytestmark = pytest.mark.slow  # three nodes and ~20 ros2 CLI calls
 
 NODES = ('arm_controller_node', 'stiffness_controller_node', 'model_node')
 
@@ -45,17 +45,20 @@ LIVE = [
     ('model_node', 'latency_budget', '0.003', 'Double value is: 0.003'),
 ]
 # (node, parameter, a value it refuses, what the refusal says: the Spec's words, or rclpy's own
-# where rclpy checks the descriptor before the node's callback)
+# where rclpy checks the descriptor (range, type, read-only) before the node's callback)
 REFUSED = [
-    ('arm_controller_node', 'pid.kp', '-1.0', ('0..10000', 'Max: 10000.0')),
-    ('arm_controller_node', 'feedforward', 'magic', ("one of 'paper_a'",)),
-    ('arm_controller_node', 'co_contraction', '650000.0', ('p_max',)),  # above p_max - p0
-    ('arm_controller_node', 'pid.kp', '35', ('double', 'Wrong parameter type')),  # no change
-    ('stiffness_controller_node', 'pd.duty_max', '2.0', ('0.01..1', 'Max: 1.0')),
-    ('model_node', 'latency_budget', '0.0', ('0.0001..1', 'Min: 0.0001')),
-    ('arm_controller_node', 'segments', '[2]', ('read-only',)),
-    ('model_node', 'segments', '[1]', ('read-only',)),
-    ('stiffness_controller_node', 'actuator_params', 'x.yaml', ('read-only',)),
+    ('arm_controller_node', 'pid.kp', '-1.0', 'out of range Min: 0.0, Max: 10000.0'),
+    ('arm_controller_node', 'feedforward', 'magic',
+     "parameter 'feedforward' = 'magic': expected one of 'paper_a', 'previous', 'none'"),
+    ('arm_controller_node', 'co_contraction', '650000.0',
+     'must lie in [p0, p_max] = [101325, 750000] Pa'),  # p0 + co_contraction above p_max
+    ('arm_controller_node', 'pid.kp', '35', "Wrong parameter type, expected 'Type.DOUBLE'"),
+    ('stiffness_controller_node', 'pd.duty_max', '2.0', 'out of range Min: 0.01, Max: 1.0'),
+    ('model_node', 'latency_budget', '0.0', 'out of range Min: 0.0001, Max: 1.0'),
+    ('arm_controller_node', 'segments', '[2]', 'Trying to set a read-only parameter: segments'),
+    ('model_node', 'segments', '[1]', 'Trying to set a read-only parameter: segments'),
+    ('stiffness_controller_node', 'actuator_params', 'x.yaml',
+     'Trying to set a read-only parameter: actuator_params'),
 ]
 
 
@@ -65,13 +68,15 @@ def ros2_param(env, *args):
 
 
 @pytest.fixture
-def graph(runtime, tmp_path, monkeypatch):
+def graph(tmp_path, monkeypatch):
     domain = str(random.randint(100, 180))
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     env = node_env(ROS_DOMAIN_ID=domain)
     processes = [launch(name, [], env, tmp_path) for name in NODES]
     try:
-        deadline = time.monotonic() + 30
+        # a generous bound: on a loaded 2-core host one `ros2 param list` of three nodes took
+        # 5-10 s, and a fresh command line may not discover every node within its spin time
+        deadline = time.monotonic() + 90
         while time.monotonic() < deadline:
             listed = ros2_param(env, 'list')
             if all(f'/{name}:' in listed for name in NODES):
@@ -88,28 +93,29 @@ def test_live_parameters_set_refuse_and_take_effect(graph):
     # A probe listens from the start: /diagnostics, and /parameter_events, where every change
     # taken is announced (a refused one is not).
     seen, changed = {}, []
-    probe.init([])
+    probe.init()
     try:
-        probe = probe.Node('live_parameter_probe')
-        probe.create_subscription(
+        watcher = probe.Node('live_parameter_probe')
+        watcher.create_subscription(
             msg.DiagnosticArray, '/diagnostics',
             lambda a: seen.update({kv.key: kv.value for s in a.status
                                    if s.name.startswith('arm_controller_node')
                                    for kv in s.values}), 50)
-        probe.create_subscription(
+        watcher.create_subscription(
             message_class('rcl_interfaces/msg/ParameterEvent'), '/parameter_events',
-            lambda e: changed.extend((e.node.lstrip('/'), p.name, str(from_message(p.value)))
+            lambda e: changed.extend((e.node.lstrip('/'), p.name, str(python_value(p.value)))
                                      for p in e.changed_parameters), 1000)
         for node, name, value, shown in LIVE:
             answer = ros2_param(env, 'set', f'/{node}', name, value)
             assert 'Set parameter successful' in answer, (node, name, answer, logs(log_dir))
             assert ros2_param(env, 'get', f'/{node}', name).strip() == shown
-        for node, name, value, reasons in REFUSED:
-            before = ros2_param(env, 'get', f'/{node}', name)
+        # A refused value changes nothing: /parameter_events (checked below) announce exactly
+        # the LIVE changes, and a read-back shows the value taken before.
+        for node, name, value, reason in REFUSED:
             answer = ros2_param(env, 'set', f'/{node}', name, value)
-            assert 'Setting parameter failed' in answer, (node, name, answer)
-            assert any(reason in answer for reason in reasons), (node, name, answer)
-            assert ros2_param(env, 'get', f'/{node}', name) == before  # nothing changed
+            assert 'Setting parameter failed' in answer and reason in answer, (node, name, answer)
+        assert ros2_param(env, 'get', '/arm_controller_node', 'pid.kp').strip() == \
+            'Double value is: 35.0'
         described = ros2_param(env, 'describe', '/arm_controller_node', 'pid.kp', 'segments')
         assert 'Min value: 0.0' in described and 'Max value: 10000.0' in described, described
         assert described.count('Read only: true') == 1, described  # segments only
@@ -118,7 +124,7 @@ def test_live_parameters_set_refuse_and_take_effect(graph):
         deadline = time.monotonic() + 15
         while (seen.get('feedforward') != 'previous' or len(changed) < len(LIVE)) \
                 and time.monotonic() < deadline:
-            probe.spin_once(probe, timeout_sec=0.1)
+            probe.spin_once(watcher, timeout_sec=0.1)
     finally:
         probe.shutdown()
     assert seen.get('feedforward') == 'previous', seen

@@ -20,20 +20,18 @@ model_node with a short healthy window; the test listens to `model_node: model_h
 /diagnostics. After the healthy window it watches HEALTHY s of the unloaded arm (no WARN allowed),
 then `ros2 param set` puts LOAD N·m on the segment; a WARN naming segment_1 must follow within
 DEADLINE s. The numbers (floor, ratios, the sample path's cost) are printed.
-
-Runs twice: the nodes on rclpy (`[rclpy]`) and on the DDS runtime (`[dds]`).
 """
 import random
 import time
 
-import pytest
 from node_processes import launch, logs, node_env, override, ros2_cli, stop_all
+import probe
+import pytest
 
 from bellows_ros.nodes.diagnostics import level_of, WARN
-import probe
 from bellows_ros.runtime.messages import msg
 
-pytestmark = pytest.mark.slow   # three node processes for ~40 s per runtime
+pytestmark = pytest.mark.slow   # three node processes for ~40 s
 
 CALIBRATION = 5.0               # s: the model node's healthy window (model_health.calibration)
 WINDOW = 2.0                    # s: model_health.window
@@ -70,7 +68,7 @@ def test_a_load_set_mid_run_leaves_the_floor_and_no_warn_before(tmp_path, monkey
                 reports.append((time.monotonic(), level_of(status.level), status.message,
                                 {kv.key: kv.value for kv in status.values}))
     try:
-        probe.init([])
+        probe.init()
         node = probe.Node('model_health_acceptance')
         node.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
 
@@ -104,7 +102,7 @@ def test_a_load_set_mid_run_leaves_the_floor_and_no_warn_before(tmp_path, monkey
     assert found, (reports[-3:], logs(tmp_path))
     warn = next(r for r in reports if r[0] > t_set and r[1] == WARN)
     healthy = [r[3] for r in before if r[0] > healthy_from]
-    info = (f'[{runtime}] healthy {t_set - healthy_from:.0f} s without WARN (floor '
+    info = (f'healthy {t_set - healthy_from:.0f} s without WARN (floor '
             f"{healthy[-1]['noise_floor_segment_1']} N·m, ratio "
             f"{max(float(v['ratio_segment_1']) for v in healthy):.2f} at most, limit "
             f"{healthy[-1]['limit_segment_1']}); out {warn[0] - t_set:.1f} s after the load: "

@@ -15,12 +15,10 @@
 """
 Acceptance: the simulated graph over real DDS, driver -> model, counted sample by sample.
 
-Runs twice: the nodes on rclpy (`[rclpy]`) and on the DDS runtime (`[dds]`); the test's own probe
-is a DDS-runtime node either way.
-
 Processes: sim_arm_node (udp_multicast CAN), sim_actuator_node (pty), driver_node, model_node; an
-independent plain-Cyclone subscriber (no bellows_ros import, its own IDL definitions with ROS 2
-type names) must see /joint_states and /bellows/driving_torque. Then the driver is stopped and its
+independent plain-rclpy script (its own process, no bellows_ros import, the ROS packages' message
+classes) must see /joint_states and /bellows/driving_torque, and find from ROS 2's graph that
+the driver publishes the one and the model node the other. Then the driver is stopped and its
 final count of published arm samples must equal the model node's count of evaluated samples.
 The probe counts the sample topics by joint names: the arm's topics carry no actuator message
 (the arm's 1 kHz subscribers never decode one), the actuator's carry the actuator's only.
@@ -35,79 +33,56 @@ import sys
 import textwrap
 import time
 
-from plain_cyclone import JOINT_STATE_SUBSCRIBER
-import pytest
 from node_processes import launch, logs, node_env, override, SIM_CONFIG
+import probe
+import pytest
 
 from bellows_ros import interfaces, params
-import probe
 from bellows_ros.runtime import realtime
 from bellows_ros.runtime.messages import msg
 
 
-PLAIN_SUBSCRIBER = JOINT_STATE_SUBSCRIBER + textwrap.dedent("""\
-    qos = Qos(Policy.Reliability.Reliable(0), Policy.History.KeepLast(50))
-    readers = {t: DataReader(participant, Topic(participant, 'rt' + t, JointState), qos=qos)
-               for t in sys.argv[2:]}
-    seen = {t: None for t in readers}
+# What any ROS 2 user's node sees: the first segment_1 sample on each topic given, and which
+# node owns each topic's writer (ROS 2's graph, as `ros2 topic info -v` reads it).
+PLAIN_SUBSCRIBER = textwrap.dedent("""\
+    import sys
+    import time
+
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from sensor_msgs.msg import JointState
+
+    rclpy.init(args=[])
+    node = rclpy.create_node('plain_subscriber')
+    seen = {topic: None for topic in sys.argv[1:]}
+
+    def keep(topic):
+        def on_message(message):
+            if message.name and message.name[0] == 'segment_1':
+                seen[topic] = message
+        return on_message
+    for topic in seen:
+        node.create_subscription(JointState, topic, keep(topic), 50)
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    owners = {}
     end = time.time() + 20
-    while time.time() < end and any(v is None for v in seen.values()):
-        for topic, reader in readers.items():
-            for sample in reader.take(50):
-                if getattr(sample, 'name', None) and sample.name[0] == 'segment_1':
-                    seen[topic] = sample
-        time.sleep(0.005)
+    while time.time() < end and (None in seen.values() or len(owners) < len(seen)):
+        executor.spin_once(timeout_sec=0.05)
+        for topic in seen:
+            writers = node.get_publishers_info_by_topic(topic)
+            if writers:
+                owners[topic] = sorted(w.node_namespace.rstrip('/') + '/' + w.node_name
+                                       for w in writers)
     for topic, sample in seen.items():
-        print(topic, sample.name[0], sample.header.stamp.sec, sample.header.stamp.nanosec,
-              sample.position[0] if sample.position else sample.effort[0])
-""")
-
-
-# Which node owns the writer of each topic, as `ros2 topic info -v` works it out: the writers a
-# reader matched (GUIDs, from DDS discovery), their owners from `ros_discovery_info`.
-PLAIN_GRAPH_READER = JOINT_STATE_SUBSCRIBER + textwrap.dedent("""\
-    from cyclonedds.idl.types import array, bounded_str, uint8
-
-    @dataclass
-    class Gid(IdlStruct, typename='rmw_dds_common::msg::dds_::Gid_'):
-        data: array[uint8, 16]
-
-    @dataclass
-    class NodeEntitiesInfo(IdlStruct, typename='rmw_dds_common::msg::dds_::NodeEntitiesInfo_'):
-        node_namespace: bounded_str[256]
-        node_name: bounded_str[256]
-        reader_gid_seq: sequence[Gid]
-        writer_gid_seq: sequence[Gid]
-
-    @dataclass
-    class ParticipantEntitiesInfo(IdlStruct,
-                                  typename='rmw_dds_common::msg::dds_::ParticipantEntitiesInfo_'):
-        gid: Gid
-        node_entities_info_seq: sequence[NodeEntitiesInfo]
-
-    # Every participant writes this one unkeyed topic: a deep history, or one node's sample
-    # replaces another's before it is taken.
-    qos = Qos(Policy.Reliability.Reliable(0), Policy.Durability.TransientLocal,
-              Policy.History.KeepLast(100))
-    info = DataReader(participant, Topic(participant, 'ros_discovery_info',
-                                         ParticipantEntitiesInfo), qos=qos)
-    readers = {t: DataReader(participant, Topic(participant, 'rt' + t, JointState))
-               for t in sys.argv[2:]}
-    owner, found = {}, {}
-    end = time.time() + 20
-    while time.time() < end and set(found) != set(readers):
-        for sample in info.take(50):
-            for node in getattr(sample, 'node_entities_info_seq', []):
-                for gid in node.writer_gid_seq:
-                    owner[bytes(gid.data)] = node.node_namespace.rstrip('/') + '/' + node.node_name
-        for topic, reader in readers.items():
-            for handle in reader.get_matched_publications():
-                key = reader.get_matched_publication_data(handle).key.bytes
-                if key in owner:
-                    found[topic] = owner[key]
-        time.sleep(0.02)
-    for topic, node in sorted(found.items()):
-        print(topic, node)
+        if sample is not None:
+            print('sample', topic, sample.name[0], sample.header.stamp.sec,
+                  sample.header.stamp.nanosec,
+                  sample.position[0] if sample.position else sample.effort[0])
+    for topic, nodes in sorted(owners.items()):
+        print('owner', topic, ','.join(nodes))
+    node.destroy_node()
+    rclpy.shutdown()
 """)
 
 
@@ -122,33 +97,33 @@ def stop(process, timeout=10):
     return process.returncode
 
 
-pytestmark = pytest.mark.slow  # four node processes, ~25 s per runtime
+pytestmark = pytest.mark.slow  # four node processes, ~25 s
 
 
 @pytest.fixture
-def graph(runtime, tmp_path, monkeypatch):
+def graph(tmp_path, monkeypatch):
     domain = str(random.randint(100, 180))
     group = f'239.74.164.{random.randint(2, 250)}'
     port = str(tmp_path / 'actuator')
     env = node_env(ROS_DOMAIN_ID=domain)
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
-    probe.init([])
-    probe = probe.Node('acceptance_probe')
+    probe.init()
+    watcher = probe.Node('acceptance_probe')
     final = {}
 
     def on_diagnostics(array):
         for status in array.status:
             final[status.name] = {kv.key: kv.value for kv in status.values}
-    probe.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
+    watcher.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
     # Every message on the four sample topics, by the names it carries (subscribed before the
     # driver starts: it waits for a subscriber on each).
     seen = {topic.resolved(): Counter() for topic in (
         interfaces.JOINT_STATES, interfaces.CHAMBERS, interfaces.ACTUATOR_JOINT_STATES,
         interfaces.ACTUATOR_CHAMBERS)}
     for name, counter in seen.items():
-        probe.create_subscription(msg.JointState, name,
-                                  lambda m, counter=counter: counter.update([tuple(m.name)]),
-                                  interfaces.SAMPLE_DEPTH)
+        watcher.create_subscription(msg.JointState, name,
+                                    lambda m, counter=counter: counter.update([tuple(m.name)]),
+                                    interfaces.SAMPLE_DEPTH)
     # One scheduling class for the whole path: config/nodes_sim.yaml runs the simulated arm and
     # the driver SCHED_FIFO above a model node at normal priority, which on a loaded machine then
     # falls behind and drops samples, and this test counts every sample through the model.
@@ -170,14 +145,14 @@ def graph(runtime, tmp_path, monkeypatch):
         # samples published before anyone listened.
         end = time.monotonic() + 60.0
         while 'model_node: driving torque' not in final and time.monotonic() < end:
-            probe.spin_once(probe, timeout_sec=0.05)
+            probe.spin_once(watcher, timeout_sec=0.05)
         assert 'model_node: driving torque' in final, logs(tmp_path)
         driver = [override('driver_node', name, value) for name, value in (
             ('arm.channel', group), ('arm.n_segments', 2), ('actuator.port', port),
             ('wait_for_subscribers', 20.0))]
         processes['driver_node'] = launch('driver_node', sum(driver, []) + normal['driver_node'],
                                           env, tmp_path)
-        yield processes, domain, tmp_path, probe, final, seen
+        yield processes, domain, tmp_path, watcher, final, seen
     finally:
         for process in processes.values():
             stop(process)
@@ -186,26 +161,25 @@ def graph(runtime, tmp_path, monkeypatch):
 
 def test_graph_publishes_and_every_sample_is_evaluated(graph):
     processes, domain, tmp_path, node, final, seen = graph
-    plain = subprocess.run([sys.executable, '-c', PLAIN_SUBSCRIBER, domain, '/joint_states',
-                            '/bellows/driving_torque'], capture_output=True, text=True, timeout=60,
-                           env={k: v for k, v in os.environ.items() if k != 'PYTHONPATH'},
+    # no bellows_ros on its path: only the ROS packages the venv (or a sourced ROS 2) holds
+    plain = subprocess.run([sys.executable, '-c', PLAIN_SUBSCRIBER, '/joint_states',
+                            '/bellows/driving_torque'], capture_output=True, text=True, timeout=90,
+                           env={k: v for k, v in node_env(ROS_DOMAIN_ID=domain).items()
+                                if k != 'PYTHONPATH'},
                            cwd=tmp_path)
     assert plain.returncode == 0, plain.stderr + logs(tmp_path)
-    lines = dict(line.split(' ', 1) for line in plain.stdout.strip().splitlines())
-    assert set(lines) == {'/joint_states', '/bellows/driving_torque'}, logs(tmp_path)
-    for line in lines.values():
+    rows = [line.split(' ', 2) for line in plain.stdout.strip().splitlines()]
+    samples = {topic: rest for kind, topic, rest in rows if kind == 'sample'}
+    assert set(samples) == {'/joint_states', '/bellows/driving_torque'}, \
+        plain.stdout + logs(tmp_path)
+    for line in samples.values():
         name, sec, _nanosec, value = line.split()
         assert name == 'segment_1' and abs(int(sec) - time.time()) < 600 \
             and math.isfinite(float(value)), line
-    # The same reader can tell which node publishes what (ROS 2's graph, `ros_discovery_info`).
-    owners = subprocess.run([sys.executable, '-c', PLAIN_GRAPH_READER, domain, '/joint_states',
-                             '/bellows/driving_torque'],
-                            capture_output=True, text=True, timeout=60,
-                            env={k: v for k, v in os.environ.items() if k != 'PYTHONPATH'},
-                            cwd=tmp_path)
-    assert owners.returncode == 0, owners.stderr
-    assert dict(line.split() for line in owners.stdout.strip().splitlines()) == {
-        '/joint_states': '/driver_node', '/bellows/driving_torque': '/model_node'}, owners.stdout
+    # The same script tells which node publishes what (ROS 2's graph): one writer each.
+    owners = {topic: rest for kind, topic, rest in rows if kind == 'owner'}
+    assert owners == {'/joint_states': '/driver_node',
+                      '/bellows/driving_torque': '/model_node'}, plain.stdout
 
     # Count: let the graph run, stop the driver, then compare its final count with the model's.
     end = time.monotonic() + 4.0
@@ -250,9 +224,9 @@ def test_a_driver_stopped_for_half_a_second_stamps_its_backlog_on_the_arms_clock
     stamps, then a burst stamped at the same instant, each sample's age hidden from the arm
     controller's `max_sample_age` (docs/bench_log.md, 2026-11-26).
     """
-    processes, domain, tmp_path, probe, final, seen = graph
+    processes, domain, tmp_path, watcher, final, seen = graph
     stamps = []
-    probe.create_subscription(
+    watcher.create_subscription(
         msg.JointState, interfaces.JOINT_STATES.resolved(),
         lambda m: stamps.append(m.header.stamp.sec * 10**9 + m.header.stamp.nanosec),
         interfaces.SAMPLE_DEPTH)
@@ -260,7 +234,7 @@ def test_a_driver_stopped_for_half_a_second_stamps_its_backlog_on_the_arms_clock
     def spin(seconds):
         end = time.monotonic() + seconds
         while time.monotonic() < end:
-            probe.spin_once(probe, timeout_sec=0.05)
+            probe.spin_once(watcher, timeout_sec=0.05)
     end = time.monotonic() + 30.0
     while len(stamps) < 1000 and time.monotonic() < end:
         spin(0.1)

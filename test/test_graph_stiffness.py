@@ -21,7 +21,6 @@ Processes: sim_actuator_node (pty; effects wall_bulging + air_leak + buckling), 
 plant's true chamber compression and gas amount, from which the true stiffness follows with paper
 B's model).
 
-Runs twice: the nodes on rclpy (`[rclpy]`) and on the DDS runtime (`[dds]`).
 
 Criteria (issue): after a step to 1900 N/m, within 2 % of the target in <= 1.2x the lead screw's
 minimum travel time, overshoot <= 5 % of the step, end stops never hit; with air_leak on, held
@@ -35,14 +34,14 @@ the range instead (reported in the assertion messages).
 import random
 import time
 
-import pytest
 from node_processes import launch, node_env, override, stop_all
+import probe
+import pytest
 
 from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.config.hardware import actuator_board_config
 from bellows_ros.models.actuator import stiffness
 from bellows_ros.models.stiffness_map import compression_for_stiffness, stiffness_range
-import probe
 from bellows_ros.runtime.messages import msg
 
 K_HIGH = 1900.0
@@ -84,7 +83,7 @@ def test_stiffness_step_and_leak_hold(tmp_path, monkeypatch):
                           if kv.key in ('x_c', 'gas_p_ref', 'end_stop_hits')}
                 plant.append((time.monotonic(), values))
     try:
-        probe.init([])
+        probe.init()
         node = probe.Node('stiffness_acceptance')
         setpoint = node.create_publisher(msg.Float64, '/actuator/stiffness_setpoint', 10)
         node.create_subscription(msg.Float64, '/actuator/stiffness',

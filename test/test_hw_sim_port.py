@@ -25,8 +25,8 @@ import stat
 import subprocess
 import sys
 
-import pytest
 from node_processes import node_env
+import pytest
 
 from bellows_ros.errors import ParameterError
 from bellows_ros.hardware.sim_actuator_board import ActuatorState, SimActuatorBoard

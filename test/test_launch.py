@@ -31,8 +31,8 @@ import sys
 import threading
 import time
 
-import pytest
 from node_processes import LOOPBACK_ENVIRONMENT, require_rclpy
+import pytest
 import yaml
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -288,7 +288,7 @@ def test_two_namespaced_graphs_run_side_by_side(prefix, tmp_path, monkeypatch):
     arm_b = {tuple(interfaces.segment_joint(i) for i in (1, 2)),
              tuple(interfaces.chain_chamber(i, j) for i in (1, 2) for j in (1, 2))}
     monkeypatch.setenv('ROS_DOMAIN_ID', env['ROS_DOMAIN_ID'])
-    probe.init([])
+    probe.init()
     try:
         probe = probe.Node('namespace_probe')
         for namespace, seen in names.items():

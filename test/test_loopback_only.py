@@ -25,8 +25,8 @@ import socket
 import subprocess
 import sys
 
-import pytest
 from node_processes import node_env
+import pytest
 
 from bellows_ros.errors import ParameterError
 from bellows_ros.hardware.arm_bus import open_can

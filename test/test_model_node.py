@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-model_node's torques, in one process over the DDS runtime: what it publishes is the model's own.
+model_node's torques, the node in the test's process: what it publishes is the model's own.
 
 A feeder node publishes a made-up stream of paired samples (/joint_states, /bellows/chambers); the
 test steps its own `SegmentModel`s on the same stream and computes τ_ext (2) with Ψ̈ from
@@ -26,6 +26,7 @@ import math
 import random
 import time
 
+import probe
 import pytest
 import yaml
 
@@ -35,7 +36,6 @@ from bellows_ros.models.derivatives import rate
 from bellows_ros.models.segment import external_torque, SegmentModel
 from bellows_ros.nodes import diagnostics
 from bellows_ros.nodes.model_node import MAX_MISSED_GAP, ModelNode
-import probe
 
 DOMAIN = '194'
 DYNAMICS = {'segment': {'dynamics': {'inertia': 0.02, 'damping': 0.1, 'gravity': 0.3}}}
@@ -47,8 +47,8 @@ def feeder(monkeypatch, tmp_path):
     params_file = tmp_path / 'dynamics.yaml'
     params_file.write_text(yaml.safe_dump({'/**': {'ros__parameters': DYNAMICS}}))
     probe.init(['--ros-args', '-p', f'model_node:params_file:={params_file}',
-                   '-p', 'model_node:segments:=[1, 2]'])
-    yield ModelNode.on(dds_node)(), probe.Node('feeder'), params_file
+                '-p', 'model_node:segments:=[1, 2]'])
+    yield probe.adopt(ModelNode()), probe.Node('feeder'), params_file
     probe.shutdown()
 
 

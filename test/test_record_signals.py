@@ -30,11 +30,11 @@ import threading
 import time
 
 from mcap.reader import make_reader
+import probe
 import pytest
 from rosbags.rosbag2 import Reader
 from rosbags.typesys import get_typestore, Stores
 
-import probe
 from bellows_ros.runtime.messages import msg
 
 pytestmark = pytest.mark.slow  # each case records for a few seconds
@@ -48,6 +48,23 @@ def numbers_in_rosbags(bag):
     with Reader(bag) as reader:
         return [STORE.deserialize_cdr(raw, c.msgtype).data
                 for c, _, raw in reader.messages()]
+
+
+def disorder(bag):
+    """
+    Where the file's messages (in file order) are out of number order: for a failure's message.
+
+    Each as (index, (log time ns, number) before, at), with the chunks' time ranges.
+    """
+    (path,) = [p for p in Path(bag).iterdir() if p.suffix == '.mcap']
+    with open(path, 'rb') as stream:
+        reader = make_reader(stream)
+        rows = [(m.log_time, STORE.deserialize_cdr(m.data, 'std_msgs/msg/Float64').data)
+                for _, _, m in reader.iter_messages(log_time_order=False)]
+        chunks = [(c.message_start_time, c.message_end_time)
+                  for c in reader.get_summary().chunk_indexes]
+    return ([(i, rows[i - 1], rows[i]) for i in range(1, len(rows))
+             if rows[i][1] < rows[i - 1][1]][:5], chunks)
 
 
 def count_in_mcap(bag):
@@ -83,7 +100,7 @@ def recording(tmp_path, monkeypatch):
     recorder = subprocess.Popen([BELLOWS, 'record', '--output', str(bag), '--topics', TOPIC],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                 env=dict(os.environ, ROS_DOMAIN_ID=domain))
-    probe.init([])
+    probe.init()
     publisher = NumberedPublisher()
     try:
         end = time.monotonic() + 30
@@ -123,7 +140,8 @@ def test_a_stopped_recording_opens_with_every_message_received(recording, signal
     received = recorded_count(out)
     numbers = numbers_in_rosbags(bag)
     assert len(numbers) == received == count_in_mcap(bag)
-    assert numbers == sorted(numbers) and received > 500
+    assert numbers == sorted(numbers), disorder(bag)  # seen once (08:20 UTC run), not since
+    assert received > 500
     print(f'{[signal.Signals(s).name for s in signals]}: published {len(publisher.sent)}, '
           f'received and kept {received}')
 

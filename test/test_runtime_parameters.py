@@ -13,13 +13,15 @@
 # limitations under the License.
 
 """
-rcl's parameter and remapping rules, one table run on both runtimes.
+rcl's parameter and remapping rules, and the bellows node base's checks on top of them, one table.
 
-Each case starts `parameter_probe.py` (a node declaring `gain`, `label`, `port`, `segments` and
-publishing on a few topics) with the case's `--ros-args` on rclpy and on the DDS runtime, and
-checks what the node got: parameter values, its name and namespace, the topics as its publishers
-resolved them, or exit status 2 with one line on stderr. The expected values are rcl's, measured
-on rclpy (Jazzy); the DDS runtime must give the same.
+Each case starts `parameter_probe.py` (a bellows node declaring `gain` in 0..10, `label`, `port`,
+`segments` as Specs and publishing on a few topics) with the case's `--ros-args`, and checks what
+the node got: parameter values, its name and namespace, the topics as its publishers resolved
+them, or exit status 2 with one line on stderr. Precedence and remapping are rcl's (Jazzy); the
+base adds the errors rcl leaves silent: a parameter given (file or -p) that the node does not
+declare, a value of another type than the declared default (no conversion, not even integer to
+double), a value outside its bounds.
 """
 from dataclasses import dataclass, field
 import json
@@ -28,11 +30,12 @@ import random
 import subprocess
 import sys
 
-import pytest
 from node_processes import node_env
+import pytest
 
 PROBE = Path(__file__).resolve().parent / 'parameter_probe.py'
 DEFAULTS = {'gain': 0.5, 'label': 'none', 'port': '/default', 'segments': [0, 0]}
+BOUNDS = {'gain': [0, 10]}
 TOPICS = ['foo', '/abs', '~/priv', 'a/b']
 
 FILES = {
@@ -48,6 +51,7 @@ FILES = {
     'E.yaml': 'probe: {ros__parameters: {segments: []}}\n',
     'M.yaml': 'probe: {ros__parameters: {segments: [1, 2.5]}}\n',
     'X.yaml': '/**: {ros__parameters: {gain: 1e-3}}\n',
+    'H.yaml': 'probe: {ros__parameters: {gain: 10.5}}\n',
 }
 
 
@@ -62,7 +66,14 @@ class Case:
     namespace: str = '/'
     topics: dict = field(default_factory=dict)
     error: str = ''
+    known_bug: str = ''  # a product bug that makes the case fail: strict xfail, until fixed
 
+
+# rclpy declares every override before the node can check it (automatically_declare_parameters_
+# from_overrides=True, runtime/node.py); an empty array has no type in rcl (PARAMETER_NOT_SET),
+# and rclpy's declare_parameters raises ValueError: a traceback and exit status 1.
+EMPTY_ARRAY_BUG = ('product bug: an empty array given ends in a ValueError traceback from '
+                   "rclpy's Node.__init__ (runtime/node.py _BellowsNode.__init__), not one line")
 
 CASES = [
     # precedence: entries keyed by node, in order of first appearance; later matching over earlier
@@ -114,16 +125,30 @@ CASES = [
          error="parameter 'gain' must be a double, got an integer 2"),
     Case('string_for_array', ['-p', 'segments:=abc'],
          error="parameter 'segments' must be an integer array, got a string"),
-    Case('mixed_array_p', ['-p', 'segments:=[1, 2.0]'], error='array elements must all have one'),
+    Case('mixed_array_p', ['-p', 'segments:=[1, 2.0]'],
+         error='Sequence should be of same type'),
     Case('mixed_array_file', ['--params-file', 'M.yaml'],
-         error='array elements must all have one'),
+         error='Sequence should be of same type'),
     Case('empty_array_file', ['--params-file', 'E.yaml'],
-         error="parameter 'segments' is an empty array"),
-    Case('empty_array_p', ['-p', 'segments:=[]'], error="parameter 'segments' is an empty array"),
+         error="parameter 'segments' is an empty array", known_bug=EMPTY_ARRAY_BUG),
+    Case('empty_array_p', ['-p', 'segments:=[]'], error="parameter 'segments' is an empty array",
+         known_bug=EMPTY_ARRAY_BUG),
+    # bounds (the Spec's, inclusive), for a value given in a file or with -p
+    Case('at_the_bounds', ['-p', 'gain:=0.0'], {'gain': 0.0}),
+    Case('at_the_upper_bound', ['-p', 'gain:=10.0'], {'gain': 10.0}),
+    Case('below_the_bounds', ['-p', 'gain:=-0.5'],
+         error="parameter 'gain' = -0.5: expected 0..10, got -0.5"),
+    Case('above_the_bounds_in_file', ['--params-file', 'H.yaml'],
+         error="parameter 'gain' = 10.5: expected 0..10, got 10.5"),
+    Case('out_of_bounds_overridden', ['--params-file', 'H.yaml', '-p', 'probe:gain:=2.0'],
+         {'gain': 2.0}),
+    # a parameter the node does not declare
     Case('undeclared', ['-p', 'extra:=1'], error="unknown parameter 'extra' for node 'probe'"),
     Case('undeclared_in_section', ['--params-file', 'FILE_WITH_EXTRA'],
          error="unknown parameter 'extra' for node 'probe'"),
-    Case('fqn_in_p_is_rejected', ['-p', '/probe:port:=/x'], error="'/probe' is not a node name"),
+    # rcl's own parse errors: its messages name the rule, not what is wrong with it
+    Case('fqn_in_p_is_rejected', ['-p', '/probe:port:=/x'],
+         error="Couldn't parse parameter override rule: '-p /probe:port:=/x'"),
     # remapping: from and to expanded in the node's namespace, the first matching rule wins
     Case('remap', ['-r', 'foo:=bar', '-r', '~/priv:=/private', '-r', 'a/b:=c'],
          topics={'foo': '/bar', '/abs': '/abs', '~/priv': '/private', 'a/b': '/c'}),
@@ -146,14 +171,16 @@ CASES = [
          name='a', namespace='/p', topics={'foo': '/p/foo'}),
     Case('ns_rule_sees_new_name', ['-r', 'probe:__node:=other', '-r', 'probe:__ns:=/y',
                                    '-r', 'other:__ns:=/x'], name='other', namespace='/x'),
-    Case('relative_namespace', ['-r', '__ns:=arm'], error='must be fully qualified'),
-    Case('bad_node_name', ['-r', '__node:=9bad'], error="'9bad' is not a valid node name"),
+    Case('relative_namespace', ['-r', '__ns:=arm'],
+         error="Couldn't parse remap rule: '-r __ns:=arm'"),
+    Case('bad_node_name', ['-r', '__node:=9bad'],
+         error="Couldn't parse remap rule: '-r __node:=9bad'"),
 ]
 
 
-def probe(runtime, cwd, argv, parameters=DEFAULTS, topics=TOPICS):
-    """Run the probe node on `runtime` with `--ros-args *argv`: the finished process."""
-    spec = json.dumps({'parameters': parameters, 'topics': topics})
+def probe(cwd, argv, parameters=DEFAULTS, topics=TOPICS):
+    """Run the probe node with `--ros-args *argv`: the finished process."""
+    spec = json.dumps({'parameters': parameters, 'bounds': BOUNDS, 'topics': topics})
     env = node_env(ROS_DOMAIN_ID=str(random.randint(60, 99)), PROBE_SPEC=spec)
     return subprocess.run([sys.executable, str(PROBE), '--ros-args', *argv], cwd=cwd, env=env,
                           capture_output=True, text=True, timeout=60)
@@ -168,22 +195,24 @@ def files(tmp_path):
 
 
 def check_error(result, fragment):
+    """Exit status 2 and one error line; rcl may log its own line first (its C logger)."""
     assert result.returncode == 2, (result.stdout, result.stderr)
-    lines = result.stderr.strip().splitlines()
+    lines = [line for line in result.stderr.strip().splitlines() if '] [rcl]: ' not in line]
     assert len(lines) == 1, result.stderr
     assert lines[0].startswith('parameter_probe.py: error: ') and fragment in lines[0], lines[0]
 
 
-@pytest.mark.slow  # a node process per case and runtime
-@pytest.mark.parametrize('case', CASES, ids=[case.id for case in CASES])
+@pytest.mark.slow  # a node process per case
+@pytest.mark.parametrize('case', [
+    pytest.param(case, marks=pytest.mark.xfail(strict=True, reason=case.known_bug))
+    if case.known_bug else case for case in CASES], ids=[case.id for case in CASES])
 def test_rcl_rules(case, files):
-    result = probe(runtime, files, case.argv)
+    result = probe(files, case.argv)
     if case.error:
         check_error(result, case.error)
         return
     assert result.returncode == 0, result.stderr
     report = json.loads(result.stdout.strip().splitlines()[-1])
-    assert report['runtime'] == runtime
     assert (report['name'], report['namespace']) == (case.name, case.namespace)
     for name, value in case.parameters.items():
         assert report['parameters'][name] == value, name
@@ -193,12 +222,14 @@ def test_rcl_rules(case, files):
 
 
 @pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason='rcl drops a later array of another element type '
+                   'silently, before the node sees its overrides; the node cannot report it')
 def test_array_of_another_type_later(files):
     """
-    An rcl quirk, not copied: a later array of another element type is dropped by rcl.
+    A later array of another element type than the earlier one: an error, not silently dropped.
 
-    For the same node and name rcl silently keeps the earlier array; both runtimes read the
-    parameters given by runtime/ros_args.py, which reports the type.
+    rcl (Jazzy) keeps the earlier array (segments [1, 2, 3, 4]) and drops `-p segments:=[1.0]`
+    without a word; the user gets a value other than the one given last.
     """
-    result = probe(runtime, files, ['--params-file', 'Q.yaml', '-p', 'probe:segments:=[1.0]'])
+    result = probe(files, ['--params-file', 'Q.yaml', '-p', 'probe:segments:=[1.0]'])
     check_error(result, "parameter 'segments' must be an integer array, got a double array")

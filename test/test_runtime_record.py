@@ -12,7 +12,13 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""`bellows record` -> rosbag2 (MCAP) -> `data.read_table`; the bag reader's alignment, errors."""
+"""
+`bellows record` -> rosbag2 (MCAP) -> `data.read_table`; the bag reader's alignment, errors.
+
+The recorder is an rclpy node writing the CDR bytes as they came (runtime/record.py); the
+synthetic bags here are written the same way: rclpy's serialized messages.
+"""
+import array
 import os
 from pathlib import Path
 import signal
@@ -20,7 +26,9 @@ import subprocess
 import sys
 import time
 
+from builtin_interfaces.msg import Time
 import numpy as np
+import probe
 import pytest
 from rosbags.rosbag2 import Reader, Writer
 from rosbags.typesys import get_typestore, Stores
@@ -28,8 +36,7 @@ from rosbags.typesys import get_typestore, Stores
 from bellows_ros import interfaces
 from bellows_ros.data import read_table
 from bellows_ros.errors import DataError
-import probe
-from bellows_ros.runtime.messages import msg, to_typestore
+from bellows_ros.runtime.messages import msg
 
 DOMAIN = '193'
 STORE = get_typestore(Stores.ROS2_JAZZY)
@@ -37,7 +44,7 @@ BELLOWS = str(Path(sys.executable).with_name('bellows'))
 
 
 def stamp(ns):
-    return msg.Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+    return Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
 
 
 def segment_messages(k, t_ns):
@@ -63,7 +70,7 @@ def test_record_then_read_back(tmp_path, monkeypatch):
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
         env=dict(os.environ, ROS_DOMAIN_ID=DOMAIN))
     try:
-        probe.init([])
+        probe.init()
         node = probe.Node('synthetic_driver')
         publishers = {topic: node.create_publisher(type(m), topic, 200)
                       for topic, m in segment_messages(0, 0).items()}
@@ -96,16 +103,43 @@ def test_record_then_read_back(tmp_path, monkeypatch):
     np.testing.assert_allclose(table['tau_ext'], -0.01 * k)
 
 
+def ros_type(message):
+    """'sensor_msgs/msg/JointState' of an rclpy message."""
+    return f"{type(message).__module__.split('.')[0]}/msg/{type(message).__name__}"
+
+
+def to_store(message):
+    """Return the rosbags message (STORE's class) with the fields of an rclpy `message`."""
+    def value(v):
+        if hasattr(v, 'get_fields_and_field_types'):
+            return to_store(v)
+        if isinstance(v, array.array) or (isinstance(v, list) and v
+                                          and isinstance(v[0], float)):
+            return np.array(v, dtype=np.float64)
+        if isinstance(v, list) and v and hasattr(v[0], 'get_fields_and_field_types'):
+            return [to_store(e) for e in v]
+        return v
+    fields = {name: value(getattr(message, name))
+              for name in message.get_fields_and_field_types()}
+    return STORE.types[ros_type(message)](**fields)
+
+
 def write_bag(path, messages, storage='sqlite3'):
-    """messages: list of (topic, message). Written with rosbags' own writer (sqlite3 storage)."""
+    """
+    messages: list of (topic, message), rclpy's. Written with rosbags' writer (sqlite3 storage).
+
+    Serialised by rosbags: rclpy's serialize_message (rmw_fastrtps_cpp) may hand back a buffer
+    longer than the message (92 bytes for an 84-byte JointState, the rest garbage), which no bag
+    holds: the recorder writes the bytes received, which are the message's own.
+    """
     with Writer(path, version=8) as writer:
         connections = {}
         for i, (topic, message) in enumerate(messages):
-            ros_type = type(message).__ros_type__
             if topic not in connections:
-                connections[topic] = writer.add_connection(topic, ros_type, typestore=STORE)
+                connections[topic] = writer.add_connection(topic, ros_type(message),
+                                                           typestore=STORE)
             writer.write(connections[topic], i,
-                         STORE.serialize_cdr(to_typestore(message), ros_type))
+                         STORE.serialize_cdr(to_store(message), ros_type(message)))
 
 
 # The actuator's sample topics: its own, or shared with the arm's (recorded before the split).
@@ -195,7 +229,7 @@ def test_a_recorder_stalled_for_seconds_loses_nothing(tmp_path):
     n = 4000
     try:
         os.environ['ROS_DOMAIN_ID'] = domain
-        probe.init([])
+        probe.init()
         node = probe.Node('synthetic_driver')
         publishers = {topic: node.create_publisher(type(m), topic, interfaces.SAMPLE_DEPTH)
                       for topic, m in segment_messages(0, 0).items()}

@@ -41,9 +41,9 @@ import subprocess
 import sys
 import time
 
+from node_processes import BIN, launch, logs, node_env, override, stop_all, wait_for
 import numpy as np
 import pytest
-from node_processes import BIN, launch, logs, node_env, override, stop_all, wait_for
 from test_doctor_bag import write_actuator_bag
 
 from bellows_ros.cli import main
