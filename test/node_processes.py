@@ -30,11 +30,7 @@ import time
 
 import pytest
 
-# DDS discovery and traffic on this host only (ROS 2 Jazzy's own switch, which every Jazzy RMW
-# honours); Fast DDS over UDP on loopback, without the shared-memory
-# files a killed process leaves in /dev/shm.
-LOOPBACK_ENVIRONMENT = {'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST', 'ROS_STATIC_PEERS': '',
-                        'FASTDDS_BUILTIN_TRANSPORTS': 'UDPv4'}
+from bellows_ros.runtime.node import LOOPBACK_ENVIRONMENT  # noqa: F401 (conftest's)
 
 
 def ros2_cli_missing():
