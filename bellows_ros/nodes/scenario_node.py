@@ -109,6 +109,10 @@ class ScenarioNode(Node):
         self.series = {name: [] for name in ('stiffness', 'x_c', 'psi', 'psi_setpoint', 'p1', 'p2',
                                              'tau_drive')}
         self.subscription(interfaces.STIFFNESS, lambda m: self._add('stiffness', m.data))
+        # When the driver vented the arm (its samples too old to act on: the graph fell behind),
+        # a run's tracking error measures the machine, not the controller.
+        self.vents = []  # s since the start of each True on bellows/vented
+        self.subscription(interfaces.VENTED, self.on_vented)
         # Best effort: the recorder must never hold up the driver's reliable writers (a reader
         # that does not acknowledge makes them block) and may miss samples when it falls behind.
         sensor = qos_profile_sensor_data
@@ -143,6 +147,10 @@ class ScenarioNode(Node):
         # Samples carry the time they were taken: a recorder that falls behind (it has the
         # lowest priority in the graph) still puts each where it belongs.
         self.series[name].append((self.elapsed(stamp), value))
+
+    def on_vented(self, msg):
+        if msg.data:
+            self.vents.append(self.elapsed())
 
     def on_joint_states(self, msg):
         if SEGMENT in msg.name:
@@ -241,7 +249,7 @@ class ScenarioNode(Node):
         if refused:
             return [f'segment_1 tracking: the arm controller did not take feedforward '
                     f"'{refused[0]}' (is arm_controller_node running?): no comparison"]
-        rms, lines = [], []
+        rms, lines, spoiled = [], [], False
         length = angle_trajectory.duration(self.trajectory)
         for label, _, start in self.runs:
             run = self.tracking_errors(start)
@@ -252,9 +260,16 @@ class ScenarioNode(Node):
                                 f'trajectory (duration {self.duration:g} s is too short, or no '
                                 '/joint_states)']
             rms.append(math.sqrt(sum(e * e for e in errors) / len(errors)))
+            vents = [t for t in self.vents if start <= t <= start + length]
             lines.append(f'segment_1 tracking, {label} ({len(errors)} samples): RMS error '
-                         f'{rms[-1]:.4f} rad')
-        if len(rms) == 2:
+                         f'{rms[-1]:.4f} rad' + (
+                             f'; the driver vented the arm {len(vents)} times in this run (its '
+                             'samples too old to act on: the graph fell behind this machine)'
+                             if vents else ''))
+            spoiled = spoiled or bool(vents)
+        if len(rms) == 2 and spoiled:
+            lines.append('feedforward / feedback only: not compared (a run was vented)')
+        elif len(rms) == 2:
             lines.append(f'feedforward / feedback only: {rms[0] / rms[1]:.2f} (same sweep, same '
                          'graph, same gains)')
         return lines
