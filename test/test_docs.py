@@ -320,7 +320,7 @@ def test_reference_documents_carry_no_dated_measurement():
 
 def test_the_dated_measurement_rule_sees_what_it_should():
     assert uncited_dates('Runs of 2026-11-22 (host busy):') == (['2026-11-22'], [])
-    assert uncited_dates('### rclpy beside the DDS runtime (2026-11-23)') == (['2026-11-23'], [])
+    assert uncited_dates('### rclpy on Fast DDS (2026-11-23)') == (['2026-11-23'], [])
     assert uncited_dates('`2026-01-01` strings') == ([], [])
     assert uncited_dates('(numbers: docs/bench_log.md, 2026-11-22, 2026-11-23 and\n2026-11-24)') \
         == ([], ['2026-11-22', '2026-11-23', '2026-11-24'])

@@ -248,3 +248,61 @@ def test_the_drivers_configuration_imports_no_physics_model():
     for module in DRIVER_MODULES:
         models = {m for m in reachable(graph, module) if _is_model(m)}
         assert models <= DRIVER_MODELS, f'{module} reaches {sorted(models - DRIVER_MODELS)}'
+
+
+# The runtime holds what runs a node on rclpy, and nothing else.
+RUNTIME_MODULES = {'__init__', 'node', 'messages', 'parameters', 'realtime', 'record',
+                   'managed_launch'}
+
+
+def test_the_runtime_holds_only_the_rclpy_node_base():
+    assert {p.stem for p in (PACKAGE / 'runtime').glob('*.py')} == RUNTIME_MODULES
+    assert not [p for p in (PACKAGE / 'runtime').iterdir() if p.is_dir()
+                and p.name != '__pycache__']
+
+
+def _ros_imports(path):
+    """Return the ROS 2 modules (rclpy, rosidl message packages) `path` imports anywhere."""
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        names = [a.name for a in node.names] if isinstance(node, ast.Import) else (
+            [node.module or ''] if isinstance(node, ast.ImportFrom) and not node.level else [])
+        found.update(n for n in names if n.split('.')[0] == 'rclpy'
+                     or n.split('.')[0].endswith(('_msgs', '_srvs', '_interfaces')))
+    return found
+
+
+# The parts that work on files, without ROS 2: they never import rclpy (nor a message package),
+# not even deferred, so that identify, doctor and the file commands run where ROS is absent.
+WITHOUT_ROS = ('models', 'config', 'identify', 'doctor', 'errors', 'outputs', 'params', 'table',
+               'data', 'bag', 'bag_repair')
+
+
+def test_the_offline_parts_never_import_rclpy():
+    offenders = {name: _ros_imports(path) for name, path in _modules().items()
+                 if name.count('.') and name.split('.')[1] in WITHOUT_ROS}
+    assert {name: found for name, found in offenders.items() if found} == {}
+    assert len(offenders) > 20  # the rule sees the modules
+
+
+def test_the_file_commands_run_without_importing_rclpy(tmp_path):
+    """`bellows export`, `identify`, `diagnose` (through the CLI's own parser) load no rclpy."""
+    import subprocess
+    import sys
+    missing = tmp_path / 'not_a_bag'  # a directory: the bag reader is loaded, and refuses it
+    missing.mkdir()
+    (missing / 'metadata.yaml').write_text('rosbag2_bagfile_information: {}\n')
+    script = (
+        'import sys\n'
+        'from bellows_ros.cli import main\n'
+        f"for argv in (['export', 'segment', '{missing}', '--output', '{tmp_path}/o.csv'],\n"
+        f"             ['identify', 'segment', '{missing}', '--output', '{tmp_path}/p.yaml'],\n"
+        f"             ['diagnose', 'segment', '{missing}', '--report', '{tmp_path}/r']):\n"
+        '    assert main(argv) == 2, argv  # the missing input: a one-line error\n'
+        "ros = sorted(m for m in sys.modules if m.split('.')[0] == 'rclpy')\n"
+        "print('rclpy modules:', ros)\n")
+    result = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
+                            timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == 'rclpy modules: []', result.stdout
+    assert result.stderr.count('error:') == 3, result.stderr

@@ -31,7 +31,8 @@ import sys
 import threading
 import time
 
-from node_processes import LOOPBACK_ENVIRONMENT, require_rclpy
+from node_processes import LOOPBACK_ENVIRONMENT, require_ros2_cli
+import probe
 import pytest
 import yaml
 
@@ -44,9 +45,7 @@ pytestmark = pytest.mark.slow
 def _ros_env(**extra):
     env = dict(os.environ)
     env.setdefault('ROS_DOMAIN_ID', '57')
-    env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    env.setdefault('CYCLONEDDS_URI', LOOPBACK_ENVIRONMENT['CYCLONEDDS_URI'])
-    env.pop('BELLOWS_RUNTIME', None)  # under ROS the nodes pick rclpy, as a user's would
+    env.update(LOOPBACK_ENVIRONMENT)
     env['PYTHONUNBUFFERED'] = '1'
     env.update(extra)
     return env
@@ -55,18 +54,18 @@ def _ros_env(**extra):
 @pytest.fixture(scope='module')
 def ros():
     """
-    Skip (with the reason) where rclpy or the ros2 CLI is not usable.
+    Skip (with the reason) where the ros2 command line or launch_ros is not usable.
 
-    Fail instead where ROS 2 was installed for the run (runtimes.require_rclpy).
+    Fail instead where it was installed for the run (node_processes.require_ros2_cli).
     """
-    require_rclpy()
-    probe = subprocess.run([sys.executable, '-c', 'import launch_ros'], env=_ros_env(),
-                           capture_output=True, text=True)
-    if probe.returncode != 0 or shutil.which('ros2') is None:
-        reason = (probe.stderr.strip().splitlines() or ['the ros2 CLI is not on PATH'])[-1]
+    require_ros2_cli()
+    result = subprocess.run([sys.executable, '-c', 'import launch_ros'], env=_ros_env(),
+                            capture_output=True, text=True)
+    if result.returncode != 0:
+        reason = result.stderr.strip().splitlines()[-1]
         message = f'ros2 launch not usable: {reason} (source your ROS 2 setup.bash)'
-        if os.environ.get('BELLOWS_REQUIRE_RCLPY') == '1':
-            pytest.fail(message + ' (BELLOWS_REQUIRE_RCLPY=1: ROS 2 was installed for this run)')
+        if os.environ.get('BELLOWS_REQUIRE_ROS2_CLI') == '1':
+            pytest.fail(message + ' (BELLOWS_REQUIRE_ROS2_CLI=1: it was installed for this run)')
         pytest.skip(message)
 
 
@@ -218,7 +217,7 @@ def test_shell_launcher_from_a_pip_install(ros, tmp_path):
 
     The package itself is installed (wheel built from this tree, no source tree on its path);
     its dependencies come from the running environment through a .pth file, so the test does not
-    download or reinstall numpy, scipy, matplotlib and cyclonedds.
+    download or reinstall numpy, scipy, matplotlib and the ROS wheels.
     """
     venv = tmp_path / 'venv'
     subprocess.run([sys.executable, '-m', 'venv', '--without-pip', str(venv)], check=True)
@@ -227,11 +226,15 @@ def test_shell_launcher_from_a_pip_install(ros, tmp_path):
     deps = [p for p in sys.path if p.endswith('site-packages') and Path(p).is_dir()]
     (site / 'zz_test_deps.pth').write_text('\n'.join(deps) + '\n')
     python = venv / 'bin' / 'python'
+    # Nothing of this checkout on the path (a PYTHONPATH set for the test run would shadow it).
+    plain = {k: v for k, v in os.environ.items() if k != 'PYTHONPATH'}
     install = subprocess.run([str(python), '-m', 'pip', 'install', '--quiet', '--no-deps',
-                              str(ROOT)], capture_output=True, text=True, timeout=GUARD)
+                              str(ROOT)], capture_output=True, text=True, timeout=GUARD,
+                             env=plain)
     assert install.returncode == 0, install.stderr[-3000:]
     where = subprocess.run([str(python), '-c', 'import bellows_ros; print(bellows_ros.__file__)'],
-                           cwd=tmp_path, capture_output=True, text=True, check=True).stdout.strip()
+                           cwd=tmp_path, capture_output=True, text=True, check=True,
+                           env=plain).stdout.strip()
     assert where.startswith(str(venv)), where  # the installed copy, not this checkout
     launcher = venv / 'share' / 'bellows_ros' / 'scripts' / 'launch_sim.sh'
     assert launcher.is_file()
@@ -240,8 +243,8 @@ def test_shell_launcher_from_a_pip_install(ros, tmp_path):
     path = ':'.join(p for p in os.environ['PATH'].split(':')
                     if not Path(p, 'driver_node').exists())
     env = _ros_env(PATH=path, AMENT_PREFIX_PATH=os.environ.get('AMENT_PREFIX_PATH', ''))
-    env.pop('CYCLONEDDS_URI')
-    env.pop('ROS_AUTOMATIC_DISCOVERY_RANGE')  # the launcher sets both for a simulation
+    env.pop('PYTHONPATH', None)
+    env.pop('ROS_AUTOMATIC_DISCOVERY_RANGE')  # the launcher sets it for a simulation
     run = subprocess.run(['bash', str(launcher), '--duration', '12', '--output', str(out)],
                          cwd=tmp_path, env=env, capture_output=True, text=True, timeout=GUARD)
     log = run.stdout + run.stderr
@@ -259,13 +262,12 @@ def test_shell_launcher_from_a_pip_install(ros, tmp_path):
 
 def test_two_namespaced_graphs_run_side_by_side(prefix, tmp_path, monkeypatch):
     """
-    `sim.launch.py namespace:=arm_a` (rclpy) beside `launch_sim.sh --namespace arm_b` (DDS).
+    `sim.launch.py namespace:=arm_a` beside `launch_sim.sh --namespace arm_b`, one domain.
 
     Graph b simulates two segments, graph a one: every sample on /arm_a/... names segment_1
     only, every one on /arm_b/... both, and nothing reaches the root namespace's topics.
     """
     from bellows_ros import interfaces
-    from bellows_ros.runtime import dds_node
     from bellows_ros.runtime.messages import msg
     env = _prefix_env(prefix, ROS_DOMAIN_ID=str(os.getpid() % 50 + 120))
     two = yaml.safe_load((ROOT / 'config' / 'nodes_sim.yaml').read_text())
@@ -278,7 +280,7 @@ def test_two_namespaced_graphs_run_side_by_side(prefix, tmp_path, monkeypatch):
                                stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
     graph_b = subprocess.Popen(['bash', str(ROOT / 'scripts' / 'launch_sim.sh'), '--no-scenario',
                                 '--namespace', 'arm_b', '--params', str(params_b), '--output',
-                                str(tmp_path / 'b')], env=dict(env, BELLOWS_RUNTIME='dds'),
+                                str(tmp_path / 'b')], env=env,
                                stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
     names = {'/arm_a': [], '/arm_b': [], '/': []}
     actuator_names = {'/arm_a': [], '/arm_b': [], '/': []}   # on the actuator's own topics
@@ -290,23 +292,24 @@ def test_two_namespaced_graphs_run_side_by_side(prefix, tmp_path, monkeypatch):
     monkeypatch.setenv('ROS_DOMAIN_ID', env['ROS_DOMAIN_ID'])
     probe.init()
     try:
-        probe = probe.Node('namespace_probe')
+        watcher = probe.Node('namespace_probe')
         for namespace, seen in names.items():
             for topic in (interfaces.JOINT_STATES, interfaces.CHAMBERS):
-                probe.create_subscription(msg.JointState, topic.resolved(namespace),
-                                          lambda m, seen=seen: seen.append(tuple(m.name)), 1000)
+                watcher.create_subscription(msg.JointState, topic.resolved(namespace),
+                                            lambda m, seen=seen: seen.append(tuple(m.name)),
+                                            1000)
             for topic in (interfaces.ACTUATOR_JOINT_STATES, interfaces.ACTUATOR_CHAMBERS):
-                probe.create_subscription(
+                watcher.create_subscription(
                     msg.JointState, topic.resolved(namespace),
                     lambda m, seen=actuator_names[namespace]: seen.append(tuple(m.name)), 1000)
         deadline = time.monotonic() + GUARD
         # Until each graph's arm speaks (its actuator may come up seconds earlier on a busy host)
         while not (set(names['/arm_a']) & arm_a and set(names['/arm_b']) & arm_b) \
                 and time.monotonic() < deadline:
-            probe.spin_once(probe, timeout_sec=0.1)
+            probe.spin_once(watcher, timeout_sec=0.1)
         end = time.monotonic() + 3.0
         while time.monotonic() < end:
-            probe.spin_once(probe, timeout_sec=0.05)
+            probe.spin_once(watcher, timeout_sec=0.05)
     finally:
         probe.shutdown()
         _stop(graph_a)

@@ -68,11 +68,11 @@ SPRING, PERIOD = 0.02, 4.0      # m, s: the test machine's spring motion
 K_LOW, K_SET = 1500.0, 1900.0   # N/m: the recorded step's start, and the set-point held
 RECORD_S, STEP_S, TRACK_S = 28.0, 4.0, 22.0
 SETTLE_S = 6.0                  # s: windows before this are not scored in a tracking run
-# s the scenario may take beyond its duration to end. In two CI runs on the DDS runtime a
-# scenario_node did not end: it had written its summary, scenario.csv and scenario.png on time,
+# s the scenario may take beyond its duration to end. In two CI runs on the removed DDS runtime
+# a scenario_node did not end: it had written its summary, scenario.csv and scenario.png on time,
 # then slept (state S, 6 s of CPU) until the test's SIGINT killed it (exit -2: Python's own
 # handler is gone by then, so it hung late in the interpreter's exit). Why is open; a failure
-# says what each process was doing (runtimes.process_states).
+# says what each process was doing (node_processes.process_states).
 END_ALLOWANCE_S = 120.0
 
 
@@ -186,7 +186,7 @@ def test_record_identify_diagnose_extend_track(tmp_path, monkeypatch):
                              0.0, TRACK_S, x_c0)
         errors[name] = stiffness_error(track, K_SET)
     summary = {name: round(rms, 1) for name, (rms, _) in errors.items()}
-    print(f'stiffness error RMS at {K_SET:g} N/m [{runtime}]:', summary, file=sys.stderr)
+    print(f'stiffness error RMS at {K_SET:g} N/m:', summary, file=sys.stderr)
     for source in ('bag', 'csv'):
         assert errors[source][0] < 0.5 * errors['default'][0], (summary, errors)
 
