@@ -65,7 +65,7 @@ except ImportError:  # rclpy before 7.1.5 (a sourced Jazzy of early 2025)
     EventsExecutor = None
 
 # DDS discovery and traffic on this host only: ROS 2 Jazzy's own switch, which rmw_fastrtps_cpp
-# and rmw_cyclonedds_cpp both honour (Fast DDS then talks over shared memory and UDP on
+# and the other Jazzy RMWs honour (Fast DDS then talks over shared memory and UDP on
 # loopback). For the simulated launches, the tests and the benches; a robot's launch leaves the
 # network as the user configured it.
 LOOPBACK_ENVIRONMENT = {'ROS_AUTOMATIC_DISCOVERY_RANGE': 'LOCALHOST', 'ROS_STATIC_PEERS': ''}
