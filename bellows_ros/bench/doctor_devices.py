@@ -275,7 +275,7 @@ def summarise(rows, causes=CAUSES):
 
 
 def _summarise_cause(rows, null, own, kind, cause):
-    """The `Result` of `cause` on the devices `own` of `kind` (`summarise`)."""
+    """Return the `Result` of `cause` on the devices `own` of `kind` (`summarise`)."""
     due = [r for r in own if _size(r, cause)[0] > DUE]
     raw_due = [r for r in own if _size(r, cause)[1] > DUE]
     named = [r for r in due if cause in r['named']]
@@ -307,8 +307,10 @@ def _summarise_cause(rows, null, own, kind, cause):
 
 def run(quick=False, devices=None, kinds=None, workers=None):
     """
-    The bench: `devices` (default 20, `quick` 1) devices of every kind, or `kinds` ('KIND[:COUNT],
-    ...', `parse_kinds`) only; `workers` processes (default `WORKERS`).
+    Run the bench: a list of `Result` (`summarise`).
+
+    `devices` (default 20, `quick` 1) devices of every kind, or `kinds` ('KIND[:COUNT],...',
+    `parse_kinds`) only; `workers` processes (default `WORKERS`).
     """
     count = devices or (QUICK_DEVICES if quick else DEVICES)
     return summarise(run_devices(count, workers=workers or WORKERS,
