@@ -16,7 +16,8 @@ The stop that latches, under load: `/bellows/estop` and `~/vent` vent the arm un
 
 A simulated arm and the driver run as node processes; this process (a plain rclpy node) floods
 pressure commands (4 bar on every chamber, 1 kHz) and watches `/bellows/chambers`. Once the
-chambers are up, it publishes `/bellows/estop` True (latched). The chambers must fall to ambient
+chambers are up, `ros2 topic pub /bellows/estop` (the README's stop, latched) says True while the
+commands keep coming. The chambers must fall to ambient
 and stay there while the commands keep coming; `False` alone must not release them, and
 `~/release` is refused while the stop is held. Then `~/vent` and `~/release` (std_srvs/Trigger,
 called with the real `ros2 service call` of ROS 2) vent and release it.
@@ -27,7 +28,7 @@ import random
 import subprocess
 import time
 
-from node_processes import launch, logs, node_env, override, ros2_cli
+from node_processes import launch, logs, node_env, override, require_ros2_cli, ros2_cli
 import probe
 import pytest
 
@@ -95,7 +96,19 @@ def test_estop_vents_under_a_command_flood_and_false_does_not_release(tmp_path, 
         assert pressures and pressures[-1][1] > 0.9 * COMMAND, logs(tmp_path)
         assert vented[-1] is False, vented   # bellows/vented: the commands took
         mark = len(vented)
-        estop.publish(msg.Bool(data=True))
+        # The stop from outside, as the README gives it, while the commands keep streaming.
+        require_ros2_cli()
+        stop = subprocess.Popen(
+            ['ros2', 'topic', 'pub', '--once', '-w', '1', '--qos-durability', 'transient_local',
+             '--qos-reliability', 'reliable', interfaces.ESTOP.resolved(), 'std_msgs/msg/Bool',
+             '{data: true}'], env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+            text=True)
+        deadline = time.monotonic() + 60
+        while stop.poll() is None and time.monotonic() < deadline:
+            flood(0.05)
+        if stop.poll() is None:
+            stop.kill()
+        assert stop.wait() == 0, stop.stdout.read()
         stopped = time.monotonic()
         flood(3.0)
         after = [p for t, p in pressures if t > stopped + 1.5]
