@@ -37,6 +37,7 @@ def pytest_report_header(config):
     except ImportError:
         executor = 'no EventsExecutor'
     missing = ros2_cli_missing()
-    return (f"rclpy from {os.path.dirname(rclpy.__file__)} ({executor}, "
-            f"{os.environ.get('RMW_IMPLEMENTATION') or 'default RMW'}); "
-            f"ros2 command line: {'skipped: ' + missing if missing else 'yes'}")
+    rmw = os.environ.get('RMW_IMPLEMENTATION') or 'default RMW'
+    cli = 'skipped: ' + missing if missing else 'yes'
+    return (f'rclpy from {os.path.dirname(rclpy.__file__)} ({executor}, {rmw}); '
+            f'ros2 command line: {cli}')
