@@ -33,7 +33,7 @@ import pytest
 from bellows_ros import interfaces
 from bellows_ros.runtime.messages import msg
 
-pytestmark = pytest.mark.slow  # two node processes, ~20 s per runtime
+pytestmark = pytest.mark.slow  # two node processes, ~20 s
 
 
 def test_the_composed_arm_graph_runs_the_three_nodes(tmp_path, monkeypatch):
