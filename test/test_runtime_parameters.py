@@ -71,10 +71,7 @@ class Case:
 
 # rclpy declares every override before the node can check it (automatically_declare_parameters_
 # from_overrides=True, runtime/node.py); an empty array has no type in rcl (PARAMETER_NOT_SET),
-# and rclpy's declare_parameters raises ValueError: a traceback and exit status 1.
-EMPTY_ARRAY_BUG = ('product bug: an empty array given ends in a ValueError traceback from '
-                   "rclpy's Node.__init__ (runtime/node.py _BellowsNode.__init__), not one line")
-
+# which the node base turns into one line naming it (rclpy does not say which parameter).
 CASES = [
     # precedence: entries keyed by node, in order of first appearance; later matching over earlier
     Case('node_section_beats_p', ['--params-file', 'p.yaml', '-p', 'port:=/cli'],
@@ -129,10 +126,8 @@ CASES = [
          error='Sequence should be of same type'),
     Case('mixed_array_file', ['--params-file', 'M.yaml'],
          error='Sequence should be of same type'),
-    Case('empty_array_file', ['--params-file', 'E.yaml'],
-         error="parameter 'segments' is an empty array", known_bug=EMPTY_ARRAY_BUG),
-    Case('empty_array_p', ['-p', 'segments:=[]'], error="parameter 'segments' is an empty array",
-         known_bug=EMPTY_ARRAY_BUG),
+    Case('empty_array_file', ['--params-file', 'E.yaml'], error='is given as an empty array'),
+    Case('empty_array_p', ['-p', 'segments:=[]'], error='is given as an empty array'),
     # bounds (the Spec's, inclusive), for a value given in a file or with -p
     Case('at_the_bounds', ['-p', 'gain:=0.0'], {'gain': 0.0}),
     Case('at_the_upper_bound', ['-p', 'gain:=10.0'], {'gain': 10.0}),

@@ -109,8 +109,14 @@ class _BellowsNode:
         self.parameters = {}
         # Every parameter given (files, -p) is declared from its override first, so that the
         # node can tell which it was given (public API: rclpy keeps the overrides private).
-        super().__init__(node_name, automatically_declare_parameters_from_overrides=True,
-                         **kwargs)
+        try:
+            super().__init__(node_name, automatically_declare_parameters_from_overrides=True,
+                             **kwargs)
+        except ValueError as exc:  # an override rcl could give no type: an empty array
+            if 'PARAMETER_NOT_SET' not in str(exc):
+                raise
+            raise ParameterError(f'{node_name}: a parameter is given as an empty array ([]), '
+                                 'which has no type; give at least one element') from None
         self._given = {name: _plain(value.value) for name, value
                        in self.get_parameters_by_prefix('').items() if name not in RCLPY_OWN}
 
