@@ -24,37 +24,16 @@ import subprocess
 import sys
 import warnings
 
+from bag_messages import (header as _header, JOINT_STATE, joints as _joints,  # noqa: F401
+                          STORE, WRENCH, wrench as _wrench)
 import numpy as np
 import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
-from rosbags.typesys import get_typestore, Stores
 import yaml
 
 from bellows_ros import data, params
 from bellows_ros.cli import main as bellows
 from bellows_ros.errors import DataError, ParameterError
-
-STORE = get_typestore(Stores.ROS2_JAZZY)
-JOINT_STATE = 'sensor_msgs/msg/JointState'
-WRENCH = 'geometry_msgs/msg/WrenchStamped'
-
-
-def _header(ns, frame=''):
-    time = STORE.types['builtin_interfaces/msg/Time'](sec=ns // 10 ** 9, nanosec=ns % 10 ** 9)
-    return STORE.types['std_msgs/msg/Header'](stamp=time, frame_id=frame)
-
-
-def _joints(ns, names, position=(), effort=()):
-    return STORE.types[JOINT_STATE](header=_header(ns), name=list(names),
-                                    position=np.array(position, float),
-                                    velocity=np.array([], float), effort=np.array(effort, float))
-
-
-def _wrench(ns, force_z):
-    vector = STORE.types['geometry_msgs/msg/Vector3']
-    body = STORE.types['geometry_msgs/msg/Wrench'](force=vector(x=0.0, y=0.0, z=force_z),
-                                                   torque=vector(x=0.0, y=0.0, z=0.0))
-    return STORE.types[WRENCH](header=_header(ns, 'actuator'), wrench=body)
 
 
 # The actuator's sample topics: its own, or (a bag recorded before they existed) the arm's.

@@ -24,15 +24,17 @@ Every input is bounded (issue #30, class 5): numbers, effects, files.
   digits are named, not read.
 Each case: exit 2, one line on stderr, no traceback, nothing written.
 """
-import csv
+
 import errno
 import os
+from pathlib import Path
 import shlex
 import threading
 
 from hypothesis import given, HealthCheck, settings, strategies as st
 import numpy as np
 import pytest
+from tables import write_csv
 
 from bellows_ros import data, params
 from bellows_ros.cli import main
@@ -40,14 +42,6 @@ from bellows_ros.config.actuator import load_actuator_params, load_actuator_plan
 from bellows_ros.config.ranges import RANGES
 from bellows_ros.errors import BellowsError, DataError, ParameterError
 from bellows_ros.models.actuator_experiments import actuator_record
-
-
-def write_csv(path, columns):
-    with open(path, 'w', newline='') as stream:
-        writer = csv.writer(stream)
-        writer.writerow(list(columns))
-        writer.writerows(zip(*columns.values()))
-    return path
 
 
 @pytest.fixture(scope='module')
@@ -273,8 +267,8 @@ def test_an_error_shows_a_long_cell_cut_short(tmp_path):
 def test_a_read_error_mid_file_is_one_line(tmp_path, monkeypatch):
     """EIO half-way through a record (a failing disk, a dropped network mount)."""
     t = np.arange(300) * 1e-3
-    path = write_csv(tmp_path / 'd.csv', {'t': t, 'x_c': 0.01 + 0 * t, 'x_s': 0.002 + 0 * t,
-                                          'p': 1.2e5 + 0 * t, 'f': 3 + 0 * t})
+    path = Path(write_csv(tmp_path / 'd.csv', {'t': t, 'x_c': 0.01 + 0 * t, 'x_s': 0.002 + 0 * t,
+                                               'p': 1.2e5 + 0 * t, 'f': 3 + 0 * t}))
 
     class Failing:
         def __init__(self, stream):

@@ -25,36 +25,16 @@ import sys
 import threading
 import time
 
+from bag_messages import (header as _header, JOINT_STATE, joints as _joints,  # noqa: F401
+                          STORE, WRENCH, wrench as _wrench)
 import numpy as np
 import pytest
 from rosbags.rosbag2 import Writer
 from rosbags.rosbag2.enums import StoragePlugin
-from rosbags.typesys import get_typestore, Stores
 
 from bellows_ros.cli import main
 
-STORE = get_typestore(Stores.ROS2_JAZZY)
-JOINT_STATE = 'sensor_msgs/msg/JointState'
-WRENCH = 'geometry_msgs/msg/WrenchStamped'
 LOCK = '.bellows-writer.lock'
-
-
-def _header(ns, frame=''):
-    stamp = STORE.types['builtin_interfaces/msg/Time'](sec=ns // 10 ** 9, nanosec=ns % 10 ** 9)
-    return STORE.types['std_msgs/msg/Header'](stamp=stamp, frame_id=frame)
-
-
-def _joints(ns, names, position=(), effort=()):
-    return STORE.types[JOINT_STATE](header=_header(ns), name=list(names),
-                                    position=np.array(position, float),
-                                    velocity=np.array([], float), effort=np.array(effort, float))
-
-
-def _wrench(ns, force_z):
-    vector = STORE.types['geometry_msgs/msg/Vector3']
-    body = STORE.types['geometry_msgs/msg/Wrench'](force=vector(x=0.0, y=0.0, z=force_z),
-                                                   torque=vector(x=0.0, y=0.0, z=0.0))
-    return STORE.types[WRENCH](header=_header(ns, 'actuator'), wrench=body)
 
 
 def write_bag(path, n=400, wrench_rows=None):

@@ -20,7 +20,6 @@ nodes are made with mknod in tmp_path only (never a path under /dev). Also: a re
 is replaced only when its manifest says the package wrote every entry, a report given as a link
 is resolved, and no temporary file survives SIGTERM or SIGHUP.
 """
-import csv
 import fcntl
 import json
 import os
@@ -33,6 +32,7 @@ import time
 
 import numpy as np
 import pytest
+from tables import write_csv
 
 from bellows_ros import outputs
 from bellows_ros.cli import main
@@ -42,14 +42,6 @@ from bellows_ros.models.actuator_experiments import actuator_record
 from bellows_ros.outputs import atomic_file, check_report_directory, report_directory
 
 BELLOWS = [sys.executable, '-c', 'import sys; from bellows_ros.cli import main; sys.exit(main())']
-
-
-def write_csv(path, columns):
-    with open(path, 'w', newline='') as stream:
-        writer = csv.writer(stream)
-        writer.writerow(list(columns))
-        writer.writerows(zip(*columns.values()))
-    return str(path)
 
 
 @pytest.fixture(scope='module')
