@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The test command: set up (if needed), then run the whole test suite on rclpy. Extra arguments
 # go to pytest, e.g.
-#   scripts/test.sh -m "not slow"      # the quick tier, under a minute
+#   scripts/test.sh -m "not slow"      # the quick tier, a few minutes
 #
 # rclpy is the sourced ROS 2 Jazzy's, else the PyPI wheels scripts/setup.sh put into .venv.
 # The ROS 2 command line and launch (ros2 param, ros2 lifecycle, ros2 launch) for the tests that
