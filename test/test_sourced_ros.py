@@ -13,10 +13,11 @@
 # limitations under the License.
 
 """
-The "ROS 2 installed, colcon workspace" path, once: a sourced Jazzy (rclpy 7.1.3 on
-rmw_cyclonedds_cpp, without the EventsExecutor), `scripts/setup.sh` using its rclpy, `colcon
-build`, `ros2 launch bellows_ros sim.launch.py`, and the driving torque of all four segments
-counted by a plain rclpy subscriber of that ROS.
+The "ROS 2 installed, colcon workspace" path, once.
+
+A sourced Jazzy (rclpy 7.1.3 on rmw_cyclonedds_cpp, without the EventsExecutor),
+`scripts/setup.sh` using its rclpy, `colcon build`, `ros2 launch bellows_ros sim.launch.py`, and
+the driving torque of all four segments counted by a plain rclpy subscriber of that ROS.
 
 The ROS is the prebuilt Jazzy of `../shared/ros2` beside the checkout (as on CI), installed into
 /opt/ros/jazzy by its own install.sh; elsewhere the test is skipped, saying why.

@@ -242,7 +242,7 @@ class ScenarioNode(Node):
                 for t, psi in self.series['psi'] if start <= t <= end]
 
     def tracking_summary(self):
-        """The RMS tracking error of each run, and the ratio of the first to the second."""
+        """Return the RMS tracking error of each run, and the ratio of the first to the second."""
         refused = [mode for mode, future in self.switch_results
                    if not (future.done() and future.result() is not None
                            and all(r.successful for r in future.result().results))]

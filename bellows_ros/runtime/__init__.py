@@ -13,9 +13,10 @@
 # limitations under the License.
 
 """
-How a bellows node runs on rclpy: the node base classes and `run` (runtime/node.py), the message
-classes (messages.py), parameter tables (parameters.py), real-time scheduling (realtime.py) and
-the recorder (record.py).
+How a bellows node runs on rclpy.
+
+The node base classes and `run` (runtime/node.py), the message classes (messages.py), parameter
+tables (parameters.py), real-time scheduling (realtime.py) and the recorder (record.py).
 """
 from bellows_ros.runtime.node import LifecycleNode, Node, run, stamp_ns
 
