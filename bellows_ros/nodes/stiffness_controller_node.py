@@ -149,12 +149,9 @@ class StiffnessControllerNode(Node):
         self.stiffness_pub = self.publisher(interfaces.STIFFNESS)
         self.subscription(interfaces.STIFFNESS_SETPOINT, self.on_setpoint)
         # The actuator's own sample topics: the arm's 1 kHz samples never reach this node.
-        self.subscription(interfaces.ACTUATOR_CHAMBERS, self.on_chambers,
-                          depth=interfaces.CONTROL_DEPTH)
-        self.subscription(interfaces.ACTUATOR_JOINT_STATES, self.on_joint_states,
-                          depth=interfaces.CONTROL_DEPTH)
-        self.subscription(interfaces.WRENCH, self.on_wrench,
-                          depth=interfaces.CONTROL_DEPTH)
+        self.subscription(interfaces.ACTUATOR_CHAMBERS, self.on_chambers)
+        self.subscription(interfaces.ACTUATOR_JOINT_STATES, self.on_joint_states)
+        self.subscription(interfaces.WRENCH, self.on_wrench)
         self.diagnostics = diagnostics.Updater(self)
         self.diagnostics.setHardwareID('none')  # software: the driver reports the devices
         self.diagnostics.add('control', self.diagnose_control)
