@@ -270,13 +270,18 @@ def test_two_namespaced_graphs_run_side_by_side(prefix, tmp_path, monkeypatch):
     from bellows_ros import interfaces
     from bellows_ros.runtime.messages import msg
     env = _prefix_env(prefix, ROS_DOMAIN_ID=str(os.getpid() % 50 + 120))
-    two = yaml.safe_load((ROOT / 'config' / 'nodes_sim.yaml').read_text())
-    two['/**/sim_arm_node']['ros__parameters']['n_segments'] = 2
-    two['/**/driver_node']['ros__parameters']['arm']['n_segments'] = 2
-    params_b = tmp_path / 'nodes_b.yaml'
-    params_b.write_text(yaml.safe_dump(two))
+    params = {}
+    for graph, segments in (('a', 1), ('b', 2)):  # two light graphs on a 2-core machine
+        config = yaml.safe_load((ROOT / 'config' / 'nodes_sim.yaml').read_text())
+        config['/**/sim_arm_node']['ros__parameters']['n_segments'] = segments
+        config['/**/driver_node']['ros__parameters']['arm']['n_segments'] = segments
+        config['/**/model_node']['ros__parameters']['segments'] = list(range(1, segments + 1))
+        params[graph] = tmp_path / f'nodes_{graph}.yaml'
+        params[graph].write_text(yaml.safe_dump(config))
+    params_b = params['b']
     graph_a = subprocess.Popen(['ros2', 'launch', 'bellows_ros', 'sim.launch.py',
-                                'scenario:=false', 'namespace:=arm_a'], env=env,
+                                'scenario:=false', 'namespace:=arm_a',
+                                f"params_file:={params['a']}"], env=env,
                                stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
     graph_b = subprocess.Popen(['bash', str(ROOT / 'scripts' / 'launch_sim.sh'), '--no-scenario',
                                 '--namespace', 'arm_b', '--params', str(params_b), '--output',
