@@ -44,11 +44,6 @@ from dataclasses import dataclass
 # doctor refuses (test_runtime_record: a recorder stopped 2.5 s). 5000 samples of 4 segments is
 # about 1 MB per topic, held only while a reader lags.
 SAMPLE_DEPTH = 5000
-# Depth for the arm controller's and the model node's subscriptions to the sample topics: a sample older
-# than this many periods is of no use to a 1 kHz loop, so a consumer that falls behind (or starts
-# while samples flow) drops the backlog and counts it `missed`, instead of working through
-# seconds of history it cannot act on. The writers and the recorder keep SAMPLE_DEPTH.
-CONTROL_DEPTH = 200
 # s: the devices' sample period (their 1 kHz clock); a sample's stamp is on that time base, so a
 # stamp gap of n periods means n - 1 samples its reader never got.
 SAMPLE_PERIOD = 1e-3

@@ -27,11 +27,12 @@ its own process (`probe.init(['--ros-args', ...])` for its parameters) spins it 
 `probe.adopt(node)` and `probe.spin_once(node)`.
 """
 import rclpy
+from rclpy.executors import SingleThreadedExecutor
 import rclpy.node
 from rclpy.task import Future
 
 from bellows_ros.runtime.messages import msg  # noqa: F401 (the ROS packages' classes)
-from bellows_ros.runtime.node import executor, LATCHED  # noqa: F401 (LATCHED: the probes' QoS)
+from bellows_ros.runtime.node import LATCHED  # noqa: F401 (the probes' QoS for latched topics)
 
 _executors = {}
 _NEVER = Future()  # spin_until_future_complete of it: spin for the timeout
@@ -48,9 +49,7 @@ def init(args=()):
 
 def adopt(node):
     """Spin `node` (a node built in this process) with `spin_once`/`spin_for`; return it."""
-    # The nodes' own executor (the EventsExecutor where rclpy has it): a third of the
-    # single-threaded executor's CPU per message, so the probe keeps up with 1 kHz topics.
-    _executors[node] = executor()
+    _executors[node] = SingleThreadedExecutor()
     _executors[node].add_node(node)
     return node
 

@@ -240,10 +240,8 @@ class ArmControllerNode(Node):
             self.state_pub = self.publisher(interfaces.TRAJECTORY_STATE)
         else:  # no control_msgs wheel on PyPI (runtime/messages.py)
             self.get_logger().info('control_msgs is not installed: ~/state is not published')
-        self.subscription(interfaces.JOINT_STATES, self.on_joint_states,
-                          depth=interfaces.CONTROL_DEPTH)
-        self.subscription(interfaces.CHAMBERS, self.on_chambers,
-                          depth=interfaces.CONTROL_DEPTH)
+        self.subscription(interfaces.JOINT_STATES, self.on_joint_states)
+        self.subscription(interfaces.CHAMBERS, self.on_chambers)
         self.subscription(interfaces.PSI_SETPOINT, self.on_setpoint)
         self.subscription(interfaces.JOINT_TRAJECTORY, self.on_trajectory)
         self.subscription(interfaces.VENTED, self.on_vented)

@@ -119,10 +119,8 @@ class ModelNode(Node):
 
         self.drive_pub = self.publisher(interfaces.DRIVING_TORQUE)
         self.external_pub = self.publisher(interfaces.EXTERNAL_TORQUE)
-        self.subscription(interfaces.JOINT_STATES, self.on_joint_states,
-                          depth=interfaces.CONTROL_DEPTH)
-        self.subscription(interfaces.CHAMBERS, self.on_chambers,
-                          depth=interfaces.CONTROL_DEPTH)
+        self.subscription(interfaces.JOINT_STATES, self.on_joint_states)
+        self.subscription(interfaces.CHAMBERS, self.on_chambers)
         self.diagnostics = diagnostics.Updater(self)
         self.diagnostics.setHardwareID('none')  # software: no device of its own
         self.diagnostics.add('driving torque', self.diagnose_evaluation)
