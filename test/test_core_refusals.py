@@ -18,13 +18,13 @@ Each case gives the command only the data; the answer (refused or not, and why) 
 must find. Records come from devices drawn over wide ranges (tube volume, gas amount, sample
 rate, the leak's size), not only the default one.
 """
-import csv
 import dataclasses
 from pathlib import Path
 import re
 
 import numpy as np
 import pytest
+from tables import write_csv
 
 from bellows_ros import params as param_files
 from bellows_ros.cli import main
@@ -38,14 +38,6 @@ from bellows_ros.models.actuator_experiments import actuator_record
 from bellows_ros.models.segment_experiments import dynamic_record
 
 PARAMS, PLANT = load_actuator_params(), load_actuator_plant_params()
-
-
-def write_csv(path, columns):
-    with open(path, 'w', newline='') as stream:
-        writer = csv.writer(stream)
-        writer.writerow(list(columns))
-        writer.writerows(zip(*columns.values()))
-    return str(path)
 
 
 def error_line(capsys):

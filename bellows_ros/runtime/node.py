@@ -196,15 +196,14 @@ class _BellowsNode:
         return self.create_publisher(messages.message_class(topic.ros_type), topic.name,
                                      self._qos(topic))
 
-    def subscription(self, topic: Any, callback: Callable[[Any], None],
-                     depth: Optional[int] = None) -> Any:
-        """Subscribe to a topic of the contract; `depth` instead of the topic's (a 1 kHz loop)."""
+    def subscription(self, topic: Any, callback: Callable[[Any], None]) -> Any:
+        """Create a subscription to a topic of the contract (bellows_ros/interfaces.py)."""
         return self.create_subscription(messages.message_class(topic.ros_type), topic.name,
-                                        callback, self._qos(topic, depth))
+                                        callback, self._qos(topic))
 
     @staticmethod
-    def _qos(topic: Any, depth: Optional[int] = None) -> Any:
-        return LATCHED if topic.latched else (depth or topic.depth)
+    def _qos(topic: Any) -> Any:
+        return LATCHED if topic.latched else topic.depth
 
 
 class Node(_BellowsNode, rclpy.node.Node):
