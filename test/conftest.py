@@ -21,11 +21,14 @@ simulated CAN bus joins its multicast group on loopback by itself (hardware/arm_
 tests draw a ROS_DOMAIN_ID of their own, so tests do not hear each other's nodes.
 """
 import os
+import signal
 
-from node_processes import LOOPBACK_ENVIRONMENT
+from node_processes import LOOPBACK_ENVIRONMENT, SESSION, session_processes
+import pytest
 
 os.environ.setdefault('MPLBACKEND', 'Agg')
 os.environ.update(LOOPBACK_ENVIRONMENT)
+os.environ[SESSION] = str(os.getpid())
 
 
 def pytest_report_header(config):
@@ -41,3 +44,22 @@ def pytest_report_header(config):
     cli = 'skipped: ' + missing if missing else 'yes'
     return (f'rclpy from {os.path.dirname(rclpy.__file__)} ({executor}, {rmw}); '
             f'ros2 command line: {cli}')
+
+
+@pytest.fixture(autouse=True)
+def no_process_left_running():
+    """
+    Every process a test starts, it stops: one left running skews every test after it.
+
+    A leftover node on a colliding ROS_DOMAIN_ID answers another test's commands, so the leak is
+    an error of the test that left it; the process is killed here so that it stops at one.
+    """
+    before = session_processes()
+    yield
+    left = {pid: name for pid, name in session_processes().items() if pid not in before}
+    for pid in left:
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    assert not left, f'the test left processes running (killed now): {sorted(left.values())}'

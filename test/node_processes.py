@@ -20,6 +20,7 @@ Tests that need the ROS 2 command line (`ros2 param`, `ros2 lifecycle`, `ros2 se
 `ros2 launch`) skip where it is absent, saying why, unless `BELLOWS_REQUIRE_ROS2_CLI=1`
 (scripts/test.sh sets it when it installed the command line): then they fail.
 """
+from multiprocessing import resource_tracker
 import os
 from pathlib import Path
 import shutil
@@ -98,6 +99,33 @@ def launch_arm(env, group, log_dir, controller_args=()):
 def logs(log_dir):
     """Return the end of every node log in `log_dir`, for an assertion's message."""
     return '\n'.join(f'--- {p.name}\n{p.read_text()[-1500:]}' for p in log_dir.glob('*.log'))
+
+
+# Every process this test session starts carries it (conftest.py sets it; children inherit it),
+# so one that outlives its parent (reparented to init) is still found as this session's.
+SESSION = 'BELLOWS_TEST_SESSION'
+
+
+def session_processes():
+    """{pid: 'pid (name)'} of the processes this test session started that still run."""
+    # multiprocessing's resource tracker (started by the first 'spawn' pool or worker, for the
+    # life of this process) is the library's, not a test's.
+    ours = {os.getpid(), getattr(resource_tracker._resource_tracker, '_pid', None)}
+    marker = f'{SESSION}={os.getpid()}'.encode() + b'\0'
+    found = {}
+    for entry in os.scandir('/proc'):
+        if entry.name.isdigit() and int(entry.name) not in ours:
+            try:
+                with open(f'/proc/{entry.name}/environ', 'rb') as environ:
+                    if marker not in environ.read():
+                        continue
+                with open(f'/proc/{entry.name}/stat') as stat:
+                    text = stat.read()
+            except OSError:
+                continue  # ended in between, or not ours to read
+            if text.rsplit(')', 1)[1].split()[0] != 'Z':   # a zombie has ended already
+                found[int(entry.name)] = text[:text.rindex(')') + 1]
+    return found
 
 
 def _cpu_seconds(pid):

@@ -29,6 +29,7 @@ from pathlib import Path
 import re
 import time
 
+from node_processes import session_processes
 import pytest
 
 from bellows_ros import params
@@ -88,25 +89,12 @@ def test_the_graph_benches_are_what_only_graph_selects():
 def graph_results():
     """Run `bellows bench --only graph --quick --json` once: {name: result as a dict}."""
     out = io.StringIO()
+    before = session_processes()
     with contextlib.redirect_stdout(out):
         assert main(['bench', '--only', 'graph', '--quick', '--json']) == 0
     # Every node process the benches started was stopped and reaped: none is left.
-    assert _children() == []
+    assert [name for pid, name in session_processes().items() if pid not in before] == []
     return {r['name']: r for r in json.loads(out.getvalue())}
-
-
-def _children():
-    """Return the processes whose parent is this one (/proc/<pid>/stat, field 4)."""
-    found = []
-    for entry in Path('/proc').iterdir():
-        if entry.name.isdigit():
-            try:
-                text = (entry / 'stat').read_text()
-            except OSError:
-                continue  # ended in between
-            if int(text.rsplit(')', 1)[1].split()[1]) == os.getpid():
-                found.append(text[:text.rindex(')') + 1])
-    return found
 
 
 @pytest.mark.slow

@@ -67,7 +67,9 @@ class _Stop:
     SIGINT/SIGTERM/SIGHUP only ask the recording to stop; the loop ends at its next turn.
 
     No exception is raised into the writer: a chunk half written when a signal arrived would
-    corrupt the bag. Further signals change nothing; the bag is closed whole.
+    corrupt the bag. Further signals change nothing; the bag is closed whole. Once a signal has
+    asked, the handlers stay: rclpy's objects are finalised after `record` returns, and a second
+    Ctrl-C raised as KeyboardInterrupt inside one of those C++ calls aborts the process.
     """
 
     def __init__(self):
@@ -83,6 +85,8 @@ class _Stop:
         self.requested = True
 
     def __exit__(self, *exc):
+        if self.requested:
+            return False  # the process was asked to end: it ends without a second signal's abort
         for signum, handler in self.previous.items():
             signal.signal(signum, handler)
         return False
