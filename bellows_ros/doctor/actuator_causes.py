@@ -43,7 +43,11 @@ Each cause adds the missing physics with its own parameters (docs/doctor.md, con
 - buckling: the spring loses force once its load index x_s/x_cr + (P - P_atm)/p_cr passes 1
   (`models.actuator.buckling_force`): stiffness loss k_b, critical pressure p_cr, critical
   compression x_cr, within the physical bounds of `actuator.buckling.bounds` (onset width from the
-  YAML).
+  YAML): the onset from ambient pressure and the start of the travel to where the other variable
+  alone sets it, fitted in decades.
+
+Every bound is derived (docs/doctor.md, "Where every range comes from"), and what a fit pinned at
+each means is `EDGES`: a limit of the physics is a finding, the others say why it is not named.
 """
 import dataclasses
 
@@ -94,11 +98,60 @@ SPECS = {
                      ('e_dd_spring_ml', 0.0, -200.0, 200.0)],
     'sensor_lag': [('log10_time_constant', -1.5, -3.5, 0.5)],
     'backlash': [('width_mm', 0.3, 0.0, 3.0)],
-    # Bounds from actuator.buckling.bounds (`buckling_specs`); these are the fallbacks.
-    'buckling': [('stiffness_loss_kn', 2.0, 0.0, 10.0),
-                 ('critical_pressure_kpa', 25.0, 5.0, 300.0),
-                 ('critical_compression_mm', 20.0, 5.0, 80.0)],
+    # Bounds from actuator.buckling.bounds (`buckling_specs`); these are the fallbacks, the same
+    # physical ranges (docs/doctor.md, "Where every range comes from"). The onset is fitted in
+    # decades: its physical range spans four of them, from an onset at ambient pressure (p_cr
+    # 0.1 kPa) or at the start of the travel (x_cr 0.1 mm) to one the other variable alone sets.
+    # k_b too: at such an onset the loss in the pressure, k_b x_cr / p_cr per Pa, is newtons
+    # per kPa with k_b of a few N/m, where a spring that carries tens of newtons ends.
+    'buckling': [('log10_stiffness_loss_kn', 0.3, -5.0, 1.23),
+                 ('log10_critical_pressure_kpa', 1.4, -1.0, 3.04),
+                 ('log10_critical_compression_mm', 1.3, -1.0, 3.0)],
 }
+# What a fit pinned at each bound means (`edge_kind`): 'limit', the bound is a limiting case of
+# the physics that a device can be in (a finding: stated, and the cause named when it pays);
+# 'absent', the effect vanishes there (it cannot pay); 'bound', a physical bound that the effect
+# cannot pass (pinned there, the cause absorbs some other error); 'range', a bound set for the
+# fit, not by physics (pinned there, the range is wrong). (cause, fit variable, side) -> (kind,
+# what it means); a bound not listed is 'range'. The numbers' sources: docs/doctor.md.
+EDGES = {
+    ('air_leak', 'log10_conductance', 'lower'): (
+        'absent', 'no leak: the gas would take > 10^5 s to escape a 0.1 L chamber'),
+    ('air_leak', 'log10_conductance', 'upper'): (
+        'limit', 'the chamber is vented: its gas reaches ambient within ~10 ms, a fit sample'),
+    ('heat_exchange', 'log10_time_constant', 'lower'): (
+        'range', 'set so that heat exchange is not a second sensor lag, not by the walls'),
+    ('heat_exchange', 'log10_time_constant', 'upper'): (
+        'limit', 'adiabatic gas: no heat crosses the walls within the record'),
+    ('heat_exchange', 'gamma', 'lower'): ('absent', 'isothermal gas (gamma 1)'),
+    ('heat_exchange', 'gamma', 'upper'): ('bound', 'a monatomic gas (5/3); air is 1.4'),
+    ('sensor_lag', 'log10_time_constant', 'lower'): (
+        'absent', 'no lag: 0.3 ms is below the fastest sample (1 ms)'),
+    ('sensor_lag', 'log10_time_constant', 'upper'): (
+        'bound', 'a 3 s pressure reading: slower than any sensor behind a tube of a rig'),
+    ('backlash', 'width_mm', 'lower'): ('absent', 'no play'),
+    ('backlash', 'width_mm', 'upper'): (
+        'bound', 'a play of more than two turns of the lead screw (1.27 mm lead)'),
+    ('buckling', 'log10_stiffness_loss_kn', 'lower'): (
+        'absent', 'no buckling: a stiffness loss of 0.01 N/m, 0.4 mN over the whole travel'),
+    ('buckling', 'log10_stiffness_loss_kn', 'upper'): (
+        'bound', "the axial stiffness of the spring's straight wall tube: no loss is larger"),
+    ('buckling', 'log10_critical_pressure_kpa', 'lower'): (
+        'limit', 'the onset lies at ambient pressure: the spring buckles as soon as the gas is '
+                 'above ambient, compressed or not (buckling from the start of the record '
+                 'wherever it is above ambient)'),
+    ('buckling', 'log10_critical_pressure_kpa', 'upper'): (
+        'limit', 'the pressure does not move the onset: the compression alone sets it'),
+    ('buckling', 'log10_critical_compression_mm', 'lower'): (
+        'limit', 'the onset lies at the start of the travel: the spring is buckled from the '
+                 'start of the record wherever it is compressed'),
+    ('buckling', 'log10_critical_compression_mm', 'upper'): (
+        'limit', 'the compression does not move the onset: the pressure alone sets it'),
+}
+for _name in ('e_q_ml', 'e_dq_chamber_ml', 'e_dq_spring_ml', 'e_dd_chamber_ml', 'e_dd_spring_ml'):
+    for _side in ('lower', 'upper'):
+        EDGES['wall_bulging', _name, _side] = (
+            'bound', "a bulge larger than the bellows' own volume over the range of a record")
 STARTS = {
     'air_leak': [[-9.5], [-12.5]],
     'heat_exchange': [[-0.7, 1.4], [1.3, 1.4]],
@@ -109,8 +162,9 @@ STARTS = {
 }
 # Buckling's onset profile (`buckling_profile`): onsets on a grid over the bounds, kept where the
 # record's rows reach them; the best PROFILE_STARTS of them start the fit.
-PROFILE_COMPRESSIONS = 16
-PROFILE_PRESSURES = 8
+# Four decades each (`SPECS['buckling']`): about 2.3 onsets per octave of x_cr, 1.5 of p_cr.
+PROFILE_COMPRESSIONS = 28
+PROFILE_PRESSURES = 18
 PROFILE_STARTS = 3
 # The strongest buckling the bounds allow must change the force by at least this many (averaged)
 # noise floors, in the least-squares sense and beyond what the material force absorbs, at some
@@ -120,9 +174,19 @@ DETECTABLE = 5.0
 # Values of each parameter across its bounds at which `_detectable` profiles a cause.
 PROFILE_POINTS = 5
 # SI factor of each scaled buckling variable.
-_BUCKLING_SI = {'stiffness_loss_kn': ('stiffness_loss', 1e3),
-                'critical_pressure_kpa': ('critical_pressure', 1e3),
-                'critical_compression_mm': ('critical_compression', 1e-3)}
+# The onset's variables are fitted as log10 of the scaled value (`_LOG`).
+_BUCKLING_SI = {'log10_stiffness_loss_kn': ('stiffness_loss', 1e3),
+                'log10_critical_pressure_kpa': ('critical_pressure', 1e3),
+                'log10_critical_compression_mm': ('critical_compression', 1e-3)}
+_LOG = ('log10_stiffness_loss_kn', 'log10_critical_pressure_kpa', 'log10_critical_compression_mm')
+# The smallest stiffness loss fitted, N/m (`SPECS`: 1e-5 kN/m); the YAML's lower bound 0 is no
+# buckling, which a fit in decades reaches as this.
+K_B_FLOOR = 0.01
+
+
+def edge_kind(cause, name, side):
+    """(kind, meaning) of `cause`'s fit variable `name` pinned at its `side` bound (`EDGES`)."""
+    return EDGES.get((cause, name, side), ('range', 'a bound of the fit, not of physics'))
 
 
 def buckling_specs(params):
@@ -132,8 +196,11 @@ def buckling_specs(params):
     for name, start, low, high in SPECS['buckling']:
         si, factor = _BUCKLING_SI[name]
         if si in bounds:
-            floor = 0.0 if si == 'stiffness_loss' else 1e-3
-            low, high = (max(v / factor, floor) for v in bounds[si])
+            if name in _LOG:
+                floor = K_B_FLOOR if si == 'stiffness_loss' else 1e-12
+                low, high = (float(np.log10(max(v, floor) / factor)) for v in bounds[si])
+            else:
+                low, high = (max(v / factor, 0.0) for v in bounds[si])
         specs.append((name, min(max(start, low), high), low, high))
     return specs
 
@@ -166,7 +233,7 @@ def buckling_profile(record, params, force_scale):
     No nonlinear fit: a few least-squares projections, cheap at any onset.
     """
     specs = {name: (low, high) for name, _, low, high in buckling_specs(params)}
-    k_max = specs['stiffness_loss_kn'][1] * 1e3
+    k_max = 10.0 ** specs['log10_stiffness_loss_kn'][1] * 1e3
     x_s, p, f = record['x_s'], record['p'], record['f']
     known, columns = force_columns(params, (), {}, x_s, p)
     basis, _ = np.linalg.qr(columns / np.sqrt(np.mean(columns ** 2, axis=0) + 1e-300))
@@ -175,8 +242,10 @@ def buckling_profile(record, params, force_scale):
     width = _onset_width(params)
     gauge = p - P_ATM
     onsets = []
-    for x_cr in np.geomspace(*specs['critical_compression_mm'], PROFILE_COMPRESSIONS) * 1e-3:
-        for p_cr in np.geomspace(*specs['critical_pressure_kpa'], PROFILE_PRESSURES) * 1e3:
+    compressions = np.logspace(*specs['log10_critical_compression_mm'], PROFILE_COMPRESSIONS)
+    pressures = np.logspace(*specs['log10_critical_pressure_kpa'], PROFILE_PRESSURES)
+    for x_cr in compressions * 1e-3:
+        for p_cr in pressures * 1e3:
             load = x_s / x_cr + gauge / p_cr
             if not (load.max() > 1.0 and load.min() < 1.0):
                 continue    # buckled everywhere or nowhere: no onset in this record
@@ -212,7 +281,7 @@ def identifiability(record, params, scales):
     best = max((o.detectable for o in onsets), default=0.0)
     reasons = {'buckling': None}
     if best < DETECTABLE:
-        k_max = buckling_specs(params)[0][3]
+        k_max = 10.0 ** buckling_specs(params)[0][3]
         x_s, gauge = 1e3 * record['x_s'], (record['p'] - P_ATM) / 1e3
         reasons['buckling'] = (
             'at every onset within the bounds that the record reaches (spring '
@@ -453,8 +522,8 @@ def _to_si(part, raw):
     if part == 'backlash':
         return {'width': raw['width_mm'] * 1e-3}
     if part == 'buckling':
-        return {_BUCKLING_SI[name][0]: value * _BUCKLING_SI[name][1]
-                for name, value in raw.items()}
+        return {_BUCKLING_SI[name][0]: (10.0 ** value if name in _LOG else value)
+                * _BUCKLING_SI[name][1] for name, value in raw.items()}
     return {name[:-3]: value * ML for name, value in raw.items()}  # wall_bulging, m³
 
 
@@ -527,8 +596,9 @@ def _profile_starts(record, params, scales):
     force_scale = (scales or {}).get('f') or noise_floors(record)['f']
     starts = []
     for onset in buckling_profile(record, params, force_scale)[:PROFILE_STARTS]:
-        k_b = onset.stiffness_loss or 0.25 * specs[0][3] * 1e3
-        start = [k_b / 1e3, onset.critical_pressure / 1e3, onset.critical_compression / 1e3]
+        k_b = onset.stiffness_loss or 0.25 * 10.0 ** specs[0][3] * 1e3
+        start = [np.log10(max(k_b, K_B_FLOOR) / 1e3), np.log10(onset.critical_pressure / 1e3),
+                 np.log10(onset.critical_compression * 1e3)]
         # inside the bounds, off their edges (a start on an edge stays there under trf)
         starts.append([min(max(v, low + 0.01 * (high - low)), high - 0.01 * (high - low))
                        for v, (_, _, low, high) in zip(start, specs)])
