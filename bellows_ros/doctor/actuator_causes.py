@@ -48,6 +48,13 @@ Each cause adds the missing physics with its own parameters (docs/doctor.md, con
 
 Every bound is derived (docs/doctor.md, "Where every range comes from"), and what a fit pinned at
 each means is `EDGES`: a limit of the physics is a finding, the others say why it is not named.
+
+Standing physics (`standing`, `standing_physics`): the live doctor asks what changed from the
+model its monitor compares the measurement with (`live.actuator_residuals`: the whole model, its
+own E_V and buckling included), so its baseline keeps them at the model's values. The offline
+doctor (`bellows diagnose`) keeps none: it asks what a device holds beyond paper B. A cause that
+is also standing (buckling) replaces the standing term by its own fit, started at the model's
+values: it pays only where the spring buckles otherwise than the model says.
 """
 import dataclasses
 
@@ -58,8 +65,9 @@ from bellows_ros.doctor.filters import lag, play, recurrence, relax
 from bellows_ros.doctor.scoring import guarded_floor, Model, noise_floor, noise_floor_ramps
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.actuator import (air_force, Buckling, buckling_force, force_error,
-                                         gas_amount, material_terms, pressure_of_amount,
-                                         total_volume, without_buckling, without_bulging)
+                                         gas_amount, material_terms, NO_BUCKLING,
+                                         pressure_of_amount, total_volume, without_buckling,
+                                         without_bulging)
 from bellows_ros.models.actuator_geometry import P_ATM, volume_geo
 
 CAUSES = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash', 'buckling')
@@ -75,6 +83,8 @@ DECIDING_DATA = {
 BASELINE = ('paper B (17): geometric volume (no E_V), isothermal sealed gas, '
             'p_ref and v_tube refitted; force (7)-(12) on the predicted pressure, F_MTS a cubic '
             'in x_s and E_F amplitude refitted, no buckling')
+# Physics of the model that a baseline may keep at the model's own values (module docstring).
+STANDING = ('wall_bulging', 'buckling')
 # Measured outputs: (column, unit, name). The first is the legacy single output.
 OUTPUTS = (('p', 'Pa', 'pressure'), ('f', 'N', 'force'))
 F_MTS_DEGREE = 3
@@ -189,6 +199,24 @@ def edge_kind(cause, name, side):
     return EDGES.get((cause, name, side), ('range', 'a bound of the fit, not of physics'))
 
 
+def standing_physics(params):
+    """Return the part of `STANDING` that `params` holds (E_V not zero, a spring that buckles)."""
+    held = {'wall_bulging': params.chamber.bulging or params.spring.bulging,
+            'buckling': params.buckling is not NO_BUCKLING
+            and params.buckling.stiffness_loss > 0.0}
+    return tuple(name for name in STANDING if held[name])
+
+
+def baseline_name(standing=()):
+    """`BASELINE`, with the model's own physics that it keeps (`standing`) said."""
+    name = BASELINE
+    if 'wall_bulging' in standing:
+        name = name.replace('geometric volume (no E_V)', "the model's own E_V")
+    if 'buckling' in standing:
+        name = name.replace('no buckling', "the model's own buckling")
+    return name
+
+
 def buckling_specs(params):
     """SPECS['buckling'] with the bounds of `actuator.buckling.bounds` where the YAML has them."""
     specs = []
@@ -220,7 +248,7 @@ class Onset:
     improvement: float            # the fall of the force's squared error (noise floors²)
 
 
-def buckling_profile(record, params, force_scale):
+def buckling_profile(record, params, force_scale, standing=()):
     """
     Profile buckling over its onset across the record's range: a list of `Onset`, best first.
 
@@ -230,12 +258,14 @@ def buckling_profile(record, params, force_scale):
     load-cell zero, E_F) can absorb of it. Its norm with the largest k_b of the bounds, over the
     averaged force noise floor `force_scale` (N), is how far the record can show buckling there
     (`detectable`); the k_b >= 0 fitted to the baseline's force residual gives the improvement.
-    No nonlinear fit: a few least-squares projections, cheap at any onset.
+    No nonlinear fit: a few least-squares projections, cheap at any onset. With `standing` E_V,
+    the force the model knows keeps it; a standing buckling is left out (the cause replaces it).
     """
     specs = {name: (low, high) for name, _, low, high in buckling_specs(params)}
     k_max = 10.0 ** specs['log10_stiffness_loss_kn'][1] * 1e3
     x_s, p, f = record['x_s'], record['p'], record['f']
-    known, columns = force_columns(params, (), {}, x_s, p)
+    kept = tuple(name for name in standing if name != 'buckling')
+    known, columns = force_columns(params, (), {}, x_s, p, kept)
     basis, _ = np.linalg.qr(columns / np.sqrt(np.mean(columns ** 2, axis=0) + 1e-300))
     residual = f - known
     residual = residual - basis @ (basis.T @ residual)
@@ -262,7 +292,7 @@ def buckling_profile(record, params, force_scale):
     return onsets
 
 
-def identifiability(record, params, scales):
+def identifiability(record, params, scales, standing=()):
     """
     Why this record cannot show each model-based cause: {cause: reason or None}.
 
@@ -276,8 +306,9 @@ def identifiability(record, params, scales):
       (`_detectable`).
     Backlash keeps its structural condition (`checks.identifiability`): a chamber that never
     reverses turns a play into a constant offset, which the encoder's zero is.
+    `standing`: the model's own physics the baseline keeps (module docstring).
     """
-    onsets = buckling_profile(record, params, scales['f'])
+    onsets = buckling_profile(record, params, scales['f'], standing)
     best = max((o.detectable for o in onsets), default=0.0)
     reasons = {'buckling': None}
     if best < DETECTABLE:
@@ -290,7 +321,7 @@ def identifiability(record, params, scales):
             f'buckling (k_b {k_max:.0f} kN/m) would change the force by at most {best:.1f} '
             f'noise floors beyond what the material force absorbs (needs {DETECTABLE:g})')
     for cause in ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag'):
-        size, where = _detectable(record, params, scales, cause)
+        size, where = _detectable(record, params, scales, cause, standing)
         reasons[cause] = None if size >= DETECTABLE else (
             f'the strongest {cause.replace("_", " ")} within its physical range ({where}) would '
             f'change pressure and force by at most {size:.1f} noise floors beyond what the '
@@ -298,7 +329,7 @@ def identifiability(record, params, scales):
     return reasons
 
 
-def _detectable(record, params, scales, cause):
+def _detectable(record, params, scales, cause, standing=()):
     """
     Largest change `cause` can make beyond the baseline's parameters: (noise floors, where).
 
@@ -309,8 +340,8 @@ def _detectable(record, params, scales, cause):
     effect, not a rule drawn around one device.
     """
     everything = np.ones(len(record), bool)
-    base = build_model(record, params, (), scales=scales)
-    extended = build_model(record, params, (cause,), scales=scales)
+    base = build_model(record, params, (), scales=scales, standing=standing)
+    extended = build_model(record, params, (cause,), scales=scales, standing=standing)
     theta = np.asarray(base.x0, float)
     y0, jacobian = baseline_directions(base, len(record))
     best, where = 0.0, ''
@@ -408,12 +439,12 @@ def geometric_volumes(params, x_c, x_s):
     return volume_geo(params.chamber, x_c), volume_geo(params.spring, x_s)
 
 
-def predict(params, causes, values, x_c, x_s, dt, geometry=None):
+def predict(params, causes, values, x_c, x_s, dt, geometry=None, standing=()):
     """Pressure the extended model predicts at the sensor (Pa) over a record (`predict_state`)."""
-    return predict_state(params, causes, values, x_c, x_s, dt, geometry)[0]
+    return predict_state(params, causes, values, x_c, x_s, dt, geometry, standing)[0]
 
 
-def predict_state(params, causes, values, x_c, x_s, dt, geometry=None):
+def predict_state(params, causes, values, x_c, x_s, dt, geometry=None, standing=()):
     """
     Pressure at the sensor and in the gas (Pa) the extended model predicts over a record.
 
@@ -421,9 +452,9 @@ def predict_state(params, causes, values, x_c, x_s, dt, geometry=None):
     'x_c_offset' (optional, m)}; `geometry`: `geometric_volumes(params, x_c, x_s)` if already
     computed (for the encoder's x_c; the chamber's volume is recomputed when the offset is not 0).
     Only the inputs x_c, x_s enter: no measured pressure, so nothing of the held-out output leaks
-    in.
+    in. `standing`: the model's own physics kept (module docstring; E_V here).
     """
-    model = _gas_model(params, causes, values)
+    model = _gas_model(params, causes, values, standing)
     v_c, v_s = geometry or geometric_volumes(params, x_c, x_s)
     offset = values['baseline'].get('x_c_offset', 0.0)
     if offset or 'backlash' in causes:
@@ -454,31 +485,43 @@ def predict_state(params, causes, values, x_c, x_s, dt, geometry=None):
     return p, p_gas
 
 
-def _gas_model(params, causes, values):
-    """Return `params` with the baseline's gas and tube, and the fitted E_V if it is a cause."""
+def _kept(params, standing):
+    """Return `params` with E_V zero unless it is standing physics (`standing`)."""
+    return params if 'wall_bulging' in standing else without_bulging(params)
+
+
+def _gas_model(params, causes, values, standing=()):
+    """
+    Return `params` with the baseline's gas and tube, and the fitted E_V if it is a cause.
+
+    The model's own E_V if it is `standing` and not a cause; else the geometric volume.
+    """
     base = values['baseline']
-    model = dataclasses.replace(without_bulging(params), p_ref=base['p_ref'],
+    model = dataclasses.replace(_kept(params, standing), p_ref=base['p_ref'],
                                 v_tube=base['v_tube'])
     if 'wall_bulging' in causes:
         model = bulged(model, values['wall_bulging'])
     return model
 
 
-def force_columns(params, causes, values, x_s, p_gas):
+def force_columns(params, causes, values, x_s, p_gas, standing=()):
     """
     Return the force the model knows, (7)-(10) (+ buckling), and the material force's columns.
 
     The columns of the linear material force: 1 (load cell zero), x_s .. x_s^3 (F_MTS), E_F's
-    shape exp(C2 (P - P_atm) + C3 Δh) (11), C1 being its coefficient.
+    shape exp(C2 (P - P_atm) + C3 Δh) (11), C1 being its coefficient. A `standing` E_V or
+    buckling that is not a cause is the model's own.
     """
     model = (bulged(params, values['wall_bulging']) if 'wall_bulging' in causes
-             else without_bulging(params))
+             else _kept(params, standing))
     known = air_force(model, x_s, p_gas)[0]                          # (9), (10)
     if 'buckling' in causes:
         b = values['buckling']
         known = known + buckling_force(Buckling(b['stiffness_loss'], b['critical_pressure'],
                                                 b['critical_compression'], _onset_width(params)),
                                        x_s, p_gas, np.exp)[0]
+    elif 'buckling' in standing:
+        known = known + buckling_force(params.buckling, x_s, p_gas, np.exp)[0]
     _, c2, c3, _ = params.e_f
     # A trial step of the fit may predict any pressure: the exponent of E_F stays finite within
     # the range the data checks accept.
@@ -527,16 +570,20 @@ def _to_si(part, raw):
     return {name[:-3]: value * ML for name, value in raw.items()}  # wall_bulging, m³
 
 
-def build_model(record, params, causes, warm=None, scales=None):
+def build_model(record, params, causes, warm=None, scales=None, standing=()):
     """
     Build the baseline plus `causes` on `record` as a `scoring.Model`.
 
     The model is fitted to the measured outputs (`measured(record, scales)`: pressure and force,
     each over its noise floor in `scales`).
 
-    `warm` ({fit variable: value}) starts the fit from an earlier model's solution.
+    `warm` ({fit variable: value}) starts the fit from an earlier model's solution. `standing`:
+    the model's own physics the baseline keeps (module docstring); a standing buckling that is a
+    cause starts at the model's values.
     """
     causes = tuple(causes)
+    standing = tuple(standing)
+    own = _own_buckling(params) if 'buckling' in standing else {}
     names, x0, lower, upper = [], [], [], []
     guess = initial_guess(record, params)
     for part in ('baseline',) + causes:
@@ -547,6 +594,8 @@ def build_model(record, params, causes, warm=None, scales=None):
                 start = warm[key]
             elif part == 'baseline':
                 start = guess[name]
+            elif part == 'buckling' and name in own:
+                start = min(max(own[name], lo + 0.01 * (hi - lo)), hi - 0.01 * (hi - lo))
             x0.append(start)
             lower.append(lo)
             upper.append(hi)
@@ -555,7 +604,7 @@ def build_model(record, params, causes, warm=None, scales=None):
         width = len(SPECS[causes[-1]])
         alternatives = STARTS[causes[-1]]
         if causes[-1] == 'buckling':
-            alternatives = _profile_starts(record, params, scales)
+            alternatives = _profile_starts(record, params, scales, standing)
         for alternative in alternatives:
             starts.append(x0[:-width] + list(alternative))
         if warm:
@@ -569,11 +618,11 @@ def build_model(record, params, causes, warm=None, scales=None):
     def run(theta, train):
         values = physical(causes, theta)
         try:
-            p, p_gas = predict_state(params, causes, values, x_c, x_s, dt, geometry)
+            p, p_gas = predict_state(params, causes, values, x_c, x_s, dt, geometry, standing)
         except ParameterError:
             # E_V so large that (17) has no positive root: a trial step of the fit, far off.
             return np.full((2, len(x_s)), 1e9), {'force': np.zeros(F_MTS_DEGREE + 2)}
-        known, columns = force_columns(params, causes, values, x_s, p_gas)
+        known, columns = force_columns(params, causes, values, x_s, p_gas, standing)
         coef = solve_force(known, columns, f, train)
         force = known + columns @ coef
         return np.vstack([p / scales['p'], force / scales['f']]), {'force': coef}
@@ -590,12 +639,20 @@ def build_model(record, params, causes, warm=None, scales=None):
                  n_linear=F_MTS_DEGREE + 2, starts=starts)
 
 
-def _profile_starts(record, params, scales):
+def _own_buckling(params):
+    """Return the model's own buckling as the fit's scaled variables {name: value}."""
+    b = params.buckling
+    return {'log10_stiffness_loss_kn': float(np.log10(max(b.stiffness_loss, K_B_FLOOR) / 1e3)),
+            'log10_critical_pressure_kpa': float(np.log10(b.critical_pressure / 1e3)),
+            'log10_critical_compression_mm': float(np.log10(b.critical_compression * 1e3))}
+
+
+def _profile_starts(record, params, scales, standing=()):
     """Return the buckling fit's starts: the best onsets of `buckling_profile` (scaled)."""
     specs = buckling_specs(params)
     force_scale = (scales or {}).get('f') or noise_floors(record)['f']
     starts = []
-    for onset in buckling_profile(record, params, force_scale)[:PROFILE_STARTS]:
+    for onset in buckling_profile(record, params, force_scale, standing)[:PROFILE_STARTS]:
         k_b = onset.stiffness_loss or 0.25 * 10.0 ** specs[0][3] * 1e3
         start = [np.log10(max(k_b, K_B_FLOOR) / 1e3), np.log10(onset.critical_pressure / 1e3),
                  np.log10(onset.critical_compression * 1e3)]
@@ -605,7 +662,7 @@ def _profile_starts(record, params, scales):
     return starts
 
 
-def extended_flat(config, causes, values):
+def extended_flat(config, causes, values, standing=()):
     """
     Return the flat ROS 2 parameters of the extended model (for `params.write_file`).
 
@@ -617,7 +674,10 @@ def extended_flat(config, causes, values):
     params = config.model
     base = values['baseline']
     model = dataclasses.replace(params, p_ref=base['p_ref'], v_tube=base['v_tube'])
-    model = without_buckling(without_bulging(model))
+    # The model's own E_V and buckling stay where they are standing physics (`standing`).
+    model = _kept(model, standing)
+    if 'buckling' not in standing:
+        model = without_buckling(model)
     if 'f_mts' in base:
         model = dataclasses.replace(model, f_mts=tuple(base['f_mts']),
                                     e_f=(base['e_f_c1'], params.e_f[1], params.e_f[2],

@@ -181,7 +181,7 @@ def raw_noise(system, table, params):
 
 
 def diagnose(system, data, config, progress=False, causes=None, source='<arrays>',
-             raw_noise=None, factor=1):
+             raw_noise=None, factor=1, standing=()):
     """
     Diagnose one record of `system` ('segment' or 'actuator'). Returns a `Diagnosis`.
 
@@ -193,9 +193,14 @@ def diagnose(system, data, config, progress=False, causes=None, source='<arrays>
     (default: the whole vocabulary of the system; `()` fits and scores the baseline only, the
     benchmark's reference). `factor` > 1: the rows of `data` are block means of that many raw rows
     (`data.read_record`), and `raw_noise` gives the raw rows' noise floors as `raw_noise` does
-    (the floors of the averaged rows follow, divided by √factor).
+    (the floors of the averaged rows follow, divided by √factor). `standing` (actuator only): the
+    model's own physics the baseline keeps at the model's values (`actuator_causes.STANDING`; the
+    live doctor's, which asks what changed from the model its monitor compares with).
     """
     started = time.perf_counter()
+    standing = tuple(standing)
+    if standing and system != 'actuator':
+        raise ValueError(f"standing physics {standing} is the actuator's, not the {system}'s")
     module = system_module(system)
     params = config.model
     full = checks.checked_record(checks.as_table(data, system, source), system, factor)
@@ -208,10 +213,11 @@ def diagnose(system, data, config, progress=False, causes=None, source='<arrays>
         floors = module.noise_floors(full) if raw_noise is None else dict(raw_noise)
         scales = {name: floors[name] / np.sqrt(record.factor) for name, *_ in outputs}
         extra['scales'] = scales
+        extra['standing'] = standing
         y = module.measured(record, scales)
         noise = floors[outputs[0][0]]
         reasons = checks.identifiability(record)
-        reasons.update(module.identifiability(record, params, scales))
+        reasons.update(module.identifiability(record, params, scales, standing))
     else:
         noise = (scoring.noise_floor(module.measured(full)) if raw_noise is None
                  else raw_noise['y'])
@@ -297,10 +303,11 @@ def diagnose(system, data, config, progress=False, causes=None, source='<arrays>
     unexplained = any(_structured(v.evidence) for v in views)
     worst = max(views, key=lambda v: v.evidence['rmse_over_noise'])
     view = views[primary]
-    return Diagnosis(system, full.path, record, view.signal, view.unit, module.BASELINE, baseline,
+    return Diagnosis(system, full.path, record, view.signal, view.unit,
+                     module.baseline_name(standing), baseline,
                      current, chosen, candidates, view.noise, worst.evidence, bool(unexplained),
-                     values, module.extended_flat(config, chosen, values), timings, failure, views,
-                     primary)
+                     values, module.extended_flat(config, chosen, values, standing), timings,
+                     failure, views, primary)
 
 
 # The current model at a candidate's values of their shared parameters must fit all the data
