@@ -283,7 +283,8 @@ def _summarise_cause(rows, null, own, kind, cause):
     false_null = sum(cause in r['named'] for r in null) / max(len(null), 1)
     false_other = sum(cause in r['named'] for r in others) / max(len(others), 1)
     gains = [r['gain'] for r in own if cause in r['named']]
-    name = kind if kind == cause else f'{kind}.{cause}'
+    # A single-cause kind by its causes, not its name: buckling@ambient is single-cause too.
+    name = kind if len(KINDS[kind][0]) == 1 else f'{kind}.{cause}'
     result = Result(f'doctor_devices.{name}.named', len(named) / max(len(due), 1), '',
                     len(due), target=TARGET_NAMED)
     result.extra.update({
