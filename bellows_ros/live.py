@@ -47,7 +47,8 @@ here: the controller feeds samples and reports the numbers on /diagnostics.
   make it about twice its size); where the model holds M Ψ̈, Ψ̈ is a difference again.
 - `SampleCost`: the sample thread's cost, per sample (`cost_us`).
 - `diagnose_window`: the doctor (`diagnosis.diagnose`) on block means of the last window with the
-  healthy window's noise floors, over the causes that develop in service (`LIVE_CAUSES`).
+  healthy window's noise floors, over the causes that develop in service (`LIVE_CAUSES`), from
+  the model the residuals compare with (its own E_V and buckling in the baseline: `standing`).
 - `DiagnosisWorker`: runs `diagnose_window` in a separate process (spawned: no fork of a process
   holding DDS threads; a process, not a thread, so the fit does not take the interpreter lock
   from the 1 kHz callback), one job at a time; a job over its time bound is killed, reported
