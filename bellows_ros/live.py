@@ -47,7 +47,8 @@ here: the controller feeds samples and reports the numbers on /diagnostics.
   make it about twice its size); where the model holds M Ψ̈, Ψ̈ is a difference again.
 - `SampleCost`: the sample thread's cost, per sample (`cost_us`).
 - `diagnose_window`: the doctor (`diagnosis.diagnose`) on block means of the last window with the
-  healthy window's noise floors, over the causes that develop in service (`LIVE_CAUSES`).
+  healthy window's noise floors, over the causes that develop in service (`LIVE_CAUSES`), from
+  the model the residuals compare with (its own E_V and buckling in the baseline: `standing`).
 - `DiagnosisWorker`: runs `diagnose_window` in a separate process (spawned: no fork of a process
   holding DDS threads; a process, not a thread, so the fit does not take the interpreter lock
   from the 1 kHz callback), one job at a time; a job over its time bound is killed, reported
@@ -286,15 +287,22 @@ def diagnose_window(config, rows, floors, causes=LIVE_CAUSES):
     `rows`: {column: array} at the full sample rate; `floors`: the healthy window's noise floors
     (the window itself is not healthy). Fitted on block means at `FIT_RATE` Hz. A window the
     doctor refuses (too short, the chamber never moves) gives the refusal as `error`.
+
+    The baseline is the model the monitor compares with (`actuator_residuals`: the whole model):
+    the model's own E_V and buckling stay in it (`actuator_causes.standing_physics`), so that the
+    doctor names what changed, not the standing physics of the device. Without them the buckling
+    fit, free over its physical range, took up the model's own buckling and E_V on a healthy
+    window (#32).
     """
-    from bellows_ros.doctor import diagnosis    # in the worker process (module imports)
+    from bellows_ros.doctor import actuator_causes, diagnosis    # in the worker process
     started = time.perf_counter()
     dt = float(np.median(np.diff(rows['t'])))
     factor = max(1, int(round(1.0 / (dt * FIT_RATE))))
     try:
         result = diagnosis.diagnose('actuator', block_means(rows, factor), config,
                                     causes=causes, source='live window',
-                                    raw_noise=floors, factor=factor)
+                                    raw_noise=floors, factor=factor,
+                                    standing=actuator_causes.standing_physics(config.model))
     except Exception as exc:   # reported, not raised: a live window may be anything
         return {'causes': [], 'values': {}, 'seconds': time.perf_counter() - started,
                 'error': f'{type(exc).__name__}: {exc}'}

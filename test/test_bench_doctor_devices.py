@@ -40,15 +40,65 @@ def test_drawn_devices_differ_repeat_and_keep_their_physics_with_an_effect():
 
 
 def test_a_null_device_and_a_buckling_device():
+    """The buckling device's onset lies at ambient pressure (p_cr 123 Pa, x_cr 4.6 mm)."""
     rows = [bench.diagnose_device(bench.draw(0, None)),
-            bench.diagnose_device(bench.draw(1, 'buckling'))]
+            bench.diagnose_device(bench.draw(0, 'buckling@ambient'), 'buckling@ambient')]
     null, buckled = rows
     assert null['named'] == [] and null['size'] == null['raw_size'] == 0.0
     assert buckled['size'] > bench.DUE          # this draw's buckling shows in its record
     assert buckled['named'] == ['buckling']
     results = {r.name: r for r in bench.summarise(rows, ('buckling',))}
-    assert results['doctor_devices.buckling.named'].value == 1.0
+    assert results['doctor_devices.buckling@ambient.named'].value == 1.0
     assert results['doctor_devices.none.false_names'].value == 0.0
+
+
+def test_the_drawn_buckling_spans_the_physical_range_beyond_the_old_fit():
+    """
+    Issue 32: the generator drew inside the fit's own range (p_cr 10-300 kPa, x_cr 5-30 mm).
+
+    Now the physical range, edges included: onsets below 5 kPa and beyond 300 kPa, x_cr below
+    5 mm and beyond 80 mm; the 'ambient' kind within 2 kPa of ambient, the 'travel_end' kind at
+    the record's top spring peak; k_b never makes the spring lose more than it carries.
+    """
+    shapes = [devices.draw_actuator(seed, ('buckling',)) for seed in range(60)]
+    onsets = [(d.params.buckling.critical_pressure, d.params.buckling.critical_compression)
+              for d in shapes]
+    assert min(p for p, _ in onsets) < 5e3 and max(p for p, _ in onsets) > 3e5
+    assert min(x for _, x in onsets) < 5e-3 and max(x for _, x in onsets) > 0.08
+    for seed in range(10):
+        ambient = devices.draw_actuator(seed, ('buckling',), 'ambient').params.buckling
+        assert 1e2 <= ambient.critical_pressure <= 2e3
+        end = devices.draw_actuator(seed, ('buckling',), 'travel_end')
+        assert 0.85 <= end.params.buckling.critical_compression / end.spring_range[1] <= 1.0
+    for device in shapes[:10]:
+        shape = {k: getattr(device.params.buckling, k) for k in
+                 ('stiffness_loss', 'critical_pressure', 'critical_compression')}
+        assert devices.within_carried(device.params, shape, device.spring_range[1]) == \
+            pytest.approx(shape['stiffness_loss'])
+
+
+def test_two_cause_rows_are_judged_per_cause_and_kinds_parse():
+    """A two-cause device: each cause named where due on its own; a third name is false."""
+    def row(seed, kind, causes, named, sizes):
+        return {'seed': seed, 'kind': kind, 'cause': causes[0] if causes else None,
+                'causes': causes, 'named': named, 'gain': 0.9, 'unexplained': False,
+                'sizes': {c: (s, s) for c, s in zip(causes, sizes)},
+                'whys': {c: 'missed' for c in causes if c not in named}, 'seconds': 1.0}
+    both = ['buckling', 'air_leak']
+    rows = [row(1, 'buckling+air_leak', both, both, (20.0, 9.0)),
+            row(2, 'buckling+air_leak', both, ['air_leak'], (15.0, 9.0)),
+            row(3, 'buckling+air_leak', both, ['buckling'], (15.0, 1.0)),   # leak not due
+            row(4, 'air_leak', ['air_leak'], ['air_leak', 'sensor_lag'], (9.0,)),
+            row(5, None, [], [], ())]
+    results = {r.name: r for r in bench.summarise(rows)}
+    assert results['doctor_devices.buckling+air_leak.buckling.named'].value == 2 / 3
+    assert results['doctor_devices.buckling+air_leak.air_leak.named'].value == 1.0
+    assert 'seed 2' in results['doctor_devices.buckling+air_leak.buckling.named'].extra['misses']
+    none = results['doctor_devices.none.false_names']
+    assert none.value == 0.0 and none.extra['false_names_all_devices'].startswith('1 of 5')
+    assert bench.parse_kinds('none:2, buckling@ambient', 3) == [(None, 2), ('buckling@ambient', 3)]
+    with pytest.raises(BellowsError, match='buckling@nowhere'):
+        bench.parse_kinds('buckling@nowhere', 1)
 
 
 def test_an_effect_the_baselines_own_parameters_take_up_is_not_due():

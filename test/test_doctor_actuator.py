@@ -157,7 +157,8 @@ def test_report_files_and_extended_yaml_go_back_into_the_system(tmp_path):
         assert min(image.shape[:2]) > 100 and len(colours) > 10, name  # drawn on, not blank
         assert f'![{name}]({name})' in text, name  # and shown in the report
     assert report['baseline']['unit'] == 'Pa'
-    assert all(set(c) == {'cause', 'heldout_rmse', 'params'} for c in report['candidates'])
+    assert all(set(c) == {'cause', 'heldout_rmse', 'params', 'edges'}
+               for c in report['candidates'])
     extended = load_actuator_plant_params(directory / 'extended.yaml')
     tau = extended.effect_defaults()['sensor_lag']['time_constant']
     assert tau == pytest.approx(chosen['sensor_lag']['time_constant'], rel=0.3)

@@ -160,6 +160,45 @@ def test_the_healthy_window_names_nothing(healthy):
     assert verdict['error'] is None and verdict['causes'] == [], verdict
 
 
+def compressing_run(seconds, scale=None, at=20.0, seed=3):
+    """Return samples of the plant whose spring is cycled 0-24 mm; buckling x `scale` from `at`."""
+    plant = ActuatorPlant(CONFIG.model, CONFIG.plant, effects=['wall_bulging', 'buckling'],
+                          seed=seed, x_c0=0.04)
+    rows = []
+    for k in range(int(round(seconds / DT))):
+        t = k * DT
+        if scale is not None and abs(t - at) < DT / 2:
+            plant.set_strengths({'buckling': scale})
+        duty = 0.3 * math.copysign(1.0, math.sin(2 * math.pi * t / 6.0))
+        s = plant.step(DT, duty, x_s_imposed=0.012 * (1.0 - math.cos(2 * math.pi * t / 4.0)))
+        rows.append((s.t, plant.x_from_counts(s.encoder_counts), s.x_s, s.p, s.f))
+    return np.array(rows)
+
+
+def test_the_live_baseline_keeps_the_models_own_buckling_and_names_a_change_of_it():
+    """
+    The model's own buckling is standing physics, not a fault; a spring buckling more is one.
+
+    The spring is compressed past the model's onset in both runs. The live doctor's baseline is
+    the model the monitor compares with (its E_V and buckling in it), so the healthy window names
+    nothing, and a stiffness loss doubled is named with the onset where the model has it.
+    """
+    assert actuator_causes.standing_physics(CONFIG.model) == ('wall_bulging', 'buckling')
+    b = CONFIG.model.buckling
+    for scale in (None, 2.0):
+        data = compressing_run(40.0, scale)
+        floors = actuator_causes.noise_floors({'p': data[:20000, 3], 'f': data[:20000, 4]})
+        verdict = live.diagnose_window(CONFIG, dict(zip(live.COLUMNS, data[-20000:].T)), floors)
+        if scale is None:
+            assert verdict['error'] is None and verdict['causes'] == [], verdict
+            continue
+        assert verdict['causes'] == ['buckling'], verdict
+        fitted = verdict['values']['buckling']
+        assert 0.8 * scale < fitted['stiffness_loss'] / b.stiffness_loss < 1.2 * scale, verdict
+        assert 0.8 < fitted['critical_pressure'] / b.critical_pressure < 1.25, verdict
+        assert 0.8 < fitted['critical_compression'] / b.critical_compression < 1.25, verdict
+
+
 def test_the_worker_runs_one_job_at_a_time_and_kills_one_over_its_bound():
     worker = live.DiagnosisWorker(time_bound=1.0)
     try:

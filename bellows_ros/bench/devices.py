@@ -43,7 +43,9 @@ in the logarithm; the last column says why (notes below the table).
 | wall_bulging | E_V × U(0.3, 2) | 15 |
 | sensor_lag | τ logU(5, 150) ms | 16 |
 | backlash | width logU(0.1, 1) mm | 17 |
-| buckling | k_b logU(500, 8000) N/m, x_cr U(5, 30) mm, p_cr logU(10, 300) kPa | 18 |
+| buckling | k_b logU(300, 17e3) N/m capped, x_cr logU(0.1, 1e3) mm, p_cr logU(0.1, 1100) kPa|18|
+| buckling, onset at ambient | p_cr logU(0.1, 2) kPa, x_cr logU(0.5, 50) mm | 19 |
+| buckling, onset at end of travel | x_cr ×U(0.85, 1) top peak, p_cr logU(300, 1100) kPa | 20 |
 
 1. Sealed at ambient (weather, altitude to ~900 m); paper B's volume test filled 0.92-1.08 × with
    a syringe.
@@ -63,9 +65,21 @@ in the logarithm; the last column says why (notes below the table).
 15. Wall thickness and hardness (paper B's E_V is one device).
 16. Fast piezo sensors to long thin tubes in front of the sensor.
 17. New to worn lead-screw nuts.
-18. Strength and shape: the load index x_s/x_cr + (P - P_atm)/p_cr reaches 1 anywhere from
-    atmospheric pressure (p_cr large: compression alone decides, e.g. 8-12 mm) to pressures the
-    record reaches (p_cr small), at any compression inside or beyond the spring's range.
+18. The physical ranges the doctor fits within (config/actuator.yaml `actuator.buckling.bounds`,
+    docs/doctor.md "Where every range comes from"), so that a fit range too narrow shows up as
+    misses: k_b from 300 N/m (a tenth of paper B's spring's stiffness: below it the loss hides in
+    the noise of most records) to the axial stiffness of the spring's straight wall tube; the
+    onset anywhere from ambient pressure (p_cr 0.1 kPa) and the start of the travel (x_cr
+    0.1 mm) to where the other variable alone sets it (p_cr 1.1 MPa, x_cr 1 m). k_b is then
+    lowered where the spring would lose more force than it carries (`within_carried`): past the
+    onset `buckling_force` falls at k_b in the compression and k_b x_cr / p_cr in the pressure
+    without end, kilonewtons at a small p_cr and a large x_cr.
+19. The onset at ambient pressure (`onset='ambient'`): the free spring buckles within 2 kPa of
+    ambient, and compressed (x_cr from 0.5 mm to beyond the record's 20 mm) at or below it;
+    paper B's spring buckles "under high pressure and compression", a softer or more slender
+    one at ambient.
+20. The onset at the end of the travel (`onset='travel_end'`): only the record's deepest
+    compressions buckle the spring, the pressure hardly moves the onset.
 
 Paper A segment (`draw_segment`; ranges as docs/arm_control.md gives them, where they were first
 drawn): geometry l0, s0 ×U(0.85, 1.15); Ogden μ ×logU(0.5, 2), γ1 U(2.2, 3.5), γ2 U(4, 8); actuator
@@ -91,10 +105,25 @@ EFFECT_RANGES = {
     'wall_bulging': {'scale': ('u', 0.3, 2.0)},
     'sensor_lag': {'time_constant': ('log', 0.005, 0.15)},
     'backlash': {'width': ('log', 1e-4, 1e-3)},
-    'buckling': {'stiffness_loss': ('log', 500.0, 8000.0),
-                 'critical_compression': ('u', 0.005, 0.030),
-                 'critical_pressure': ('log', 1e4, 3e5)},
+    # The physical ranges (note 18): the bounds of config/actuator.yaml actuator.buckling.bounds.
+    'buckling': {'stiffness_loss': ('log', 300.0, 17000.0),
+                 'critical_compression': ('log', 1e-4, 1.0),
+                 'critical_pressure': ('log', 1e2, 1.1e6)},
 }
+# Onsets at the edges of the physical range (notes 19, 20): {onset: {parameter: (kind, low,
+# high)}}, replacing those of EFFECT_RANGES['buckling']; 'travel_end' x_cr is a fraction of the
+# record's top spring peak (the drawn spring_range's high end).
+ONSETS = {
+    'ambient': {'critical_pressure': ('log', 1e2, 2e3),
+                'critical_compression': ('log', 5e-4, 0.05)},
+    'travel_end': {'critical_compression': ('u', 0.85, 1.0),
+                   'critical_pressure': ('log', 3e5, 1.1e6)},
+}
+# The buckling the stiffness-control bench draws as a nuisance (`stiffness_devices`), as issue 21
+# drew it for every bench: its devices and its log stay comparable. Not the doctor's ranges.
+CONTROL_BUCKLING = {'stiffness_loss': ('log', 500.0, 8000.0),
+                    'critical_compression': ('u', 0.005, 0.030),
+                    'critical_pressure': ('log', 1e4, 3e5)}
 # Shape parameters of buckling live in ActuatorParams.buckling, not in the plant's effect.
 _BUCKLING_SHAPE = ('stiffness_loss', 'critical_compression', 'critical_pressure')
 
@@ -113,18 +142,49 @@ def _draw(rng, kind, low, high):
     return log_uniform(rng, low, high) if kind == 'log' else float(rng.uniform(low, high))
 
 
-def draw_effect(rng, name):
-    """Parameters of effect `name` drawn from `EFFECT_RANGES` (SI)."""
-    return {key: _draw(rng, *spec) for key, spec in EFFECT_RANGES[name].items()}
+# Gauge pressures (Pa) a drawn record's sealed gas spans at most (the chamber's targets within
+# -20..40 mm from the design point; the records seen reach -10..+16 kPa).
+RECORD_GAUGE = (-15e3, 20e3)
 
 
-def draw_actuator(seed, effects=()):
+def within_carried(params, shape, peak):
+    """
+    Return the drawn k_b (N/m), lowered where the spring would lose more force than it carries.
+
+    Past its onset `buckling_force` loses k_b (x_s - x_cr) + k_b x_cr (P - P_atm)/p_cr, linear
+    without end: at a small p_cr and a large x_cr that is kilonewtons on a spring that carries
+    tens of newtons. A buckled bellows cannot lose more force than it carries, at most its
+    material force at the record's top compression `peak` (m) plus the pressure's force on it
+    (equivalent area times the record's highest gauge, `RECORD_GAUGE`). k_b is scaled down until
+    the largest loss over the record's range (x_s 0..peak, gauge over `RECORD_GAUGE`) is that.
+    """
+    from bellows_ros.models.actuator import Buckling, buckling_force, material_terms
+    from bellows_ros.models.actuator_geometry import area, P_ATM
+    x_s, gauge = np.meshgrid(np.linspace(0.0, peak, 41), np.linspace(*RECORD_GAUGE, 71))
+    onset = Buckling(1.0, shape['critical_pressure'], shape['critical_compression'],
+                     params.buckling.onset_width)
+    loss = float(np.max(-buckling_force(onset, x_s, P_ATM + gauge, np.exp)[0]))
+    carried = (float(np.dot(params.f_mts, material_terms(np.array(peak), len(params.f_mts))))
+               + float(area(params.spring, 0.0, P_ATM)[0]) * RECORD_GAUGE[1])
+    if loss <= 0.0:
+        return shape['stiffness_loss']
+    return float(min(shape['stiffness_loss'], carried / loss))
+
+
+def draw_effect(rng, name, ranges=None):
+    """Parameters of effect `name` drawn from `ranges` (default `EFFECT_RANGES[name]`, SI)."""
+    return {key: _draw(rng, *spec) for key, spec in (ranges or EFFECT_RANGES[name]).items()}
+
+
+def draw_actuator(seed, effects=(), onset=None, buckling=None):
     """
     Return an `Actuator` drawn from the ranges of the module docstring, seeded.
 
     `effects`: names of the effects it has (their strength and shape drawn too). The device's
     physics is drawn before its effects, so the same seed gives the same device with or without
-    an effect.
+    an effect. `onset` ('ambient', 'travel_end'; `ONSETS`) draws a buckling onset at that edge of
+    its physical range; `buckling` replaces the buckling's ranges ({parameter: (kind, low,
+    high)}, `CONTROL_BUCKLING`).
     """
     from bellows_ros.config.actuator import load_actuator
     rng = np.random.default_rng(seed)
@@ -157,8 +217,17 @@ def draw_actuator(seed, effects=()):
     # they are.
     drawn = {}
     for name in effects:
+        ranges = dict(EFFECT_RANGES[name])
+        if name == 'buckling':
+            ranges.update(buckling or {})
+            ranges.update(ONSETS[onset] if onset else {})
         drawn[name] = draw_effect(np.random.default_rng([seed, list(EFFECT_RANGES).index(name)]),
-                                  name)
+                                  name, ranges)
+    if onset == 'travel_end' and 'buckling' in drawn:
+        drawn['buckling']['critical_compression'] *= spring_range[1]
+    if 'buckling' in drawn and not buckling:
+        drawn['buckling']['stiffness_loss'] = within_carried(
+            params, drawn['buckling'], spring_range[1])
     if 'buckling' in drawn:
         shape = drawn.pop('buckling')
         params = dataclasses.replace(params, buckling=dataclasses.replace(

@@ -63,7 +63,7 @@ EFFECTS = ('air_leak', 'wall_bulging', 'buckling')
 
 def draw_actuator(seed):
     """Return a drawn actuator (`devices.draw_actuator`) with a leak, wall bulging and buckling."""
-    return devices.draw_actuator(seed, EFFECTS)
+    return devices.draw_actuator(seed, EFFECTS, buckling=devices.CONTROL_BUCKLING)
 
 
 def controller_settings():

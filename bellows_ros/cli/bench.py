@@ -14,6 +14,7 @@
 
 """`bellows bench [--json]`: run every benchmark module in `bellows_ros.bench`."""
 import importlib
+import inspect
 import json
 import pkgutil
 import sys
@@ -29,14 +30,29 @@ def add_arguments(parser):
                              'several, comma-separated: one seeded run of several benches)')
     parser.add_argument('--quick', action='store_true',
                         help='fewer calls (a smoke run, less precise)')
+    # A subset of a drawn-device bench (doctor_devices): the full one takes hours on 2 cores.
+    parser.add_argument('--devices', type=int, metavar='N',
+                        help='devices per kind of a drawn-device bench that takes it '
+                             '(doctor_devices; default its own)')
+    parser.add_argument('--kinds', metavar='KIND[:COUNT][,...]',
+                        help="only these kinds of device ('none' the null devices; "
+                             'doctor_devices.KINDS), COUNT devices each (default --devices)')
+    parser.add_argument('--workers', type=int, metavar='N',
+                        help='worker processes of a bench that takes it (doctor_devices)')
 
 
 def run(args):
     results = []
+    options = {name: getattr(args, name, None) for name in ('devices', 'kinds', 'workers')}
     for name in chosen_modules(args.only):
         print(f'bench: {name} ...', file=sys.stderr)
         module = importlib.import_module(f'bellows_ros.bench.{name}')
-        results.extend(module.run(quick=args.quick))
+        accepted = inspect.signature(module.run).parameters
+        given = {key: value for key, value in options.items() if value is not None}
+        refused = sorted(set(given) - set(accepted))
+        if refused:
+            raise BellowsError(f"bench {name} takes no --{', --'.join(refused)}")
+        results.extend(module.run(quick=args.quick, **given))
     if args.json:
         print(json.dumps([r.as_dict() for r in results], indent=2))
     else:

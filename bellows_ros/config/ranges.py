@@ -120,10 +120,15 @@ RANGES = {
     # stays below 220 + 400 + 50 < 709, so E_F is finite on every state.
     'actuator.force.e_f': [Range(-1e4, 1e4, 'N'), Range(-2e-4, 2e-4, '1/Pa'),
                            Range(-2e3, 2e3, '1/m'), Range(-50.0, 50.0, '1')],
+    # k_b: up to the axial stiffness of the stiffest bellows wall of any size here (the doctor's
+    # fit stops at the spring's own wall tube, 17 kN/m: config/actuator.yaml, docs/doctor.md).
     'actuator.buckling.stiffness_loss': Range(0.0, 1e6, 'N/m'),
+    # p_cr: from an onset at ambient (its width delta p_cr below any pressure sensor's noise) to
+    # beyond any supply (compression alone sets the onset); the doctor fits over all of it.
     'actuator.buckling.critical_pressure': Range(1e2, MAX_PRESSURE, 'Pa gauge'),
+    # x_cr: from an onset at the start of the travel to beyond any travel (pressure alone).
     'actuator.buckling.critical_compression': Range(1e-4, 1.0, 'm'),
-    'actuator.buckling.onset_width': Range(1e-3, 1.0, '1'),
+    'actuator.buckling.onset_width': Range(1e-3, 1.0, '1'),  # a step .. the whole critical load
     'actuator.stiffness.x_s_low': Range(*TRAVEL, 'm'),
     'actuator.stiffness.x_s_high': Range(*TRAVEL, 'm'),
     'actuator.sensors.pressure_noise': Range(0.0, 1e5, 'Pa'),

@@ -43,7 +43,18 @@ Each cause adds the missing physics with its own parameters (docs/doctor.md, con
 - buckling: the spring loses force once its load index x_s/x_cr + (P - P_atm)/p_cr passes 1
   (`models.actuator.buckling_force`): stiffness loss k_b, critical pressure p_cr, critical
   compression x_cr, within the physical bounds of `actuator.buckling.bounds` (onset width from the
-  YAML).
+  YAML): the onset from ambient pressure and the start of the travel to where the other variable
+  alone sets it, fitted in decades.
+
+Every bound is derived (docs/doctor.md, "Where every range comes from"), and what a fit pinned at
+each means is `EDGES`: a limit of the physics is a finding, the others say why it is not named.
+
+Standing physics (`standing`, `standing_physics`): the live doctor asks what changed from the
+model its monitor compares the measurement with (`live.actuator_residuals`: the whole model, its
+own E_V and buckling included), so its baseline keeps them at the model's values. The offline
+doctor (`bellows diagnose`) keeps none: it asks what a device holds beyond paper B. A cause that
+is also standing (buckling) replaces the standing term by its own fit, started at the model's
+values: it pays only where the spring buckles otherwise than the model says.
 """
 import dataclasses
 
@@ -54,8 +65,9 @@ from bellows_ros.doctor.filters import lag, play, recurrence, relax
 from bellows_ros.doctor.scoring import guarded_floor, Model, noise_floor, noise_floor_ramps
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.actuator import (air_force, Buckling, buckling_force, force_error,
-                                         gas_amount, material_terms, pressure_of_amount,
-                                         total_volume, without_buckling, without_bulging)
+                                         gas_amount, material_terms, NO_BUCKLING,
+                                         pressure_of_amount, total_volume, without_buckling,
+                                         without_bulging)
 from bellows_ros.models.actuator_geometry import P_ATM, volume_geo
 
 CAUSES = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash', 'buckling')
@@ -71,6 +83,8 @@ DECIDING_DATA = {
 BASELINE = ('paper B (17): geometric volume (no E_V), isothermal sealed gas, '
             'p_ref and v_tube refitted; force (7)-(12) on the predicted pressure, F_MTS a cubic '
             'in x_s and E_F amplitude refitted, no buckling')
+# Physics of the model that a baseline may keep at the model's own values (module docstring).
+STANDING = ('wall_bulging', 'buckling')
 # Measured outputs: (column, unit, name). The first is the legacy single output.
 OUTPUTS = (('p', 'Pa', 'pressure'), ('f', 'N', 'force'))
 F_MTS_DEGREE = 3
@@ -94,11 +108,60 @@ SPECS = {
                      ('e_dd_spring_ml', 0.0, -200.0, 200.0)],
     'sensor_lag': [('log10_time_constant', -1.5, -3.5, 0.5)],
     'backlash': [('width_mm', 0.3, 0.0, 3.0)],
-    # Bounds from actuator.buckling.bounds (`buckling_specs`); these are the fallbacks.
-    'buckling': [('stiffness_loss_kn', 2.0, 0.0, 10.0),
-                 ('critical_pressure_kpa', 25.0, 5.0, 300.0),
-                 ('critical_compression_mm', 20.0, 5.0, 80.0)],
+    # Bounds from actuator.buckling.bounds (`buckling_specs`); these are the fallbacks, the same
+    # physical ranges (docs/doctor.md, "Where every range comes from"). The onset is fitted in
+    # decades: its physical range spans four of them, from an onset at ambient pressure (p_cr
+    # 0.1 kPa) or at the start of the travel (x_cr 0.1 mm) to one the other variable alone sets.
+    # k_b too: at such an onset the loss in the pressure, k_b x_cr / p_cr per Pa, is newtons
+    # per kPa with k_b of a few N/m, where a spring that carries tens of newtons ends.
+    'buckling': [('log10_stiffness_loss_kn', 0.3, -5.0, 1.23),
+                 ('log10_critical_pressure_kpa', 1.4, -1.0, 3.04),
+                 ('log10_critical_compression_mm', 1.3, -1.0, 3.0)],
 }
+# What a fit pinned at each bound means (`edge_kind`): 'limit', the bound is a limiting case of
+# the physics that a device can be in (a finding: stated, and the cause named when it pays);
+# 'absent', the effect vanishes there (it cannot pay); 'bound', a physical bound that the effect
+# cannot pass (pinned there, the cause absorbs some other error); 'range', a bound set for the
+# fit, not by physics (pinned there, the range is wrong). (cause, fit variable, side) -> (kind,
+# what it means); a bound not listed is 'range'. The numbers' sources: docs/doctor.md.
+EDGES = {
+    ('air_leak', 'log10_conductance', 'lower'): (
+        'absent', 'no leak: the gas would take > 10^5 s to escape a 0.1 L chamber'),
+    ('air_leak', 'log10_conductance', 'upper'): (
+        'limit', 'the chamber is vented: its gas reaches ambient within ~10 ms, a fit sample'),
+    ('heat_exchange', 'log10_time_constant', 'lower'): (
+        'range', 'set so that heat exchange is not a second sensor lag, not by the walls'),
+    ('heat_exchange', 'log10_time_constant', 'upper'): (
+        'limit', 'adiabatic gas: no heat crosses the walls within the record'),
+    ('heat_exchange', 'gamma', 'lower'): ('absent', 'isothermal gas (gamma 1)'),
+    ('heat_exchange', 'gamma', 'upper'): ('bound', 'a monatomic gas (5/3); air is 1.4'),
+    ('sensor_lag', 'log10_time_constant', 'lower'): (
+        'absent', 'no lag: 0.3 ms is below the fastest sample (1 ms)'),
+    ('sensor_lag', 'log10_time_constant', 'upper'): (
+        'bound', 'a 3 s pressure reading: slower than any sensor behind a tube of a rig'),
+    ('backlash', 'width_mm', 'lower'): ('absent', 'no play'),
+    ('backlash', 'width_mm', 'upper'): (
+        'bound', 'a play of more than two turns of the lead screw (1.27 mm lead)'),
+    ('buckling', 'log10_stiffness_loss_kn', 'lower'): (
+        'absent', 'no buckling: a stiffness loss of 0.01 N/m, 0.4 mN over the whole travel'),
+    ('buckling', 'log10_stiffness_loss_kn', 'upper'): (
+        'bound', "the axial stiffness of the spring's straight wall tube: no loss is larger"),
+    ('buckling', 'log10_critical_pressure_kpa', 'lower'): (
+        'limit', 'the onset lies at ambient pressure: the spring buckles as soon as the gas is '
+                 'above ambient, compressed or not (buckling from the start of the record '
+                 'wherever it is above ambient)'),
+    ('buckling', 'log10_critical_pressure_kpa', 'upper'): (
+        'limit', 'the pressure does not move the onset: the compression alone sets it'),
+    ('buckling', 'log10_critical_compression_mm', 'lower'): (
+        'limit', 'the onset lies at the start of the travel: the spring is buckled from the '
+                 'start of the record wherever it is compressed'),
+    ('buckling', 'log10_critical_compression_mm', 'upper'): (
+        'limit', 'the compression does not move the onset: the pressure alone sets it'),
+}
+for _name in ('e_q_ml', 'e_dq_chamber_ml', 'e_dq_spring_ml', 'e_dd_chamber_ml', 'e_dd_spring_ml'):
+    for _side in ('lower', 'upper'):
+        EDGES['wall_bulging', _name, _side] = (
+            'bound', "a bulge larger than the bellows' own volume over the range of a record")
 STARTS = {
     'air_leak': [[-9.5], [-12.5]],
     'heat_exchange': [[-0.7, 1.4], [1.3, 1.4]],
@@ -109,8 +172,9 @@ STARTS = {
 }
 # Buckling's onset profile (`buckling_profile`): onsets on a grid over the bounds, kept where the
 # record's rows reach them; the best PROFILE_STARTS of them start the fit.
-PROFILE_COMPRESSIONS = 16
-PROFILE_PRESSURES = 8
+# Four decades each (`SPECS['buckling']`): about 2.3 onsets per octave of x_cr, 1.5 of p_cr.
+PROFILE_COMPRESSIONS = 28
+PROFILE_PRESSURES = 18
 PROFILE_STARTS = 3
 # The strongest buckling the bounds allow must change the force by at least this many (averaged)
 # noise floors, in the least-squares sense and beyond what the material force absorbs, at some
@@ -120,9 +184,37 @@ DETECTABLE = 5.0
 # Values of each parameter across its bounds at which `_detectable` profiles a cause.
 PROFILE_POINTS = 5
 # SI factor of each scaled buckling variable.
-_BUCKLING_SI = {'stiffness_loss_kn': ('stiffness_loss', 1e3),
-                'critical_pressure_kpa': ('critical_pressure', 1e3),
-                'critical_compression_mm': ('critical_compression', 1e-3)}
+# The onset's variables are fitted as log10 of the scaled value (`_LOG`).
+_BUCKLING_SI = {'log10_stiffness_loss_kn': ('stiffness_loss', 1e3),
+                'log10_critical_pressure_kpa': ('critical_pressure', 1e3),
+                'log10_critical_compression_mm': ('critical_compression', 1e-3)}
+_LOG = ('log10_stiffness_loss_kn', 'log10_critical_pressure_kpa', 'log10_critical_compression_mm')
+# The smallest stiffness loss fitted, N/m (`SPECS`: 1e-5 kN/m); the YAML's lower bound 0 is no
+# buckling, which a fit in decades reaches as this.
+K_B_FLOOR = 0.01
+
+
+def edge_kind(cause, name, side):
+    """(kind, meaning) of `cause`'s fit variable `name` pinned at its `side` bound (`EDGES`)."""
+    return EDGES.get((cause, name, side), ('range', 'a bound of the fit, not of physics'))
+
+
+def standing_physics(params):
+    """Return the part of `STANDING` that `params` holds (E_V not zero, a spring that buckles)."""
+    held = {'wall_bulging': params.chamber.bulging or params.spring.bulging,
+            'buckling': params.buckling is not NO_BUCKLING
+            and params.buckling.stiffness_loss > 0.0}
+    return tuple(name for name in STANDING if held[name])
+
+
+def baseline_name(standing=()):
+    """`BASELINE`, with the model's own physics that it keeps (`standing`) said."""
+    name = BASELINE
+    if 'wall_bulging' in standing:
+        name = name.replace('geometric volume (no E_V)', "the model's own E_V")
+    if 'buckling' in standing:
+        name = name.replace('no buckling', "the model's own buckling")
+    return name
 
 
 def buckling_specs(params):
@@ -132,8 +224,11 @@ def buckling_specs(params):
     for name, start, low, high in SPECS['buckling']:
         si, factor = _BUCKLING_SI[name]
         if si in bounds:
-            floor = 0.0 if si == 'stiffness_loss' else 1e-3
-            low, high = (max(v / factor, floor) for v in bounds[si])
+            if name in _LOG:
+                floor = K_B_FLOOR if si == 'stiffness_loss' else 1e-12
+                low, high = (float(np.log10(max(v, floor) / factor)) for v in bounds[si])
+            else:
+                low, high = (max(v / factor, 0.0) for v in bounds[si])
         specs.append((name, min(max(start, low), high), low, high))
     return specs
 
@@ -153,7 +248,7 @@ class Onset:
     improvement: float            # the fall of the force's squared error (noise floors²)
 
 
-def buckling_profile(record, params, force_scale):
+def buckling_profile(record, params, force_scale, standing=()):
     """
     Profile buckling over its onset across the record's range: a list of `Onset`, best first.
 
@@ -163,20 +258,24 @@ def buckling_profile(record, params, force_scale):
     load-cell zero, E_F) can absorb of it. Its norm with the largest k_b of the bounds, over the
     averaged force noise floor `force_scale` (N), is how far the record can show buckling there
     (`detectable`); the k_b >= 0 fitted to the baseline's force residual gives the improvement.
-    No nonlinear fit: a few least-squares projections, cheap at any onset.
+    No nonlinear fit: a few least-squares projections, cheap at any onset. With `standing` E_V,
+    the force the model knows keeps it; a standing buckling is left out (the cause replaces it).
     """
     specs = {name: (low, high) for name, _, low, high in buckling_specs(params)}
-    k_max = specs['stiffness_loss_kn'][1] * 1e3
+    k_max = 10.0 ** specs['log10_stiffness_loss_kn'][1] * 1e3
     x_s, p, f = record['x_s'], record['p'], record['f']
-    known, columns = force_columns(params, (), {}, x_s, p)
+    kept = tuple(name for name in standing if name != 'buckling')
+    known, columns = force_columns(params, (), {}, x_s, p, kept)
     basis, _ = np.linalg.qr(columns / np.sqrt(np.mean(columns ** 2, axis=0) + 1e-300))
     residual = f - known
     residual = residual - basis @ (basis.T @ residual)
     width = _onset_width(params)
     gauge = p - P_ATM
     onsets = []
-    for x_cr in np.geomspace(*specs['critical_compression_mm'], PROFILE_COMPRESSIONS) * 1e-3:
-        for p_cr in np.geomspace(*specs['critical_pressure_kpa'], PROFILE_PRESSURES) * 1e3:
+    compressions = np.logspace(*specs['log10_critical_compression_mm'], PROFILE_COMPRESSIONS)
+    pressures = np.logspace(*specs['log10_critical_pressure_kpa'], PROFILE_PRESSURES)
+    for x_cr in compressions * 1e-3:
+        for p_cr in pressures * 1e3:
             load = x_s / x_cr + gauge / p_cr
             if not (load.max() > 1.0 and load.min() < 1.0):
                 continue    # buckled everywhere or nowhere: no onset in this record
@@ -193,7 +292,7 @@ def buckling_profile(record, params, force_scale):
     return onsets
 
 
-def identifiability(record, params, scales):
+def identifiability(record, params, scales, standing=()):
     """
     Why this record cannot show each model-based cause: {cause: reason or None}.
 
@@ -207,12 +306,13 @@ def identifiability(record, params, scales):
       (`_detectable`).
     Backlash keeps its structural condition (`checks.identifiability`): a chamber that never
     reverses turns a play into a constant offset, which the encoder's zero is.
+    `standing`: the model's own physics the baseline keeps (module docstring).
     """
-    onsets = buckling_profile(record, params, scales['f'])
+    onsets = buckling_profile(record, params, scales['f'], standing)
     best = max((o.detectable for o in onsets), default=0.0)
     reasons = {'buckling': None}
     if best < DETECTABLE:
-        k_max = buckling_specs(params)[0][3]
+        k_max = 10.0 ** buckling_specs(params)[0][3]
         x_s, gauge = 1e3 * record['x_s'], (record['p'] - P_ATM) / 1e3
         reasons['buckling'] = (
             'at every onset within the bounds that the record reaches (spring '
@@ -221,7 +321,7 @@ def identifiability(record, params, scales):
             f'buckling (k_b {k_max:.0f} kN/m) would change the force by at most {best:.1f} '
             f'noise floors beyond what the material force absorbs (needs {DETECTABLE:g})')
     for cause in ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag'):
-        size, where = _detectable(record, params, scales, cause)
+        size, where = _detectable(record, params, scales, cause, standing)
         reasons[cause] = None if size >= DETECTABLE else (
             f'the strongest {cause.replace("_", " ")} within its physical range ({where}) would '
             f'change pressure and force by at most {size:.1f} noise floors beyond what the '
@@ -229,7 +329,7 @@ def identifiability(record, params, scales):
     return reasons
 
 
-def _detectable(record, params, scales, cause):
+def _detectable(record, params, scales, cause, standing=()):
     """
     Largest change `cause` can make beyond the baseline's parameters: (noise floors, where).
 
@@ -240,8 +340,8 @@ def _detectable(record, params, scales, cause):
     effect, not a rule drawn around one device.
     """
     everything = np.ones(len(record), bool)
-    base = build_model(record, params, (), scales=scales)
-    extended = build_model(record, params, (cause,), scales=scales)
+    base = build_model(record, params, (), scales=scales, standing=standing)
+    extended = build_model(record, params, (cause,), scales=scales, standing=standing)
     theta = np.asarray(base.x0, float)
     y0, jacobian = baseline_directions(base, len(record))
     best, where = 0.0, ''
@@ -339,12 +439,12 @@ def geometric_volumes(params, x_c, x_s):
     return volume_geo(params.chamber, x_c), volume_geo(params.spring, x_s)
 
 
-def predict(params, causes, values, x_c, x_s, dt, geometry=None):
+def predict(params, causes, values, x_c, x_s, dt, geometry=None, standing=()):
     """Pressure the extended model predicts at the sensor (Pa) over a record (`predict_state`)."""
-    return predict_state(params, causes, values, x_c, x_s, dt, geometry)[0]
+    return predict_state(params, causes, values, x_c, x_s, dt, geometry, standing)[0]
 
 
-def predict_state(params, causes, values, x_c, x_s, dt, geometry=None):
+def predict_state(params, causes, values, x_c, x_s, dt, geometry=None, standing=()):
     """
     Pressure at the sensor and in the gas (Pa) the extended model predicts over a record.
 
@@ -352,9 +452,9 @@ def predict_state(params, causes, values, x_c, x_s, dt, geometry=None):
     'x_c_offset' (optional, m)}; `geometry`: `geometric_volumes(params, x_c, x_s)` if already
     computed (for the encoder's x_c; the chamber's volume is recomputed when the offset is not 0).
     Only the inputs x_c, x_s enter: no measured pressure, so nothing of the held-out output leaks
-    in.
+    in. `standing`: the model's own physics kept (module docstring; E_V here).
     """
-    model = _gas_model(params, causes, values)
+    model = _gas_model(params, causes, values, standing)
     v_c, v_s = geometry or geometric_volumes(params, x_c, x_s)
     offset = values['baseline'].get('x_c_offset', 0.0)
     if offset or 'backlash' in causes:
@@ -385,31 +485,43 @@ def predict_state(params, causes, values, x_c, x_s, dt, geometry=None):
     return p, p_gas
 
 
-def _gas_model(params, causes, values):
-    """Return `params` with the baseline's gas and tube, and the fitted E_V if it is a cause."""
+def _kept(params, standing):
+    """Return `params` with E_V zero unless it is standing physics (`standing`)."""
+    return params if 'wall_bulging' in standing else without_bulging(params)
+
+
+def _gas_model(params, causes, values, standing=()):
+    """
+    Return `params` with the baseline's gas and tube, and the fitted E_V if it is a cause.
+
+    The model's own E_V if it is `standing` and not a cause; else the geometric volume.
+    """
     base = values['baseline']
-    model = dataclasses.replace(without_bulging(params), p_ref=base['p_ref'],
+    model = dataclasses.replace(_kept(params, standing), p_ref=base['p_ref'],
                                 v_tube=base['v_tube'])
     if 'wall_bulging' in causes:
         model = bulged(model, values['wall_bulging'])
     return model
 
 
-def force_columns(params, causes, values, x_s, p_gas):
+def force_columns(params, causes, values, x_s, p_gas, standing=()):
     """
     Return the force the model knows, (7)-(10) (+ buckling), and the material force's columns.
 
     The columns of the linear material force: 1 (load cell zero), x_s .. x_s^3 (F_MTS), E_F's
-    shape exp(C2 (P - P_atm) + C3 Δh) (11), C1 being its coefficient.
+    shape exp(C2 (P - P_atm) + C3 Δh) (11), C1 being its coefficient. A `standing` E_V or
+    buckling that is not a cause is the model's own.
     """
     model = (bulged(params, values['wall_bulging']) if 'wall_bulging' in causes
-             else without_bulging(params))
+             else _kept(params, standing))
     known = air_force(model, x_s, p_gas)[0]                          # (9), (10)
     if 'buckling' in causes:
         b = values['buckling']
         known = known + buckling_force(Buckling(b['stiffness_loss'], b['critical_pressure'],
                                                 b['critical_compression'], _onset_width(params)),
                                        x_s, p_gas, np.exp)[0]
+    elif 'buckling' in standing:
+        known = known + buckling_force(params.buckling, x_s, p_gas, np.exp)[0]
     _, c2, c3, _ = params.e_f
     # A trial step of the fit may predict any pressure: the exponent of E_F stays finite within
     # the range the data checks accept.
@@ -453,21 +565,25 @@ def _to_si(part, raw):
     if part == 'backlash':
         return {'width': raw['width_mm'] * 1e-3}
     if part == 'buckling':
-        return {_BUCKLING_SI[name][0]: value * _BUCKLING_SI[name][1]
-                for name, value in raw.items()}
+        return {_BUCKLING_SI[name][0]: (10.0 ** value if name in _LOG else value)
+                * _BUCKLING_SI[name][1] for name, value in raw.items()}
     return {name[:-3]: value * ML for name, value in raw.items()}  # wall_bulging, m³
 
 
-def build_model(record, params, causes, warm=None, scales=None):
+def build_model(record, params, causes, warm=None, scales=None, standing=()):
     """
     Build the baseline plus `causes` on `record` as a `scoring.Model`.
 
     The model is fitted to the measured outputs (`measured(record, scales)`: pressure and force,
     each over its noise floor in `scales`).
 
-    `warm` ({fit variable: value}) starts the fit from an earlier model's solution.
+    `warm` ({fit variable: value}) starts the fit from an earlier model's solution. `standing`:
+    the model's own physics the baseline keeps (module docstring); a standing buckling that is a
+    cause starts at the model's values.
     """
     causes = tuple(causes)
+    standing = tuple(standing)
+    own = _own_buckling(params) if 'buckling' in standing else {}
     names, x0, lower, upper = [], [], [], []
     guess = initial_guess(record, params)
     for part in ('baseline',) + causes:
@@ -478,6 +594,8 @@ def build_model(record, params, causes, warm=None, scales=None):
                 start = warm[key]
             elif part == 'baseline':
                 start = guess[name]
+            elif part == 'buckling' and name in own:
+                start = min(max(own[name], lo + 0.01 * (hi - lo)), hi - 0.01 * (hi - lo))
             x0.append(start)
             lower.append(lo)
             upper.append(hi)
@@ -486,7 +604,7 @@ def build_model(record, params, causes, warm=None, scales=None):
         width = len(SPECS[causes[-1]])
         alternatives = STARTS[causes[-1]]
         if causes[-1] == 'buckling':
-            alternatives = _profile_starts(record, params, scales)
+            alternatives = _profile_starts(record, params, scales, standing)
         for alternative in alternatives:
             starts.append(x0[:-width] + list(alternative))
         if warm:
@@ -500,11 +618,11 @@ def build_model(record, params, causes, warm=None, scales=None):
     def run(theta, train):
         values = physical(causes, theta)
         try:
-            p, p_gas = predict_state(params, causes, values, x_c, x_s, dt, geometry)
+            p, p_gas = predict_state(params, causes, values, x_c, x_s, dt, geometry, standing)
         except ParameterError:
             # E_V so large that (17) has no positive root: a trial step of the fit, far off.
             return np.full((2, len(x_s)), 1e9), {'force': np.zeros(F_MTS_DEGREE + 2)}
-        known, columns = force_columns(params, causes, values, x_s, p_gas)
+        known, columns = force_columns(params, causes, values, x_s, p_gas, standing)
         coef = solve_force(known, columns, f, train)
         force = known + columns @ coef
         return np.vstack([p / scales['p'], force / scales['f']]), {'force': coef}
@@ -521,21 +639,30 @@ def build_model(record, params, causes, warm=None, scales=None):
                  n_linear=F_MTS_DEGREE + 2, starts=starts)
 
 
-def _profile_starts(record, params, scales):
+def _own_buckling(params):
+    """Return the model's own buckling as the fit's scaled variables {name: value}."""
+    b = params.buckling
+    return {'log10_stiffness_loss_kn': float(np.log10(max(b.stiffness_loss, K_B_FLOOR) / 1e3)),
+            'log10_critical_pressure_kpa': float(np.log10(b.critical_pressure / 1e3)),
+            'log10_critical_compression_mm': float(np.log10(b.critical_compression * 1e3))}
+
+
+def _profile_starts(record, params, scales, standing=()):
     """Return the buckling fit's starts: the best onsets of `buckling_profile` (scaled)."""
     specs = buckling_specs(params)
     force_scale = (scales or {}).get('f') or noise_floors(record)['f']
     starts = []
-    for onset in buckling_profile(record, params, force_scale)[:PROFILE_STARTS]:
-        k_b = onset.stiffness_loss or 0.25 * specs[0][3] * 1e3
-        start = [k_b / 1e3, onset.critical_pressure / 1e3, onset.critical_compression / 1e3]
+    for onset in buckling_profile(record, params, force_scale, standing)[:PROFILE_STARTS]:
+        k_b = onset.stiffness_loss or 0.25 * 10.0 ** specs[0][3] * 1e3
+        start = [np.log10(max(k_b, K_B_FLOOR) / 1e3), np.log10(onset.critical_pressure / 1e3),
+                 np.log10(onset.critical_compression * 1e3)]
         # inside the bounds, off their edges (a start on an edge stays there under trf)
         starts.append([min(max(v, low + 0.01 * (high - low)), high - 0.01 * (high - low))
                        for v, (_, _, low, high) in zip(start, specs)])
     return starts
 
 
-def extended_flat(config, causes, values):
+def extended_flat(config, causes, values, standing=()):
     """
     Return the flat ROS 2 parameters of the extended model (for `params.write_file`).
 
@@ -547,7 +674,10 @@ def extended_flat(config, causes, values):
     params = config.model
     base = values['baseline']
     model = dataclasses.replace(params, p_ref=base['p_ref'], v_tube=base['v_tube'])
-    model = without_buckling(without_bulging(model))
+    # The model's own E_V and buckling stay where they are standing physics (`standing`).
+    model = _kept(model, standing)
+    if 'buckling' not in standing:
+        model = without_buckling(model)
     if 'f_mts' in base:
         model = dataclasses.replace(model, f_mts=tuple(base['f_mts']),
                                     e_f=(base['e_f_c1'], params.e_f[1], params.e_f[2],

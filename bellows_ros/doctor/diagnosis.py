@@ -23,8 +23,11 @@ It takes data and parameter objects and returns a `Diagnosis`; it reads and writ
    dynamics of every cause are slower than that, and averaging also lowers the noise.
 3. Score the baseline on held-out blocks of time.
 4. Greedy forward selection: try every identifiable cause as an extension of the current model,
-   keep the best whose physical parameters are not at the edge of their range if it *pays*
-   (`scoring.pays`), refit, repeat with the remaining causes.
+   keep the best if it *pays* (`scoring.pays`) and none of its physical parameters is pinned at
+   a bound that is not a limiting case of the physics (`edge_report`: a buckling onset at
+   ambient pressure is a finding; a lag at the end of an arbitrary range is not), refit, repeat
+   with the remaining causes until none pays (a second cause beside the first: a leak and a
+   buckling spring).
 5. Look at what is left: if the final held-out residual is still well above the noise floor and
    correlated in time, the record holds structure that no candidate explains (`unexplained`).
 
@@ -60,6 +63,9 @@ class Candidate:
     gain: float = None
     pays: bool = False
     note: str = None
+    # Fit variables of the scored model at a bound of their range (`edge_report`): [{parameter,
+    # side, kind, meaning}]; kind 'limit' is a finding, the others say why it is not named.
+    edges: list = field(default_factory=list)
 
 
 @dataclass
@@ -175,7 +181,7 @@ def raw_noise(system, table, params):
 
 
 def diagnose(system, data, config, progress=False, causes=None, source='<arrays>',
-             raw_noise=None, factor=1):
+             raw_noise=None, factor=1, standing=()):
     """
     Diagnose one record of `system` ('segment' or 'actuator'). Returns a `Diagnosis`.
 
@@ -187,9 +193,14 @@ def diagnose(system, data, config, progress=False, causes=None, source='<arrays>
     (default: the whole vocabulary of the system; `()` fits and scores the baseline only, the
     benchmark's reference). `factor` > 1: the rows of `data` are block means of that many raw rows
     (`data.read_record`), and `raw_noise` gives the raw rows' noise floors as `raw_noise` does
-    (the floors of the averaged rows follow, divided by √factor).
+    (the floors of the averaged rows follow, divided by √factor). `standing` (actuator only): the
+    model's own physics the baseline keeps at the model's values (`actuator_causes.STANDING`; the
+    live doctor's, which asks what changed from the model its monitor compares with).
     """
     started = time.perf_counter()
+    standing = tuple(standing)
+    if standing and system != 'actuator':
+        raise ValueError(f"standing physics {standing} is the actuator's, not the {system}'s")
     module = system_module(system)
     params = config.model
     full = checks.checked_record(checks.as_table(data, system, source), system, factor)
@@ -202,10 +213,11 @@ def diagnose(system, data, config, progress=False, causes=None, source='<arrays>
         floors = module.noise_floors(full) if raw_noise is None else dict(raw_noise)
         scales = {name: floors[name] / np.sqrt(record.factor) for name, *_ in outputs}
         extra['scales'] = scales
+        extra['standing'] = standing
         y = module.measured(record, scales)
         noise = floors[outputs[0][0]]
         reasons = checks.identifiability(record)
-        reasons.update(module.identifiability(record, params, scales))
+        reasons.update(module.identifiability(record, params, scales, standing))
     else:
         noise = (scoring.noise_floor(module.measured(full)) if raw_noise is None
                  else raw_noise['y'])
@@ -244,8 +256,14 @@ def diagnose(system, data, config, progress=False, causes=None, source='<arrays>
             candidate = candidates[cause]
             candidate.score, candidate.extends = result, tuple(chosen)
             candidate.gain = scoring.gain(result.rmse, current.rmse)
+        polished = _polished(current, round_scores, y, lambda warm: score(tuple(chosen), warm))
+        if polished is not None:
+            current = polished
+            for cause, result in round_scores.items():
+                candidates[cause].gain = scoring.gain(result.rmse, current.rmse)
         for cause, result in round_scores.items():
-            candidates[cause].note = (_doubt(result, cause, floor)
+            candidates[cause].edges = edge_report(result, cause, module)
+            candidates[cause].note = (_doubt(candidates[cause].edges, result, floor)
                                       or _worsens(result, current, outputs))
         credible = [c for c in round_scores if candidates[c].note is None]
         if not credible:
@@ -285,26 +303,86 @@ def diagnose(system, data, config, progress=False, causes=None, source='<arrays>
     unexplained = any(_structured(v.evidence) for v in views)
     worst = max(views, key=lambda v: v.evidence['rmse_over_noise'])
     view = views[primary]
-    return Diagnosis(system, full.path, record, view.signal, view.unit, module.BASELINE, baseline,
+    return Diagnosis(system, full.path, record, view.signal, view.unit,
+                     module.baseline_name(standing), baseline,
                      current, chosen, candidates, view.noise, worst.evidence, bool(unexplained),
-                     values, module.extended_flat(config, chosen, values), timings, failure, views,
-                     primary)
+                     values, module.extended_flat(config, chosen, values, standing), timings,
+                     failure, views, primary)
+
+
+# The current model at a candidate's values of their shared parameters must fit all the data
+# better than its own fit by this fraction of the cost before it is refitted from there.
+POLISH = 1e-3
+
+
+def _polished(current, round_scores, y, rescore):
+    """
+    Return the current model refitted from where a candidate's fit left their shared parameters.
+
+    Every candidate's fit starts where the current model's ended and runs on. When the current
+    fit had not converged (a large effect just named), a candidate whose own effect is nil (a
+    sensor lag of 0.3 ms) would take the credit for those extra iterations. So the current model
+    is evaluated at the shared parameters of the candidate that fits all the data best; if that
+    is better than its own fit by more than `POLISH`, it is refitted from there (`rescore(warm)`)
+    and every candidate is judged against the better of the two. Returns None when nothing is
+    gained.
+    """
+    if not round_scores or not current.model.names:
+        return None
+    names = current.model.names
+    best = min(round_scores.values(), key=lambda r: r.full.cost)
+    shared = np.asarray(best.full.theta[:len(names)], float)
+    everything = np.ones(np.shape(y)[-1], bool)
+    prediction = current.model.predict(shared, everything)[0]
+    if not np.mean((prediction - y) ** 2) < (1.0 - POLISH) * current.full.cost:
+        return None
+    refitted = rescore(dict(zip(names, shared)))
+    return refitted if refitted.full.cost < current.full.cost else None
 
 
 def _structured(evidence):
     return evidence['rmse_over_noise'] > UNEXPLAINED_RATIO and evidence['ljung_box_p'] < LB_P
 
 
-def _doubt(result, cause, floor):
+# What a fit pinned at a bound of each kind (`edge_report`) says, when the cause is not named.
+EDGE_VERDICTS = {
+    'absent': 'the effect vanishes there',
+    'bound': 'a physical bound no such effect passes: the cause absorbs some other error',
+    'range': 'not a physical limit: the range is wrong',
+}
+
+
+def edge_report(result, cause, module):
+    """
+    Return the fit variables of `cause` at a bound of their range, with what that means.
+
+    [{'parameter', 'side' ('lower'/'upper'), 'kind', 'meaning'}]; the kind and meaning come from
+    the system's causes module (`edge_kind`: 'limit', 'absent', 'bound' or 'range'); a module
+    without them has only ranges of the fit ('range').
+    """
+    kind_of = getattr(module, 'edge_kind', None)
+    out = []
+    for name, side in scoring.edges(result, cause):
+        kind, meaning = (kind_of(cause, name, side) if kind_of
+                         else ('range', 'a bound of the fit, not of physics'))
+        out.append({'parameter': name, 'side': side, 'kind': kind, 'meaning': meaning})
+    return out
+
+
+def _doubt(edges, result, floor):
     """
     Tell why a scored candidate cannot be named whatever its gain, or return None.
 
-    A physical parameter at the edge of its range (it absorbs some other error), or a broken
-    held-out score.
+    A physical parameter at a bound of its range (`edge_report`) that is not a limiting case of
+    the physics: the effect vanishes there, or the cause absorbs some other error, or the range
+    is wrong. At a limit ('limit': an onset at ambient pressure) the fit is a finding and the
+    cause is named when it pays. Or a broken held-out score.
     """
-    edge = scoring.at_edge(result, cause)
-    if edge:
-        return f'fitted {", ".join(edge)} at the edge of its physical range'
+    doubtful = [e for e in edges if e['kind'] != 'limit']
+    if doubtful:
+        return '; '.join(f"fitted {e['parameter']} at the {e['side']} bound of its range "
+                         f"({e['meaning']}; {EDGE_VERDICTS.get(e['kind'], e['kind'])})"
+                         for e in doubtful)
     return scoring.heldout_failure(result, floor)
 
 

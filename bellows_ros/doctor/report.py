@@ -61,8 +61,10 @@ def report_dict(d):
         if candidate.score is not None:
             params = candidate.score.params().get(cause, {})
         rmse = d.candidate_rmse(cause)
+        # A fit at a bound of its range: a limiting case of the physics (a finding, kind
+        # 'limit') or not (the note says why it is not named), per parameter.
         candidates.append({'cause': cause, 'heldout_rmse': None if rmse is None else _number(rmse),
-                           'params': params})
+                           'params': params, 'edges': list(candidate.edges)})
     report = {
         'system': d.system,
         'baseline': {'model': d.baseline_name, 'rmse': d.baseline_rmse, 'unit': d.unit},
@@ -84,6 +86,23 @@ def report_dict(d):
     return report
 
 
+def limit_findings(d):
+    """
+    Return a sentence per named cause fitted at a limiting case of its physics (`edges`).
+
+    Such a fit is a finding, not a doubt: a buckling onset at ambient pressure says the spring is
+    buckled from the start of the record wherever the gas is above ambient.
+    """
+    lines = []
+    for cause in d.causes:
+        limits = [e for e in d.candidates[cause].edges if e['kind'] == 'limit']
+        if limits:
+            lines.append(f'`{cause}` is fitted at a physical limit, a finding: ' + '; '.join(
+                f"{e['parameter']} at its {e['side']} bound: {e['meaning']}" for e in limits)
+                + '.')
+    return lines
+
+
 def extended_name(d):
     return 'baseline + ' + ' + '.join(d.causes) if d.causes else 'baseline (no cause pays)'
 
@@ -93,7 +112,7 @@ def details_dict(d):
     for cause, c in d.candidates.items():
         candidates[cause] = {'identifiable': c.identifiable, 'reason': c.reason,
                              'extends': list(c.extends), 'gain_over_extended_model': c.gain,
-                             'pays': c.pays, 'note': c.note,
+                             'pays': c.pays, 'note': c.note, 'edges': list(c.edges),
                              'heldout_rmse': c.score.rmse if c.score else None,
                              'insample_rmse': c.score.insample_rmse if c.score else None}
     return {
@@ -165,6 +184,8 @@ def markdown(d, plots):
                      f'with {"it" if len(d.causes) == 1 else "them"} cuts the held-out RMSE from '
                      f'{d.baseline_rmse:.4g} to {d.final_rmse:.4g} {d.unit} (gain '
                      f'{100 * d.gain:.1f} %).')
+        for line in limit_findings(d):
+            lines.append(f'\n{line}')
     elif d.failure:
         lines.append(f'**Cause: `none` — the baseline could not be scored.** Its {d.failure} '
                      f'{d.unit}. Causes compared against a broken score would name whichever '
@@ -225,6 +246,10 @@ def markdown(d, plots):
             continue
         extends = ' + '.join(('baseline',) + c.extends)
         verdict = 'yes' if c.pays else ('no: ' + c.note if c.note else 'no')
+        limits = [e for e in c.edges if e['kind'] == 'limit']
+        if limits and not c.note:
+            verdict += ' (at a physical limit: ' + '; '.join(
+                f"{e['parameter']} at its {e['side']} bound, {e['meaning']}" for e in limits) + ')'
         if d.outputs:
             rmse = ', '.join(f'{o.candidate_rmse[cause]:.4g} {o.unit}' for o in d.outputs)
         else:

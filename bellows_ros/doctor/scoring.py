@@ -244,15 +244,25 @@ def at_edge(score, cause, margin=0.005):
 
     A cause whose parameter runs to the edge (a sensor lag of 1 ms at 100 Hz, a natural curvature
     steeper than any bellows) is not describing its physics: it is absorbing some other error.
+    Unless the bound is a limiting case of the physics (`edges`, `diagnosis`).
+    """
+    return [name for name, _ in edges(score, cause, margin)]
+
+
+def edges(score, cause, margin=0.005):
+    """
+    Return [(name, side)] of `cause`'s fit variables at a bound; side 'lower' or 'upper'.
+
+    `margin` is a fraction of the variable's range.
     """
     model, theta = score.model, score.full.theta
-    edge = []
+    found = []
     for name, value, lo, hi in zip(model.names, theta, model.lower, model.upper):
         if name.startswith(cause + '.'):
             position = (value - lo) / (hi - lo)
             if position < margin or position > 1.0 - margin:
-                edge.append(name.split('.', 1)[1])
-    return edge
+                found.append((name.split('.', 1)[1], 'lower' if position < 0.5 else 'upper'))
+    return found
 
 
 def autocorrelation(x, max_lag):
