@@ -159,10 +159,6 @@ def graph(tmp_path, monkeypatch):
         probe.shutdown()
 
 
-@pytest.mark.xfail(strict=False, reason='regression after merging issue 30 (the test passes on '
-                   'the rclpy-tests branch, with the same test files and nodes): the model node '
-                   'evaluated 4198-4299 of 6068-6824 published samples, none rejected, missed '
-                   'or late at the end; cause not found')
 def test_graph_publishes_and_every_sample_is_evaluated(graph):
     processes, domain, tmp_path, node, final, seen = graph
     # no bellows_ros on its path: only the ROS packages the venv (or a sourced ROS 2) holds
