@@ -36,8 +36,9 @@ in the root namespace. Columns:
 """
 from pathlib import Path
 
+from lz4.frame import LZ4FrameDecompressor
 import numpy as np
-from rosbags.rosbag2 import Reader
+from rosbags.rosbag2 import Reader, storage_mcap
 from rosbags.typesys import get_types_from_msg, get_typestore, Stores
 import yaml
 
@@ -82,6 +83,30 @@ for _name, _text in EXTRA_DEFINITIONS.items():
 # Messages a bag's table is read from, at most: the reader holds them all (~150 bytes each);
 # 30 million is about three hours of the three actuator topics at 1 kHz.
 MAX_BAG_MESSAGES = 30_000_000
+# Bytes one MCAP chunk may inflate to. rosbag2 and `bellows record` write chunks of about 1 MiB;
+# a chunk is read whole, so this is the memory one read of a bag may take at once.
+MAX_CHUNK_BYTES = 256 * 2**20
+
+
+def _bounded(decompressor):
+    """
+    Return a rosbags chunk decompressor that never inflates past the chunk's declared size.
+
+    rosbags' MCAP reader inflates a whole chunk, then compares its length with the size the chunk
+    declares: a few kilobytes of zstd or lz4 that inflate to gigabytes (a corrupt or hostile
+    file) would take the memory first. Here a declared size over MAX_CHUNK_BYTES is refused, and
+    inflating stops one byte past the declared size, which rosbags' own check then refuses.
+    """
+    def inflate(data, size):
+        if size > MAX_CHUNK_BYTES:
+            raise ValueError(f'a chunk declares {size:,} bytes uncompressed: over '
+                             f'{MAX_CHUNK_BYTES:,} (bag.MAX_CHUNK_BYTES)')
+        return decompressor().decompress(data, max_length=size + 1)
+    return inflate
+
+
+storage_mcap.DECOMPRESSORS.update(zstd=_bounded(storage_mcap.zstd.ZstdDecompressor),
+                                  lz4=_bounded(LZ4FrameDecompressor))
 # The actuator's topics, and where a recording from before they existed held its samples.
 ACTUATOR_FALLBACK = {ACTUATOR_JOINT_STATES: JOINT_STATES, ACTUATOR_CHAMBERS: CHAMBERS}
 
@@ -225,6 +250,16 @@ def _open(path):
         reader.open()
     except Exception as exc:  # rosbags' many error types for a bag it cannot open (see _messages)
         raise DataError(path, f'cannot open the rosbag2 recording ({_first_line(exc)})') from None
+    # Said before any chunk is read (its bytes are read whole, compressed or not): the index
+    # of an MCAP file lists every chunk's sizes.
+    for storage in getattr(reader.storage, 'storages', ()):
+        for chunk in getattr(storage, 'chunks', ()):
+            size = max(chunk.compressed_size, chunk.uncompressed_size)
+            if size > MAX_CHUNK_BYTES:
+                reader.close()
+                raise DataError(path, f'{storage.path.name}: a chunk of {size:,} bytes, over '
+                                      f'{MAX_CHUNK_BYTES:,} (bag.MAX_CHUNK_BYTES); a damaged '
+                                      'file, or one written with chunks this reader cannot hold')
     return reader
 
 

@@ -364,3 +364,31 @@ def test_the_nodes_strengths_and_the_cli_effects_share_their_ranges(module, syst
         rule = effect_range(system, effect, key)
         assert spec.high == rule.high, spec.name
         assert spec.low <= rule.low and spec.low in (0.0, rule.low), spec.name
+
+
+@pytest.mark.parametrize('compression', ['zstd', 'lz4'])
+def test_a_chunk_inflates_no_further_than_it_declares(compression):
+    # 64 MiB of zeros compress to a few kilobytes: a bomb for a reader that inflates first.
+    import lz4.frame
+    from rosbags.rosbag2 import storage_mcap
+
+    from bellows_ros import bag  # noqa: F401 (bounds rosbags' decompressors)
+    compress = {'zstd': storage_mcap.zstd.compress, 'lz4': lz4.frame.compress}[compression]
+    bomb = compress(bytes(64 * 2**20))
+    assert len(bomb) < 2**20
+    inflated = storage_mcap.DECOMPRESSORS[compression](bomb, 1000)
+    assert len(inflated) == 1001    # rosbags then refuses the chunk: its size is not the declared
+    with pytest.raises(ValueError, match='MAX_CHUNK_BYTES'):
+        storage_mcap.DECOMPRESSORS[compression](bomb, 2**40)
+
+
+def test_a_bag_with_a_chunk_over_the_limit_is_refused(tmp_path, monkeypatch, capsys):
+    from test_core_one_writer import write_bag
+
+    from bellows_ros import bag as bag_reader
+    path = write_bag(tmp_path / 'bag', n=200)
+    monkeypatch.setattr(bag_reader, 'MAX_CHUNK_BYTES', 1000)
+    status, err = run(['export', 'actuator', str(path), '--output', str(tmp_path / 'o.csv')],
+                      capsys)
+    assert_one_line(status, err, str(path), 'bag.MAX_CHUNK_BYTES')
+    assert not (tmp_path / 'o.csv').exists()

@@ -24,7 +24,8 @@ commands; active obeys them; deactivate vents; a transition the state does not h
 by the command line and changes neither the state nor the chambers; cleanup closes the devices
 and a new configure opens them again; a `~/vent` survives deactivate/activate until `~/release`;
 shutdown vents and waits for ambient, and says after how long. The end of the process does the
-same from active.
+same from active. Every transition a state does not offer, in each of the four states, is refused
+and leaves the chambers as they were; shutdown is taken from each state that offers it.
 """
 import random
 import re
@@ -269,3 +270,68 @@ def test_the_end_of_the_process_vents_and_waits_for_ambient(rig):
     assert vent, log[-2000:]
     assert float(vent.group(1)) > 0.0  # it was pressurised: venting takes time
     print(f'vent to ambient at SIGINT: {float(vent.group(1)):.3f} s')
+
+
+# rcl_lifecycle's primary states and the transitions each offers; every other one is refused.
+TRANSITIONS = ('configure', 'cleanup', 'activate', 'deactivate', 'shutdown')
+OFFERED = {'unconfigured [1]': {'configure', 'shutdown'},
+           'inactive [2]': {'cleanup', 'activate', 'shutdown'},
+           'active [3]': {'deactivate', 'shutdown'},
+           'finalized [4]': set()}
+
+
+def test_every_transition_a_state_lacks_is_refused_while_commands_stream(rig):
+    """
+    Each state against each transition it does not offer: refused, state and chambers unchanged.
+
+    The test above takes the offered ones (and one refusal per state); this one takes the rest,
+    then shuts down from inactive (the test below: from unconfigured, the one above: from active).
+    """
+    start_driver, probe, env, log_dir = rig
+    start_driver('false')
+    deadline = time.monotonic() + 30
+    while 'unconfigured' not in probe.lifecycle(env, 'get', status=None) \
+            and time.monotonic() < deadline:
+        time.sleep(0.2)
+
+    def refuse_the_rest(state, check):
+        for transition in TRANSITIONS:
+            if transition not in OFFERED[state]:
+                probe.refused(env, transition, state)
+                check(probe.later(1.0, settle=0.0), transition)
+
+    def no_samples(seen, transition):
+        assert not seen, f'samples published after a refused {transition}'
+
+    def vented(seen, transition):
+        assert seen and max(seen) < VENTED, f'commands obeyed after a refused {transition}'
+
+    def obeyed(seen, transition):
+        assert seen and min(seen) > 0.9 * COMMAND, f'a refused {transition} stopped the commands'
+
+    refuse_the_rest('unconfigured [1]', no_samples)
+    assert 'successful' in probe.lifecycle(env, 'set', 'configure'), logs(log_dir)
+    refuse_the_rest('inactive [2]', vented)
+    assert 'successful' in probe.lifecycle(env, 'set', 'activate')
+    probe.pressurise(log_dir)
+    refuse_the_rest('active [3]', obeyed)
+    assert 'successful' in probe.lifecycle(env, 'set', 'deactivate')
+    assert max(probe.later(3.0, settle=1.5)) < VENTED, 'deactivate did not vent'
+    assert 'successful' in probe.lifecycle(env, 'set', 'shutdown')
+    assert probe.lifecycle(env, 'get').strip() == 'finalized [4]'
+    assert VENT_LINE.search((log_dir / 'driver_node.log').read_text()), logs(log_dir)
+    refuse_the_rest('finalized [4]', no_samples)
+
+
+def test_shutdown_from_unconfigured_ends_finalized_with_nothing_driven(rig):
+    start_driver, probe, env, log_dir = rig
+    start_driver('false')
+    deadline = time.monotonic() + 30
+    while 'unconfigured' not in probe.lifecycle(env, 'get', status=None) \
+            and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert 'successful' in probe.lifecycle(env, 'set', 'shutdown'), logs(log_dir)
+    assert probe.lifecycle(env, 'get').strip() == 'finalized [4]'
+    assert not probe.later(1.5, settle=0.0), 'samples published after shutdown'
+    assert probe.status.get('driver_node: arm', {}).get('lifecycle') in (None, 'finalized')
+    probe.refused(env, 'configure', 'finalized [4]')
