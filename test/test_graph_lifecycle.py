@@ -27,6 +27,7 @@ shutdown vents and waits for ambient, and says after how long. The end of the pr
 same from active. Every transition a state does not offer, in each of the four states, is refused
 and leaves the chambers as they were; shutdown is taken from each state that offers it.
 """
+import math
 import random
 import re
 import signal
@@ -294,11 +295,16 @@ def test_every_transition_a_state_lacks_is_refused_while_commands_stream(rig):
             and time.monotonic() < deadline:
         time.sleep(0.2)
 
+    seen = []   # (state, refused transition, samples, lowest and highest chamber pressure)
+
     def refuse_the_rest(state, check):
         for transition in TRANSITIONS:
             if transition not in OFFERED[state]:
                 probe.refused(env, transition, state)
-                check(probe.later(1.0, settle=0.0), transition)
+                after = probe.later(1.0, settle=0.0)
+                seen.append((state, transition, len(after), min(after, default=math.nan),
+                             max(after, default=math.nan)))
+                check(after, transition)
 
     def no_samples(seen, transition):
         assert not seen, f'samples published after a refused {transition}'
@@ -321,6 +327,9 @@ def test_every_transition_a_state_lacks_is_refused_while_commands_stream(rig):
     assert probe.lifecycle(env, 'get').strip() == 'finalized [4]'
     assert VENT_LINE.search((log_dir / 'driver_node.log').read_text()), logs(log_dir)
     refuse_the_rest('finalized [4]', no_samples)
+    for state, transition, count, low, high in seen:
+        print(f'{state:16} {transition:10} refused; {count:4} samples in the next 1 s, chambers '
+              f'{low / 1e3:.1f}..{high / 1e3:.1f} kPa abs')
 
 
 def test_shutdown_from_unconfigured_ends_finalized_with_nothing_driven(rig):
