@@ -99,7 +99,7 @@ class ActuatorBoard:
         self.serial = None          # the board's serial number, from its first IDENTITY
         self._identified = False    # the open port has named itself as that board
         self._opened_at = None      # time.monotonic() the port was opened
-        self._refusal_reported = False  # a refused port was logged in this outage
+        self._refusal_reported = None   # why a port was last refused, as logged in this outage
         self.latched = False    # stopped on request (stop()): duties refused until release()
         self._counts = dict.fromkeys(
             ['samples', 'callback_errors', 'dropped', 'duplicates', 'sequence_resets',
@@ -225,10 +225,10 @@ class ActuatorBoard:
         except Exception:  # a port that vanished may not close cleanly; it is closed either way
             pass
         self._counts['identity_refusals'] += 1
-        if not self._refusal_reported:
+        if why != self._refusal_reported:  # each reason once: a slow IDENTITY, then the serial
             log.error('actuator board: %s %s; not using it (retrying every %.2f s)',
                       self.config.port, why, self.config.reconnect_interval)
-            self._refusal_reported = True
+            self._refusal_reported = why
         self._stop.wait(self.config.reconnect_interval)
 
     def _identify(self, identity):
@@ -290,7 +290,7 @@ class ActuatorBoard:
                     else:
                         log.info('actuator board: opened %s (board %016x)', self.config.port,
                                  self.serial)
-                    ever_opened, outage_reported, self._refusal_reported = True, False, False
+                    ever_opened, outage_reported, self._refusal_reported = True, False, None
                 elif isinstance(message, sp.Telemetry):
                     if self._identified:
                         self._accept(message)
