@@ -174,6 +174,13 @@ class Probe:
         assert status is None or process.returncode == status, (args, output)
         return output
 
+    def until_unconfigured(self, env, seconds=30.0):
+        """Ask `ros2 lifecycle get` until a driver started unmanaged says it is unconfigured."""
+        deadline = time.monotonic() + seconds
+        while 'unconfigured' not in self.lifecycle(env, 'get', status=None) \
+                and time.monotonic() < deadline:
+            time.sleep(0.2)
+
     def refused(self, env, transition, state):
         """`ros2 lifecycle set` of a `transition` that `state` lacks: refused, nothing changes."""
         output = self.lifecycle(env, 'set', transition, status=1)
@@ -201,10 +208,7 @@ class Probe:
 def test_lifecycle_from_the_command_line(rig):
     start_driver, probe, env, log_dir = rig
     start_driver('false')
-    deadline = time.monotonic() + 30
-    while 'unconfigured' not in probe.lifecycle(env, 'get', status=None) \
-            and time.monotonic() < deadline:
-        time.sleep(0.2)
+    probe.until_unconfigured(env)
     probe.flood(1.0)
     assert not probe.pressures, 'samples published while unconfigured'
     probe.refused(env, 'activate', 'unconfigured [1]')
@@ -290,10 +294,7 @@ def test_every_transition_a_state_lacks_is_refused_while_commands_stream(rig):
     """
     start_driver, probe, env, log_dir = rig
     start_driver('false')
-    deadline = time.monotonic() + 30
-    while 'unconfigured' not in probe.lifecycle(env, 'get', status=None) \
-            and time.monotonic() < deadline:
-        time.sleep(0.2)
+    probe.until_unconfigured(env)
 
     seen = []   # (state, refused transition, samples, lowest and highest chamber pressure)
 
@@ -339,10 +340,7 @@ def test_every_transition_a_state_lacks_is_refused_while_commands_stream(rig):
 def test_shutdown_from_unconfigured_ends_finalized_with_nothing_driven(rig):
     start_driver, probe, env, log_dir = rig
     start_driver('false')
-    deadline = time.monotonic() + 30
-    while 'unconfigured' not in probe.lifecycle(env, 'get', status=None) \
-            and time.monotonic() < deadline:
-        time.sleep(0.2)
+    probe.until_unconfigured(env)
     assert 'successful' in probe.lifecycle(env, 'set', 'shutdown'), logs(log_dir)
     assert probe.lifecycle(env, 'get').strip() == 'finalized [4]'
     assert not probe.later(1.5, settle=0.0), 'samples published after shutdown'
