@@ -503,10 +503,10 @@ class ArmControllerFloor(_FloorNode):
                 command_pub.publish(command)
             if state_pub is not None and samples[0] % self.STATE_EVERY == 0:
                 state_pub.publish(state)
-        for topic in (interfaces.JOINT_STATES, interfaces.PSI_SETPOINT,
-                      interfaces.JOINT_TRAJECTORY, interfaces.VENTED):
+        self.subscription(interfaces.JOINT_STATES, _ignore, newest_only=True)
+        for topic in (interfaces.PSI_SETPOINT, interfaces.JOINT_TRAJECTORY, interfaces.VENTED):
             self.subscription(topic, _ignore)
-        self.subscription(interfaces.CHAMBERS, on_chambers)
+        self.subscription(interfaces.CHAMBERS, on_chambers, newest_only=True)
 
 
 class ScenarioFloor(_FloorNode):

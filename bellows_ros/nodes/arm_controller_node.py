@@ -240,8 +240,9 @@ class ArmControllerNode(Node):
             self.state_pub = self.publisher(interfaces.TRAJECTORY_STATE)
         else:  # no control_msgs wheel on PyPI (runtime/messages.py)
             self.get_logger().info('control_msgs is not installed: ~/state is not published')
-        self.subscription(interfaces.JOINT_STATES, self.on_joint_states)
-        self.subscription(interfaces.CHAMBERS, self.on_chambers)
+        # The newest samples only: a command acts on the present (interfaces.md, "QoS").
+        self.subscription(interfaces.JOINT_STATES, self.on_joint_states, newest_only=True)
+        self.subscription(interfaces.CHAMBERS, self.on_chambers, newest_only=True)
         self.subscription(interfaces.PSI_SETPOINT, self.on_setpoint)
         self.subscription(interfaces.JOINT_TRAJECTORY, self.on_trajectory)
         self.subscription(interfaces.VENTED, self.on_vented)

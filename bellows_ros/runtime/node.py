@@ -51,7 +51,7 @@ import rclpy.exceptions
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 import rclpy.lifecycle
 import rclpy.node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy, qos_profile_sensor_data, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 from rclpy.task import Future
 
@@ -196,10 +196,19 @@ class _BellowsNode:
         return self.create_publisher(messages.message_class(topic.ros_type), topic.name,
                                      self._qos(topic))
 
-    def subscription(self, topic: Any, callback: Callable[[Any], None]) -> Any:
-        """Create a subscription to a topic of the contract (bellows_ros/interfaces.py)."""
+    def subscription(self, topic: Any, callback: Callable[[Any], None], *,
+                     newest_only: bool = False) -> Any:
+        """
+        Create a subscription to a topic of the contract (bellows_ros/interfaces.py).
+
+        `newest_only`: best effort, the newest few (rclpy's sensor-data profile), for a reader
+        that acts on the present, such as a controller. A reliable reader delivers in order: after
+        one lost sample it gets no later one until the lost one is repaired, and every sample of
+        that wait arrives too old to act on (docs/interfaces.md, "QoS").
+        """
+        qos = qos_profile_sensor_data if newest_only else self._qos(topic)
         return self.create_subscription(messages.message_class(topic.ros_type), topic.name,
-                                        callback, self._qos(topic))
+                                        callback, qos)
 
     @staticmethod
     def _qos(topic: Any) -> Any:
