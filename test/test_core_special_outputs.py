@@ -220,24 +220,45 @@ def test_a_link_to_a_file_as_report_is_refused_before_work(record, tmp_path, cap
 @pytest.mark.slow
 @pytest.mark.parametrize('signum', [signal.SIGTERM, signal.SIGHUP])
 def test_a_signal_leaves_no_temporary_file(tmp_path, signum):
-    rows = 200_000
-    t = np.arange(rows) * 1e-3
+    process, out_dir = simulate_then_signal(tmp_path, signum, signal.SIG_DFL)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 128 + signum, err
+    assert 'Traceback' not in err and len(err.strip().splitlines()) == 1, err
+    assert list(out_dir.iterdir()) == []
+
+
+@pytest.mark.slow
+def test_an_ignored_hangup_stays_ignored(tmp_path):
+    # Under nohup (SIGHUP ignored, as the user asked) the command goes on to its output.
+    process, out_dir = simulate_then_signal(tmp_path, signal.SIGHUP, signal.SIG_IGN)
+    _, err = process.communicate(timeout=120)
+    assert process.returncode == 0, err
+    assert [p.name for p in out_dir.iterdir()] == ['out.csv']
+
+
+def simulate_then_signal(tmp_path, signum, disposition):
+    """
+    Start a long `bellows simulate` with `signum` set to `disposition`; signal it mid-write.
+
+    Returns the process and its output directory. The disposition is set in the child rather
+    than inherited: a test session run under nohup ignores SIGHUP, and the command rightly keeps
+    an ignored signal ignored.
+    """
+    t = np.arange(200_000) * 1e-3
     source = write_csv(tmp_path / 'in.csv', {'t': t, 'psi': 0.3 * np.sin(t), 'p1': 2e5 + 0 * t,
                                              'p2': 1.5e5 + 0 * t, 'tau_ext': 0 * t})
     out_dir = tmp_path / 'out'
     out_dir.mkdir()
     process = subprocess.Popen(BELLOWS + ['simulate', 'segment', '--input', source, '--output',
                                           str(out_dir / 'out.csv')],
-                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                               preexec_fn=lambda: signal.signal(signum, disposition))
     end = time.monotonic() + 120
     while process.poll() is None and not any(out_dir.iterdir()) and time.monotonic() < end:
         time.sleep(0.001)
     assert process.poll() is None
     process.send_signal(signum)
-    _, err = process.communicate(timeout=60)
-    assert process.returncode == 128 + signum, err
-    assert 'Traceback' not in err and len(err.strip().splitlines()) == 1, err
-    assert list(out_dir.iterdir()) == []
+    return process, out_dir
 
 
 def test_an_orphan_temporary_file_goes_with_the_next_write_a_held_one_stays(tmp_path):
