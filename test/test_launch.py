@@ -312,15 +312,19 @@ def test_two_namespaced_graphs_run_side_by_side(prefix, tmp_path, monkeypatch):
         while not (set(names['/arm_a']) & arm_a and set(names['/arm_b']) & arm_b) \
                 and time.monotonic() < deadline:
             probe.spin_once(watcher, timeout_sec=0.1)
-        # Then until each arm has said over 100 things: this process's rclpy probe takes in the
-        # two graphs' ~8000 messages/s far slower than they come (41 in 3 s, on a loaded host).
+        # Then until each arm has said over 100 things and each actuator something: this
+        # process's rclpy probe takes in the two graphs' ~8000 messages/s far slower than they
+        # come (41 in 3 s, on a loaded host), and an actuator starved by two graphs' SCHED_FIFO
+        # arms may speak only after the arms have said their hundred.
         end = time.monotonic() + 60.0
         started = time.monotonic()
-        while min(len(names['/arm_a']), len(names['/arm_b'])) <= 100 \
+        while (min(len(names['/arm_a']), len(names['/arm_b'])) <= 100
+               or not (actuator_names['/arm_a'] and actuator_names['/arm_b'])) \
                 and time.monotonic() < end:
             probe.spin_once(watcher, timeout_sec=0.05)
-        print(f"namespaces: {len(names['/arm_a'])} and {len(names['/arm_b'])} arm messages "
-              f'taken in {time.monotonic() - started:.1f} s')
+        print(f"namespaces: {len(names['/arm_a'])} and {len(names['/arm_b'])} arm messages, "
+              f"{len(actuator_names['/arm_a'])} and {len(actuator_names['/arm_b'])} actuator "
+              f'messages taken in {time.monotonic() - started:.1f} s')
     finally:
         probe.shutdown()
         _stop(graph_a)
