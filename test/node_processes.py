@@ -23,6 +23,7 @@ Tests that need the ROS 2 command line (`ros2 param`, `ros2 lifecycle`, `ros2 se
 from multiprocessing import resource_tracker
 import os
 from pathlib import Path
+import random
 import shutil
 import signal
 import subprocess
@@ -75,6 +76,18 @@ def launch(name, args, env, log_dir):
     return subprocess.Popen([str(BIN / name), '--ros-args', '--params-file', str(SIM_CONFIG),
                              *AUTOSTART.get(name, []), *args], env=env, stdout=log,
                             stderr=subprocess.STDOUT)
+
+
+def free_domain():
+    """
+    Return a ROS domain for one test's graph, drawn from 1-101.
+
+    Not 102-214: Fast DDS's ports for those (7400 + 250 x domain and up) fall among Linux's
+    ephemeral ports (32768-60999), where any socket may hold a participant's well-known port
+    (ROS 2's documentation, "The ROS_DOMAIN_ID"). Not 0: a user's own graph. The benches use
+    215-232 (bench/graph.py).
+    """
+    return str(random.randint(1, 101))
 
 
 def launch_arm(env, group, log_dir, controller_args=()):

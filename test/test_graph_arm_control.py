@@ -30,7 +30,7 @@ import math
 import random
 import time
 
-from node_processes import launch_arm, node_env, override, stop_all
+from node_processes import free_domain, launch_arm, node_env, override, stop_all
 import probe
 import pytest
 
@@ -50,7 +50,7 @@ def interpolate(points, t):
 def test_arm_controller_tracks_on_the_simulated_arm(tmp_path, monkeypatch):
     # A domain and CAN group of its own: the other graph tests and launch_sim.sh use 201-230 and
     # 239.74.163.x, and a second arm's /joint_states would be taken for this one's.
-    domain = str(random.randint(101, 140))
+    domain = free_domain()
     group = f'239.74.171.{random.randint(2, 250)}'
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     env = node_env(ROS_DOMAIN_ID=domain)

@@ -20,11 +20,10 @@ process) drives it. The driver must stay up, report the actuator ERROR (no data)
 same port, it reconnects and data flow again. SIGINT then ends the driver with status 0.
 """
 import os
-import random
 import signal
 import time
 
-from node_processes import launch, logs, node_env, override
+from node_processes import free_domain, launch, logs, node_env, override
 import probe
 import pytest
 
@@ -36,7 +35,7 @@ pytestmark = pytest.mark.slow  # node processes, ~20 s
 
 
 def test_a_board_killed_under_the_driver_is_reported_and_survived(tmp_path, monkeypatch):
-    domain = str(random.randint(100, 180))
+    domain = free_domain()
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     env = node_env(ROS_DOMAIN_ID=domain)
     port = str(tmp_path / 'board')

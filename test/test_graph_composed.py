@@ -25,8 +25,8 @@ import signal
 import subprocess
 import time
 
-from node_processes import (BIN, launch, logs, node_env, override, require_ros2_cli, ros2_cli,
-                            SIM_CONFIG, stop_all)
+from node_processes import (BIN, free_domain, launch, logs, node_env, override,
+                            require_ros2_cli, ros2_cli, SIM_CONFIG, stop_all)
 import probe
 import pytest
 
@@ -37,7 +37,7 @@ pytestmark = pytest.mark.slow  # two node processes, ~20 s
 
 
 def test_the_composed_arm_graph_runs_the_three_nodes(tmp_path, monkeypatch):
-    domain = str(random.randint(100, 180))
+    domain = free_domain()
     group = f'239.74.171.{random.randint(2, 250)}'
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     env = node_env(ROS_DOMAIN_ID=domain)

@@ -23,7 +23,7 @@ import subprocess
 import sys
 import time
 
-from node_processes import node_env, stop_all
+from node_processes import free_domain, node_env, stop_all
 import pytest
 
 pytestmark = pytest.mark.slow  # each test starts a node process (1-3 s)
@@ -36,7 +36,7 @@ CONFIG = Path(__file__).resolve().parent.parent / 'config' / 'nodes_sim.yaml'
 def run(tmp_path):
     """Return a runner of `node` with `args`: its exit, in a domain of its own."""
     def run_node(node, args):
-        env = node_env(ROS_DOMAIN_ID=str(random.randint(181, 200)))
+        env = node_env(ROS_DOMAIN_ID=free_domain())
         return subprocess.run([str(BIN / node), '--ros-args', *args], capture_output=True,
                               text=True, timeout=60, env=env, cwd=tmp_path)
     return run_node
@@ -66,7 +66,7 @@ def test_a_port_that_appears_within_startup_timeout_is_opened(tmp_path):
     up to `startup_timeout` for the port.
     """
     port = tmp_path / 'board'
-    env = node_env(ROS_DOMAIN_ID=str(random.randint(181, 200)))
+    env = node_env(ROS_DOMAIN_ID=free_domain())
     driver = subprocess.Popen([str(BIN / 'driver_node'), '--ros-args', '-p', 'autostart:=true',
                                '-p', 'actuator.enabled:=true', '-p', f'actuator.port:={port}',
                                '-p', 'startup_timeout:=20.0'], env=env, cwd=tmp_path,

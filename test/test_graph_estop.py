@@ -28,7 +28,8 @@ import random
 import subprocess
 import time
 
-from node_processes import launch, logs, node_env, override, require_ros2_cli, ros2_cli
+from node_processes import (free_domain, launch, logs, node_env, override, require_ros2_cli,
+                            ros2_cli)
 import probe
 import pytest
 
@@ -50,7 +51,7 @@ def call(service, env):
 
 
 def test_estop_vents_under_a_command_flood_and_false_does_not_release(tmp_path, monkeypatch):
-    domain = str(random.randint(100, 180))
+    domain = free_domain()
     group = f'239.74.168.{random.randint(2, 250)}'
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     env = node_env(ROS_DOMAIN_ID=domain)

@@ -30,7 +30,7 @@ import math
 import random
 import time
 
-from node_processes import launch_arm, logs, node_env, stop_all
+from node_processes import free_domain, launch_arm, logs, node_env, stop_all
 import probe
 import pytest
 
@@ -53,7 +53,7 @@ def trajectory(names, points):
 @pytest.mark.timeout(150)
 def test_arm_controller_follows_a_joint_trajectory(tmp_path, monkeypatch):
     # A domain and CAN group of their own (test_graph_arm_control uses 101-140, 239.74.171.x).
-    domain = str(random.randint(141, 170))
+    domain = free_domain()
     group = f'239.74.172.{random.randint(2, 250)}'
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     env = node_env(ROS_DOMAIN_ID=domain)

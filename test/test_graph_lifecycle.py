@@ -36,8 +36,8 @@ import sys
 import textwrap
 import time
 
-from node_processes import (launch, logs, node_env, override, require_ros2_cli, ros2_cli,
-                            stop_all)
+from node_processes import (free_domain, launch, logs, node_env, override, require_ros2_cli,
+                            ros2_cli, stop_all)
 from polling import wait_for
 import probe
 import pytest
@@ -74,7 +74,7 @@ def ros2(args, env):
 
 def test_the_state_machine_is_rcl_lifecycles(tmp_path):
     """`ros2 lifecycle list -a` and `list` read the same from the driver as from rclpy's node."""
-    env = node_env(ROS_DOMAIN_ID=str(random.randint(100, 180)))
+    env = node_env(ROS_DOMAIN_ID=free_domain())
     reference = subprocess.Popen([sys.executable, '-c', REFERENCE], env=env)
     driver = launch('driver_node', override('driver_node', 'autostart', 'false')
                     + override('driver_node', 'actuator.enabled', 'false'), env, tmp_path)
@@ -97,7 +97,7 @@ def test_the_state_machine_is_rcl_lifecycles(tmp_path):
 @pytest.fixture
 def rig(tmp_path, monkeypatch):
     """Start a simulated arm (one segment); yield a starter of the driver and the probe."""
-    domain = str(random.randint(100, 180))
+    domain = free_domain()
     group = f'239.74.169.{random.randint(2, 250)}'
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     env = node_env(ROS_DOMAIN_ID=domain)

@@ -24,10 +24,9 @@ which docs/bench_log.md records once by hand), then `ros2 param set` switches th
 on; a WARN `model_health` naming air_leak must follow within DEADLINE s.
 """
 import os
-import random
 import time
 
-from node_processes import launch, logs, node_env, override, ros2_cli, stop_all
+from node_processes import free_domain, launch, logs, node_env, override, ros2_cli, stop_all
 import probe
 import pytest
 
@@ -52,7 +51,7 @@ STATUS = 'stiffness_controller_node: model_health'
 def test_a_leak_set_mid_run_is_named_within_a_minute_and_no_warn_before(
         tmp_path, monkeypatch):
     params = load_actuator_params()
-    domain = str(random.randint(181, 200))
+    domain = free_domain()
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     env = node_env(ROS_DOMAIN_ID=domain)
     port = str(tmp_path / 'actuator')

@@ -27,7 +27,7 @@ import os
 import random
 import time
 
-from node_processes import launch, logs, node_env, override, ros2_cli, stop_all
+from node_processes import free_domain, launch, logs, node_env, override, ros2_cli, stop_all
 import probe
 import pytest
 
@@ -46,7 +46,7 @@ def ros2_param(env, *args):
 
 def test_a_leak_set_mid_run_drains_the_gas_and_a_bad_one_is_refused(
         tmp_path, monkeypatch):
-    domain = str(random.randint(100, 180))
+    domain = free_domain()
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     env = node_env(ROS_DOMAIN_ID=domain)
     port = str(tmp_path / 'board')
@@ -109,7 +109,7 @@ def test_a_leak_set_mid_run_drains_the_gas_and_a_bad_one_is_refused(
 def test_a_segment_effect_set_mid_run_is_taken_and_a_bad_one_is_refused(
         tmp_path, monkeypatch):
     """sim_arm_node: the strength reaches the running plants (their /diagnostics say so)."""
-    domain = str(random.randint(100, 180))
+    domain = free_domain()
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     env = node_env(ROS_DOMAIN_ID=domain)
     arm, friction = 'sim_arm_node', 'effect.pressure_friction.c_fp'

@@ -21,10 +21,9 @@ reads back; a value outside its Spec is refused with the reason; a read-only one
 read-only; a refused one changes nothing (it is not announced on /parameter_events); a change
 reaches the running node (its /diagnostics show the new feedforward).
 """
-import random
 import time
 
-from node_processes import launch, logs, node_env, ros2_cli, stop_all
+from node_processes import free_domain, launch, logs, node_env, ros2_cli, stop_all
 import probe
 import pytest
 from rclpy.parameter import parameter_value_to_python as python_value
@@ -69,7 +68,7 @@ def ros2_param(env, *args):
 
 @pytest.fixture
 def graph(tmp_path, monkeypatch):
-    domain = str(random.randint(100, 180))
+    domain = free_domain()
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     env = node_env(ROS_DOMAIN_ID=domain)
     processes = [launch(name, [], env, tmp_path) for name in NODES]

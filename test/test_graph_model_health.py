@@ -24,7 +24,7 @@ DEADLINE s. The numbers (floor, ratios, the sample path's cost) are printed.
 import random
 import time
 
-from node_processes import launch, logs, node_env, override, ros2_cli, stop_all
+from node_processes import free_domain, launch, logs, node_env, override, ros2_cli, stop_all
 import probe
 import pytest
 
@@ -43,7 +43,7 @@ STATUS = 'model_node: model_health'
 
 @pytest.mark.timeout(240)
 def test_a_load_set_mid_run_leaves_the_floor_and_no_warn_before(tmp_path, monkeypatch):
-    domain = str(random.randint(100, 180))
+    domain = free_domain()
     group = f'239.74.165.{random.randint(2, 250)}'
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     env = node_env(ROS_DOMAIN_ID=domain)

@@ -33,7 +33,7 @@ import sys
 import textwrap
 import time
 
-from node_processes import launch, logs, node_env, override, SIM_CONFIG
+from node_processes import free_domain, launch, logs, node_env, override, SIM_CONFIG
 import probe
 import pytest
 
@@ -102,7 +102,7 @@ pytestmark = pytest.mark.slow  # four node processes, ~25 s
 
 @pytest.fixture
 def graph(tmp_path, monkeypatch):
-    domain = str(random.randint(100, 180))
+    domain = free_domain()
     group = f'239.74.164.{random.randint(2, 250)}'
     port = str(tmp_path / 'actuator')
     env = node_env(ROS_DOMAIN_ID=domain)

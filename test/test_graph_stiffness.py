@@ -31,10 +31,9 @@ The low set-point is 1400 N/m where the actuator model can reach it; with the pr
 config/actuator.yaml its range starts above 1400 N/m, so the step starts 1 % above the bottom of
 the range instead (reported in the assertion messages).
 """
-import random
 import time
 
-from node_processes import launch, node_env, override, stop_all
+from node_processes import free_domain, launch, node_env, override, stop_all
 import probe
 import pytest
 
@@ -59,7 +58,7 @@ def test_stiffness_step_and_leak_hold(tmp_path, monkeypatch):
     duty_max = actuator_board_config().duty_max
     travel_min = abs(x_high - x_low) / (duty_max * load_actuator_plant_params().drive.max_speed)
 
-    domain = str(random.randint(201, 230))
+    domain = free_domain()
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     env = node_env(ROS_DOMAIN_ID=domain)
     port = str(tmp_path / 'actuator')

@@ -20,12 +20,11 @@ error at start and stays as it was. As root, `port:=/dev/ttyACM0` once removed t
 """
 import os
 from pathlib import Path
-import random
 import stat
 import subprocess
 import sys
 
-from node_processes import node_env
+from node_processes import free_domain, node_env
 import pytest
 
 from bellows_ros.errors import ParameterError
@@ -120,7 +119,7 @@ def test_a_link_replaced_by_someone_else_is_not_removed(tmp_path):
 @pytest.mark.parametrize('taken', ['file', 'directory', 'link'], indirect=True)
 def test_the_node_given_a_taken_port_exits_2_and_leaves_it(taken, tmp_path):
     before = snapshot(taken)
-    env = node_env(ROS_DOMAIN_ID=str(random.randint(181, 200)))
+    env = node_env(ROS_DOMAIN_ID=free_domain())
     result = subprocess.run([str(BIN / 'sim_actuator_node'), '--ros-args', '-p',
                              f'port:={taken}'], capture_output=True, text=True, timeout=60,
                             env=env, cwd=tmp_path)

@@ -31,7 +31,7 @@ import sys
 import threading
 import time
 
-from node_processes import LOOPBACK_ENVIRONMENT, require_ros2_cli
+from node_processes import free_domain, LOOPBACK_ENVIRONMENT, require_ros2_cli
 import probe
 import pytest
 import yaml
@@ -269,7 +269,7 @@ def test_two_namespaced_graphs_run_side_by_side(prefix, tmp_path, monkeypatch):
     """
     from bellows_ros import interfaces
     from bellows_ros.runtime.messages import msg
-    env = _prefix_env(prefix, ROS_DOMAIN_ID=str(os.getpid() % 50 + 120))
+    env = _prefix_env(prefix, ROS_DOMAIN_ID=free_domain())
     params = {}
     for graph, segments in (('a', 1), ('b', 2)):  # two light graphs on a 2-core machine
         config = yaml.safe_load((ROOT / 'config' / 'nodes_sim.yaml').read_text())

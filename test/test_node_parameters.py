@@ -23,12 +23,11 @@ import importlib
 import math
 from pathlib import Path
 import pkgutil
-import random
 import subprocess
 import sys
 
 from hypothesis import given, settings, strategies as st
-from node_processes import node_env
+from node_processes import free_domain, node_env
 import pytest
 
 from bellows_ros import nodes
@@ -142,7 +141,7 @@ STARTS = [
 @pytest.mark.parametrize('node, setting, name', STARTS, ids=[f'{n}:{s}' for n, s, _ in STARTS])
 def test_a_node_given_a_bad_value_says_so_in_one_line_and_exits_2(
         node, setting, name, tmp_path):
-    env = node_env(ROS_DOMAIN_ID=str(random.randint(181, 200)))
+    env = node_env(ROS_DOMAIN_ID=free_domain())
     result = subprocess.run([str(BIN / node), '--ros-args', '-p', setting], capture_output=True,
                             text=True, timeout=60, env=env, cwd=tmp_path)
     assert result.returncode == 2, result.stderr

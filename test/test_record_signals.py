@@ -22,7 +22,6 @@ kill, once `bellows reindex` has rebuilt the bag. The counts kept are printed fo
 """
 import os
 from pathlib import Path
-import random
 import signal
 import subprocess
 import sys
@@ -30,6 +29,7 @@ import threading
 import time
 
 from mcap.reader import make_reader
+from node_processes import free_domain
 import probe
 import pytest
 from rosbags.rosbag2 import Reader
@@ -94,7 +94,7 @@ class NumberedPublisher:
 @pytest.fixture
 def recording(tmp_path, monkeypatch):
     """Start `bellows record` and a numbered publisher; yield (recorder, publisher, bag)."""
-    domain = str(random.randint(150, 180))
+    domain = free_domain()
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     bag = tmp_path / 'bag'
     recorder = subprocess.Popen([BELLOWS, 'record', '--output', str(bag), '--topics', TOPIC],

@@ -35,13 +35,12 @@ The code gets only the records; the device's parameters are used to build it and
 """
 import json
 import math
-import random
 import re
 import subprocess
 import sys
 import time
 
-from node_processes import BIN, launch, logs, node_env, override, stop_all, wait_for
+from node_processes import BIN, free_domain, launch, logs, node_env, override, stop_all, wait_for
 import numpy as np
 import pytest
 from test_doctor_bag import write_actuator_bag
@@ -157,7 +156,7 @@ def identify_and_diagnose(data, out):
 @pytest.mark.slow
 @pytest.mark.timeout(1800)
 def test_record_identify_diagnose_extend_track(tmp_path, monkeypatch):
-    domain = str(random.randint(201, 230))
+    domain = free_domain()
     monkeypatch.setenv('ROS_DOMAIN_ID', domain)
     env = node_env(ROS_DOMAIN_ID=domain)
     device = tmp_path / 'device.yaml'

@@ -87,8 +87,10 @@ from bellows_ros.runtime.messages import msg
 from bellows_ros.runtime.node import LOOPBACK_ENVIRONMENT
 
 # Each bench's ROS domains (drawn per graph) and simulated CAN groups (239.74.170.x: x drawn),
-# apart from one another and from the tests' (a graph of one bench never hears another's).
-DOMAINS = {'graph': (150, 152), 'graph_actuator': (153, 154), 'graph_floor': (155, 160)}
+# apart from one another and from the tests' (1-101; a graph of one bench never hears another's).
+# Within 215-232: Fast DDS's ports for domains 102-214 fall among Linux's ephemeral ports
+# (ROS 2's documentation, "The ROS_DOMAIN_ID").
+DOMAINS = {'graph': (215, 217), 'graph_actuator': (218, 219), 'graph_floor': (220, 225)}
 CAN_GROUPS = {'graph': '239.74.170', 'graph_actuator': '239.74.171', 'graph_floor': '239.74.172'}
 # s: the longest the bench's executor runs before the bench looks at its node processes again.
 SPIN_SLICE = 0.05
