@@ -48,6 +48,7 @@ setup(
     ],
     extras_require={'test': [
         'pytest>=7', 'hypothesis>=6', 'pytest-timeout>=2',
+        'pytest-xdist>=3',  # scripts/test.sh: the tests not marked realtime on every core
         # the lint tests: flake8 with ament_flake8's plugins, pydocstyle as ament_pep257 runs it
         'flake8>=6', 'flake8-builtins', 'flake8-comprehensions', 'flake8-import-order',
         'flake8-quotes', 'pydocstyle>=6',

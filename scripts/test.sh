@@ -2,6 +2,13 @@
 # The test command: set up (if needed), then run the whole test suite on rclpy. Extra arguments
 # go to pytest, e.g.
 #   scripts/test.sh -m "not slow"      # the quick tier, a few minutes
+#   scripts/test.sh test/test_doctor_live.py -x
+#
+# The whole suite (no test path, -m or -k given; give options as --name=value) runs in two
+# phases: first every test not marked `realtime` in parallel, one pytest-xdist worker per core
+# (a module's tests on one worker), then the `realtime` ones (node graphs, simulated devices, the
+# ROS 2 command line) one at a time, alone on the machine, as their 1 kHz processes need. The
+# exit status is the worse of the two. With a path, -m or -k, pytest runs once, as given.
 #
 # rclpy is the sourced ROS 2 Jazzy's, else the PyPI wheels scripts/setup.sh put into .venv.
 # The ROS 2 command line and launch (ros2 param, ros2 lifecycle, ros2 launch) for the tests that
@@ -34,4 +41,30 @@ fi
 export PYTHONFAULTHANDLER=1
 # The ros2 command line runs `python3` from PATH: the venv's, which has its dependencies.
 export PATH="$venv/bin:$PATH"
-exec "$venv/bin/python" -m pytest "$@"
+pytest=("$venv/bin/python" -m pytest)
+
+whole=1
+for arg in "$@"; do
+  case "$arg" in
+    -m|-m?*|-k|-k?*|-n|-n?*|--numprocesses*) whole=0 ;;
+    -*) ;;
+    *) whole=0 ;;  # a test path (or an option's value given apart: use --name=value)
+  esac
+done
+if [ "$whole" = 0 ]; then
+  exec "${pytest[@]}" "$@"
+fi
+
+# pytest's "no test selected" (5) is no failure of a phase.
+phase() { "$@" && return 0; local status=$?; [ "$status" = 5 ] && return 0; return "$status"; }
+workers=$(nproc 2>/dev/null || echo 1)
+parallel=()
+[ "$workers" -gt 1 ] && parallel=(-n "$workers" --dist loadfile)
+status=0
+echo "bellows test: 1/2, the tests not marked realtime (${workers} worker(s))" >&2
+# One BLAS thread per worker: the workers already take every core.
+OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 \
+  phase "${pytest[@]}" "${parallel[@]}" -m "not realtime" "$@" || status=$?
+echo "bellows test: 2/2, the realtime tests, one at a time" >&2
+phase "${pytest[@]}" -p no:xdist -m realtime "$@" || { s=$?; [ "$status" = 0 ] && status=$s; }
+exit "$status"

@@ -30,6 +30,8 @@ from bellows_ros.config.segment import load_segment_params
 from bellows_ros.nodes import diagnostics
 from bellows_ros.nodes.arm_controller_node import ArmControllerNode, ArmControllerTask
 
+pytestmark = pytest.mark.realtime  # runs alone, after the others (scripts/test.sh)
+
 MS = 1_000_000  # ns
 
 

@@ -33,6 +33,8 @@ from bellows_ros import interfaces
 from bellows_ros.nodes import diagnostics as d
 from bellows_ros.runtime.messages import msg as ros_msg
 
+pytestmark = pytest.mark.realtime  # runs alone, after the others (scripts/test.sh)
+
 # The ROS packages' classes the nodes use, and Time for the stand-in node's clock.
 NODE_MSG = types.SimpleNamespace(Time=Time, **vars(ros_msg))
 # A message class whose `byte` level is an int (rosbags' and other non-rclpy classes).

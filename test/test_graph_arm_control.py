@@ -38,6 +38,8 @@ from bellows_ros.config.hardware import arm_bus_config
 from bellows_ros.control import angle_trajectory
 from bellows_ros.runtime.messages import msg
 
+pytestmark = pytest.mark.realtime  # runs alone, after the others (scripts/test.sh)
+
 
 def interpolate(points, t):
     """Value of a (time, value) series at `t` (the last value at or before it)."""

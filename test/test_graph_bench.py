@@ -38,6 +38,8 @@ from bellows_ros.cli import main
 from bellows_ros.cli.bench import chosen_modules, format_table
 from bellows_ros.runtime import realtime
 
+pytestmark = pytest.mark.realtime  # runs alone, after the others (scripts/test.sh)
+
 
 def latency_requests_held():
     """Return this process's open file descriptors on the PM QoS device (its requests)."""

@@ -31,7 +31,8 @@ from bellows_ros.nodes.diagnostics import ERROR, level_of
 from bellows_ros.runtime import stamp_ns
 from bellows_ros.runtime.messages import msg
 
-pytestmark = pytest.mark.slow  # node processes, ~20 s
+# node processes, ~20 s
+pytestmark = [pytest.mark.slow, pytest.mark.realtime]
 
 
 def test_a_board_killed_under_the_driver_is_reported_and_survived(tmp_path, monkeypatch):

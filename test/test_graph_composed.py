@@ -33,7 +33,8 @@ import pytest
 from bellows_ros import interfaces
 from bellows_ros.runtime.messages import msg
 
-pytestmark = pytest.mark.slow  # two node processes, ~20 s
+# two node processes, ~20 s
+pytestmark = [pytest.mark.slow, pytest.mark.realtime]
 
 
 def test_the_composed_arm_graph_runs_the_three_nodes(tmp_path, monkeypatch):

@@ -26,7 +26,8 @@ import time
 from node_processes import free_domain, node_env, stop_all
 import pytest
 
-pytestmark = pytest.mark.slow  # each test starts a node process (1-3 s)
+# each test starts a node process (1-3 s)
+pytestmark = [pytest.mark.slow, pytest.mark.realtime]
 
 BIN = Path(sys.executable).parent
 CONFIG = Path(__file__).resolve().parent.parent / 'config' / 'nodes_sim.yaml'

@@ -36,7 +36,8 @@ import pytest
 from bellows_ros import interfaces
 from bellows_ros.runtime.messages import msg
 
-pytestmark = pytest.mark.slow  # two node processes, ~15 s
+# two node processes, ~15 s
+pytestmark = [pytest.mark.slow, pytest.mark.realtime]
 
 AMBIENT = 101325.0
 COMMAND = 4.0e5

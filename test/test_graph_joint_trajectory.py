@@ -37,6 +37,8 @@ import pytest
 from bellows_ros import interfaces
 from bellows_ros.runtime.messages import msg
 
+pytestmark = pytest.mark.realtime  # runs alone, after the others (scripts/test.sh)
+
 END = -0.4  # rad, trajectory B's last point
 
 

@@ -26,6 +26,11 @@ and a new configure opens them again; a `~/vent` survives deactivate/activate un
 shutdown vents and waits for ambient, and says after how long. The end of the process does the
 same from active. Every transition a state does not offer, in each of the four states, is refused
 and leaves the chambers as they were; shutdown is taken from each state that offers it.
+
+Each verb goes through the command line once (`test_lifecycle_from_the_command_line`); the
+repeats and the matrix of refusals ask the driver's lifecycle services from this process, as
+the command line does (lifecycle_msgs' ChangeState, GetState, GetAvailableTransitions): a call of
+the command line costs 3-10 s here, a service call milliseconds.
 """
 import math
 import random
@@ -43,9 +48,14 @@ import probe
 import pytest
 
 from bellows_ros import interfaces
-from bellows_ros.runtime.messages import msg
+from bellows_ros.runtime.messages import message_class, msg
 
-pytestmark = pytest.mark.slow  # node processes and ros2 CLI calls, ~60 s
+ChangeState = message_class('lifecycle_msgs/srv/ChangeState')
+GetState = message_class('lifecycle_msgs/srv/GetState')
+GetAvailableTransitions = message_class('lifecycle_msgs/srv/GetAvailableTransitions')
+
+# node processes and ros2 CLI calls, ~60 s
+pytestmark = [pytest.mark.slow, pytest.mark.realtime]
 
 AMBIENT = 101325.0
 COMMAND = 4.0e5
@@ -141,6 +151,12 @@ class Probe:
         self.command = msg.JointState(name=[interfaces.chain_chamber(1, 1),
                                             interfaces.chain_chamber(1, 2)],
                                       effort=[COMMAND, COMMAND])
+        # The driver's lifecycle services, as `ros2 lifecycle` asks them.
+        self.services = {kind: self.node.create_client(kind, f'/driver_node/{name}')
+                         for kind, name in ((ChangeState, 'change_state'),
+                                            (GetState, 'get_state'),
+                                            (GetAvailableTransitions,
+                                             'get_available_transitions'))}
 
     def flood(self, seconds=0.0, until=None):
         """Publish commands for `seconds`, or while the process `until` runs; its stdout."""
@@ -173,6 +189,36 @@ class Probe:
             print(f'ros2 lifecycle {" ".join(args)}: Node not found ({self.not_found})')
         assert status is None or process.returncode == status, (args, output)
         return output
+
+    def call(self, kind, request, timeout=60.0):
+        """Call the driver's lifecycle service `kind` while commands keep coming; its answer."""
+        client = self.services[kind]
+        end = time.monotonic() + timeout
+        while not client.service_is_ready() and time.monotonic() < end:
+            self.flood(0.05)
+        future = client.call_async(request)
+        while not future.done() and time.monotonic() < end:
+            self.flood(0.01)
+        assert future.done(), f'no answer from /driver_node within {timeout} s'
+        return future.result()
+
+    def state(self):
+        """Return the driver's state, as `ros2 lifecycle get` prints it ('inactive [2]')."""
+        state = self.call(GetState, GetState.Request()).current_state
+        return f'{state.label} [{state.id}]'
+
+    def change(self, transition):
+        """Ask the driver for `transition` by its label; whether it was taken."""
+        request = ChangeState.Request()
+        request.transition.label = transition
+        return self.call(ChangeState, request).success
+
+    def refused_in_process(self, transition, state):
+        """Ask for a `transition` that `state` lacks: not offered, refused, nothing changes."""
+        offered = self.call(GetAvailableTransitions, GetAvailableTransitions.Request())
+        assert transition not in {t.transition.label for t in offered.available_transitions}
+        assert not self.change(transition), f'{transition} taken in {state}'
+        assert self.state() == state
 
     def until_unconfigured(self, env, seconds=30.0):
         """Ask `ros2 lifecycle get` until a driver started unmanaged says it is unconfigured."""
@@ -220,45 +266,45 @@ def test_lifecycle_from_the_command_line(rig):
     inactive = probe.later(1.5, settle=0.0)
     assert inactive and max(inactive) < VENTED, 'commands obeyed while inactive'
     assert probe.status['driver_node: arm']['lifecycle'] == 'inactive'
-    probe.refused(env, 'configure', 'inactive [2]')
+    probe.refused_in_process('configure', 'inactive [2]')
     inactive = probe.later(1.5, settle=0.0)
     assert inactive and max(inactive) < VENTED, 'commands obeyed after a refused configure'
 
     assert 'successful' in probe.lifecycle(env, 'set', 'activate')
-    assert probe.lifecycle(env, 'get').strip() == 'active [3]'
+    assert probe.state() == 'active [3]'
     probe.pressurise(log_dir)
-    probe.refused(env, 'cleanup', 'active [3]')
+    probe.refused_in_process('cleanup', 'active [3]')
     active = probe.later(1.5, settle=0.0)
     assert active and min(active) > 0.9 * COMMAND, 'a refused cleanup stopped the commands'
     assert 'successful' in probe.lifecycle(env, 'set', 'deactivate')
-    assert probe.lifecycle(env, 'get').strip() == 'inactive [2]'
+    assert probe.state() == 'inactive [2]'
     assert max(probe.later(3.0, settle=1.5)) < VENTED, 'deactivate did not vent'
 
     # cleanup closes the devices (no samples), configure opens them again, vented
     assert 'successful' in probe.lifecycle(env, 'set', 'cleanup'), logs(log_dir)
-    assert probe.lifecycle(env, 'get').strip() == 'unconfigured [1]'
+    assert probe.state() == 'unconfigured [1]'
     assert not probe.later(2.0, settle=0.5), 'samples published after cleanup'
-    assert 'successful' in probe.lifecycle(env, 'set', 'configure'), logs(log_dir)
+    assert probe.change('configure'), logs(log_dir)
     reconfigured = probe.later(1.5, settle=0.0)
     assert reconfigured and max(reconfigured) < VENTED, 'configured again: not vented'
-    assert 'successful' in probe.lifecycle(env, 'set', 'activate')
+    assert probe.change('activate')
     probe.pressurise(log_dir)
 
     # A latched vent outlives deactivate/activate: only ~/release ends it.
     ros2(['service', 'call', '/driver_node/vent', 'std_srvs/srv/Trigger'], env)
-    assert 'successful' in probe.lifecycle(env, 'set', 'deactivate')
-    assert 'successful' in probe.lifecycle(env, 'set', 'activate')
+    assert probe.change('deactivate')
+    assert probe.change('activate')
     assert max(probe.later(2.0)) < VENTED, 'activate released a latched vent'
     ros2(['service', 'call', '/driver_node/release', 'std_srvs/srv/Trigger'], env)
     probe.pressurise(log_dir)
 
     assert 'successful' in probe.lifecycle(env, 'set', 'shutdown')
-    assert probe.lifecycle(env, 'get').strip() == 'finalized [4]'
+    assert probe.state() == 'finalized [4]'
     log = (log_dir / 'driver_node.log').read_text()
     vent = VENT_LINE.search(log)
     assert vent, log[-2000:]
     assert float(vent.group(1)) > 0.0  # it was pressurised: venting takes time
-    probe.refused(env, 'configure', 'finalized [4]')
+    probe.refused_in_process('configure', 'finalized [4]')
     print(f'vent to ambient after shutdown: {float(vent.group(1)):.3f} s')
 
 
@@ -294,14 +340,14 @@ def test_every_transition_a_state_lacks_is_refused_while_commands_stream(rig):
     """
     start_driver, probe, env, log_dir = rig
     start_driver('false')
-    probe.until_unconfigured(env)
+    assert probe.state() == 'unconfigured [1]'
 
     seen = []   # (state, refused transition, samples, lowest and highest chamber pressure)
 
     def refuse_the_rest(state, check):
         for transition in TRANSITIONS:
             if transition not in OFFERED[state]:
-                probe.refused(env, transition, state)
+                probe.refused_in_process(transition, state)
                 after = probe.later(1.0, settle=0.0)
                 seen.append((state, transition, len(after), min(after, default=math.nan),
                              max(after, default=math.nan)))
@@ -321,15 +367,15 @@ def test_every_transition_a_state_lacks_is_refused_while_commands_stream(rig):
         assert probe.status['driver_node: arm']['lifecycle'] == 'active'
 
     refuse_the_rest('unconfigured [1]', no_samples)
-    assert 'successful' in probe.lifecycle(env, 'set', 'configure'), logs(log_dir)
+    assert probe.change('configure'), logs(log_dir)
     refuse_the_rest('inactive [2]', vented)
-    assert 'successful' in probe.lifecycle(env, 'set', 'activate')
+    assert probe.change('activate')
     probe.pressurise(log_dir)
     refuse_the_rest('active [3]', obeyed)
-    assert 'successful' in probe.lifecycle(env, 'set', 'deactivate')
+    assert probe.change('deactivate')
     assert max(probe.later(3.0, settle=1.5)) < VENTED, 'deactivate did not vent'
-    assert 'successful' in probe.lifecycle(env, 'set', 'shutdown')
-    assert probe.lifecycle(env, 'get').strip() == 'finalized [4]'
+    assert probe.change('shutdown')
+    assert probe.state() == 'finalized [4]'
     assert VENT_LINE.search((log_dir / 'driver_node.log').read_text()), logs(log_dir)
     refuse_the_rest('finalized [4]', no_samples)
     for state, transition, count, low, high in seen:
@@ -340,9 +386,9 @@ def test_every_transition_a_state_lacks_is_refused_while_commands_stream(rig):
 def test_shutdown_from_unconfigured_ends_finalized_with_nothing_driven(rig):
     start_driver, probe, env, log_dir = rig
     start_driver('false')
-    probe.until_unconfigured(env)
-    assert 'successful' in probe.lifecycle(env, 'set', 'shutdown'), logs(log_dir)
-    assert probe.lifecycle(env, 'get').strip() == 'finalized [4]'
+    assert probe.state() == 'unconfigured [1]'
+    assert probe.change('shutdown'), logs(log_dir)
+    assert probe.state() == 'finalized [4]'
     assert not probe.later(1.5, settle=0.0), 'samples published after shutdown'
     assert probe.status.get('driver_node: arm', {}).get('lifecycle') in (None, 'finalized')
-    probe.refused(env, 'configure', 'finalized [4]')
+    probe.refused_in_process('configure', 'finalized [4]')

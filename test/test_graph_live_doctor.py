@@ -35,7 +35,8 @@ from bellows_ros.models.stiffness_map import compression_for_stiffness
 from bellows_ros.nodes.diagnostics import level_of, STALE, WARN
 from bellows_ros.runtime.messages import msg
 
-pytestmark = pytest.mark.slow   # three node processes for ~2 min
+# three node processes for ~2 min
+pytestmark = [pytest.mark.slow, pytest.mark.realtime]
 
 SETPOINTS = (2100.0, 2300.0)    # N/m: 2.5-6.5 kPa above ambient, the gas leaks out
 SWITCH = 4.0                    # s between set-point changes

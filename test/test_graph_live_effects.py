@@ -33,7 +33,8 @@ import pytest
 
 from bellows_ros.runtime.messages import msg
 
-pytestmark = pytest.mark.slow  # a node process and ~8 ros2 CLI calls
+# a node process and ~8 ros2 CLI calls
+pytestmark = [pytest.mark.slow, pytest.mark.realtime]
 
 NODE = 'sim_actuator_node'
 LEAK = 'effect.air_leak.conductance'

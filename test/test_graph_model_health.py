@@ -31,7 +31,8 @@ import pytest
 from bellows_ros.nodes.diagnostics import level_of, STALE, WARN
 from bellows_ros.runtime.messages import msg
 
-pytestmark = pytest.mark.slow   # three node processes for ~40 s
+# three node processes for ~40 s
+pytestmark = [pytest.mark.slow, pytest.mark.realtime]
 
 CALIBRATION = 5.0               # s: the model node's healthy window (model_health.calibration)
 WINDOW = 2.0                    # s: model_health.window

@@ -97,7 +97,8 @@ def stop(process, timeout=10):
     return process.returncode
 
 
-pytestmark = pytest.mark.slow  # four node processes, ~25 s
+# four node processes, ~25 s
+pytestmark = [pytest.mark.slow, pytest.mark.realtime]
 
 
 @pytest.fixture

@@ -43,6 +43,8 @@ from bellows_ros.models.actuator import stiffness
 from bellows_ros.models.stiffness_map import compression_for_stiffness, stiffness_range
 from bellows_ros.runtime.messages import msg
 
+pytestmark = pytest.mark.realtime  # runs alone, after the others (scripts/test.sh)
+
 K_HIGH = 1900.0
 HOLD = 60.0
 

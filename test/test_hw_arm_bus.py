@@ -38,6 +38,8 @@ from bellows_ros.hardware.faults import Faults
 from bellows_ros.hardware.loopback_can import RECEIVE_BUFFER
 from bellows_ros.hardware.sim_arm_bus import SimArmBus
 
+pytestmark = pytest.mark.realtime  # runs alone, after the others (scripts/test.sh)
+
 CONFIG = arm_bus_config()
 N = CONFIG.n_segments
 

@@ -37,6 +37,8 @@ from bellows_ros.hardware import serial_protocol as sp
 from bellows_ros.hardware.actuator_board import ActuatorBoard
 from bellows_ros.hardware.sim_actuator_board import ActuatorState, SimActuatorBoard
 
+pytestmark = pytest.mark.realtime  # runs alone, after the others (scripts/test.sh)
+
 CONFIG = actuator_board_config()
 BOARD = """
 import sys

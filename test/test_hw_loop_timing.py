@@ -25,6 +25,8 @@ import pytest
 
 from bellows_ros.hardware.loop_timing import CATCH_UP_S, device_steps, LoopStats, PeriodicLoop
 
+pytestmark = pytest.mark.realtime  # runs alone, after the others (scripts/test.sh)
+
 
 def test_stats_percentiles_and_misses():
     stats = LoopStats(window=1000)

@@ -30,6 +30,8 @@ import pytest
 from bellows_ros.errors import ParameterError
 from bellows_ros.hardware.sim_actuator_board import ActuatorState, SimActuatorBoard
 
+pytestmark = pytest.mark.realtime  # runs alone, after the others (scripts/test.sh)
+
 BIN = Path(sys.executable).parent
 
 

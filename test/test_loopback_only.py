@@ -34,6 +34,8 @@ import pytest
 from bellows_ros.errors import ParameterError
 from bellows_ros.hardware.arm_bus import open_can
 
+pytestmark = pytest.mark.realtime  # runs alone, after the others (scripts/test.sh)
+
 HERE = Path(__file__).resolve().parent
 NETNS_RUN = HERE / 'netns_run.sh'
 LAUNCH_SIM = HERE.parent / 'scripts' / 'launch_sim.sh'

@@ -37,6 +37,8 @@ from bellows_ros.models.segment import external_torque, SegmentModel
 from bellows_ros.nodes import diagnostics
 from bellows_ros.nodes.model_node import MAX_MISSED_GAP, ModelNode
 
+pytestmark = pytest.mark.realtime  # runs alone, after the others (scripts/test.sh)
+
 DOMAIN = '194'
 DYNAMICS = {'segment': {'dynamics': {'inertia': 0.02, 'damping': 0.1, 'gravity': 0.3}}}
 

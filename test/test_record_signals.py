@@ -37,7 +37,8 @@ from rosbags.typesys import get_typestore, Stores
 
 from bellows_ros.runtime.messages import msg
 
-pytestmark = pytest.mark.slow  # each case records for a few seconds
+# each case records for a few seconds
+pytestmark = [pytest.mark.slow, pytest.mark.realtime]
 
 STORE = get_typestore(Stores.ROS2_JAZZY)
 BELLOWS = str(Path(sys.executable).with_name('bellows'))

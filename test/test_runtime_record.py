@@ -38,6 +38,8 @@ from bellows_ros.data import read_table
 from bellows_ros.errors import DataError
 from bellows_ros.runtime.messages import msg
 
+pytestmark = pytest.mark.realtime  # runs alone, after the others (scripts/test.sh)
+
 DOMAIN = '193'
 STORE = get_typestore(Stores.ROS2_JAZZY)
 BELLOWS = str(Path(sys.executable).with_name('bellows'))

@@ -30,7 +30,8 @@ import textwrap
 
 import pytest
 
-pytestmark = pytest.mark.slow  # a venv, colcon, the whole graph: a few minutes
+# a venv, colcon, the whole graph: a few minutes
+pytestmark = [pytest.mark.slow, pytest.mark.realtime]
 
 TOP = Path(__file__).resolve().parent.parent
 SHARED_ROS = TOP.parent / 'shared' / 'ros2'

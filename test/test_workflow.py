@@ -54,6 +54,8 @@ from bellows_ros.models.actuator import stiffness
 from bellows_ros.models.actuator_plant import ActuatorPlant
 from bellows_ros.models.stiffness_map import compression_for_stiffness
 
+pytestmark = pytest.mark.realtime  # runs alone, after the others (scripts/test.sh)
+
 DEVICE_YAML = """\
 /**:
   ros__parameters:
