@@ -28,6 +28,7 @@ import signal
 import subprocess
 import textwrap
 
+from node_processes import free_domain
 import pytest
 
 # a venv, colcon, the whole graph: a few minutes
@@ -90,8 +91,7 @@ def test_colcon_build_and_ros2_launch_on_a_sourced_jazzy(tmp_path):
     # setup.sh took the sourced ROS's rclpy: no ROS wheels from PyPI in this venv.
     assert 'using the sourced ROS 2 jazzy' in setup.stderr
     assert not list((venv / 'lib').glob('python3*/site-packages/rclpy'))
-    domain = str(os.getpid() % 40 + 40)  # in 1-101: see node_processes.free_domain
-    env = dict(os.environ, ROS_DOMAIN_ID=domain)
+    env = dict(os.environ, ROS_DOMAIN_ID=free_domain())
     env.pop('RMW_IMPLEMENTATION', None)  # that ROS has rmw_cyclonedds_cpp only
     log = open(tmp_path / 'launch.log', 'w')
     launch = subprocess.Popen(
