@@ -250,6 +250,14 @@ def _open(path):
         reader.open()
     except Exception as exc:  # rosbags' many error types for a bag it cannot open (see _messages)
         raise DataError(path, f'cannot open the rosbag2 recording ({_first_line(exc)})') from None
+    # rosbags takes metadata.yaml's counts as they are written: a damaged file may hold any
+    # YAML value there (a flipped bit makes `100` the text `1p0`).
+    for connection in reader.connections:
+        count = connection.msgcount
+        if isinstance(count, bool) or not isinstance(count, int) or count < 0:
+            reader.close()
+            raise DataError(path / 'metadata.yaml', f'topic {connection.topic}: message_count '
+                                                    f'{count!r} is not a count of messages')
     # Said before any chunk is read (its bytes are read whole, compressed or not): the index
     # of an MCAP file lists every chunk's sizes.
     for storage in getattr(reader.storage, 'storages', ()):

@@ -239,6 +239,20 @@ def test_spoilt_bags_are_one_line_or_a_table_that_passes_every_check(
     assert table['p'].min() >= data.MIN_ABSOLUTE_PRESSURE
 
 
+def test_a_message_count_that_is_not_a_number_is_one_line(good_bags, tmp_path):
+    # What the fuzzer above found (seed 510509): a flipped bit turned a count into text.
+    bag = tmp_path / 'bag'
+    shutil.copytree(good_bags['sqlite3'], bag)
+    metadata = bag / 'metadata.yaml'
+    text = metadata.read_text()
+    assert 'message_count: 40' in text
+    metadata.write_text(text.replace('message_count: 40', 'message_count: 4p', 1))
+    with pytest.raises(DataError) as error:
+        data.read_table(bag, 'actuator')
+    assert_one_line_naming(error.value, bag)
+    assert "message_count '4p' is not a count" in str(error.value)
+
+
 # --- parameter YAML -----------------------------------------------------------------------------
 
 scalars = st.one_of(st.none(), st.booleans(), st.integers(-2 ** 1030, 2 ** 1030), st.floats(),
