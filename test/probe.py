@@ -64,6 +64,13 @@ def spin_once(node, timeout_sec=0.05):
     _executors[node].spin_until_future_complete(_NEVER, timeout_sec=max(timeout_sec, 0.001))
 
 
+def result_of(node, future, timeout_sec=30.0):
+    """Spin `node` until `future` (e.g. a service call's) is done; its result."""
+    _executors[node].spin_until_future_complete(future, timeout_sec=timeout_sec)
+    assert future.done(), f'no answer within {timeout_sec} s'
+    return future.result()
+
+
 def spin_for(node, seconds):
     """Spin `node` for `seconds`."""
     spin_once(node, seconds)

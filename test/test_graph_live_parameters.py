@@ -29,6 +29,7 @@ s here, a service call milliseconds.
 import time
 
 from node_processes import free_domain, launch, logs, node_env, ros2_cli, stop_all
+from polling import wait_for
 import probe
 import pytest
 from rclpy.parameter import get_parameter_value, parameter_value_to_python as python_value
@@ -93,13 +94,6 @@ class Clients:
                                            str(python_value(p.value)))
                                           for p in e.changed_parameters), 1000)
 
-    def wait(self, future, timeout=30.0):
-        end = time.monotonic() + timeout
-        while not future.done() and time.monotonic() < end:
-            probe.spin_once(self.node, 0.05)
-        assert future.done(), f'no answer within {timeout} s'
-        return future.result()
-
     def ready(self):
         """Whether every node's parameter services are discovered."""
         probe.spin_once(self.node, 0.1)
@@ -108,10 +102,11 @@ class Clients:
     def set_parameter(self, node, name, value):
         """Set `name` to `value` (text, parsed as `ros2 param set` parses it); the result."""
         parameter = ParameterMsg(name=name, value=get_parameter_value(value))
-        return self.wait(self.clients[node].set_parameters([parameter])).results[0]
+        answer = probe.result_of(self.node, self.clients[node].set_parameters([parameter]))
+        return answer.results[0]
 
     def get_parameter(self, node, name):
-        value, = self.wait(self.clients[node].get_parameters([name])).values
+        value, = probe.result_of(self.node, self.clients[node].get_parameters([name])).values
         return python_value(value)
 
 
@@ -124,10 +119,9 @@ def graph(tmp_path, monkeypatch):
     probe.init()
     try:
         clients = Clients()
-        deadline = time.monotonic() + 90  # a loaded 2-core host starts a node in seconds
-        while not clients.ready() and time.monotonic() < deadline:
-            pass
-        assert clients.ready(), (clients.node.get_node_names(), logs(tmp_path))
+        # a loaded 2-core host starts a node in seconds
+        assert wait_for(clients.ready, timeout=90), (clients.node.get_node_names(),
+                                                     logs(tmp_path))
         yield env, tmp_path, clients
     finally:
         probe.shutdown()
