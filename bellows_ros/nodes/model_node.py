@@ -26,7 +26,8 @@ memory carries from sample to sample, Algorithm 1) and the node publishes
 
 Parameters: segments (int array, which segments to evaluate), params_file (str: identified
 parameters from `bellows identify`, laid over config/segment.yaml; '' = defaults),
-max_pending (int: unmatched half-samples kept before the oldest is dropped and counted),
+max_pending (int: unmatched half-samples kept before the oldest is dropped and counted; as
+deep as the sample queues, whose bursts may bring one topic's halves well before the other's),
 latency_budget (s: a torque published later than this after its sample's stamp is counted `late`),
 realtime_priority (int: SCHED_FIFO priority 1-99 for the node's threads, 0 = normal scheduling),
 cpu_latency_limit (s: CPU wake-up latency held while the node runs, 0 = idle CPUs poll, negative =
@@ -64,8 +65,12 @@ PARAMETERS = (
          low=1, high=dbc_segments(), items=(1, dbc_segments()), unique=True),
     Spec('params_file', '', "identified parameters laid over config/segment.yaml ('' = "
          'defaults)'),
-    Spec('max_pending', 100, 'unmatched half-samples kept before the oldest is dropped',
-         low=1, high=interfaces.SAMPLE_DEPTH),
+    # As deep as the reliable reader queues: a reader delivers what it holds in bursts (a hole
+    # repaired, an executor that fell behind), and one topic's burst of up to SAMPLE_DEPTH halves
+    # may come before the other's. With 100 such a burst dropped whole samples whose other half
+    # was still queued (1107 of 6126 in one run of test_graph_sample).
+    Spec('max_pending', interfaces.SAMPLE_DEPTH, 'unmatched half-samples kept before the oldest '
+         'is dropped', low=1, high=interfaces.SAMPLE_DEPTH),
     Spec('latency_budget', 0.002, 'a torque published later than this after its sample is '
          'counted late, s', low=1e-4, high=1.0, read_only=False),
     # Model health (bellows_ros.live): read once at start (the limits hold for this window).
