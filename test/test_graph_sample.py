@@ -38,6 +38,7 @@ import time
 from node_processes import free_domain, launch, logs, node_env, override, SIM_CONFIG
 import probe
 import pytest
+from rclpy.serialization import deserialize_message
 
 from bellows_ros import interfaces, params
 from bellows_ros.runtime import realtime, stamp_ns
@@ -125,26 +126,33 @@ def graph(tmp_path, monkeypatch):
             final[status.name]['_message'] = status.message
     watcher.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
     # Every message on the four sample topics, by the names it carries (subscribed before the
-    # driver starts: it waits for a subscriber on each).
+    # driver starts: it waits for a subscriber on each); the stamp of every arm sample, and of
+    # the first driving torque. The model node's reader matches the driver's writer when its own
+    # discovery gets there, which on a loaded machine was 0.7-2.1 s after this probe's (which
+    # the driver waits for). Samples published before it matched never reach it; from its first
+    # torque on, none may be missing.
     seen = {topic.resolved(): Counter() for topic in (
         interfaces.JOINT_STATES, interfaces.CHAMBERS, interfaces.ACTUATOR_JOINT_STATES,
         interfaces.ACTUATOR_CHAMBERS)}
+    arm_stamps, first_torque = [], []
+
+    def count(counter, stamps=None):
+        def on_sample(message):
+            counter.update([tuple(message.name)])
+            if stamps is not None:
+                stamps.append(stamp_ns(message.header.stamp))
+        return on_sample
     for name, counter in seen.items():
-        watcher.create_subscription(msg.JointState, name,
-                                    lambda m, counter=counter: counter.update([tuple(m.name)]),
+        stamps = arm_stamps if name == interfaces.JOINT_STATES.resolved() else None
+        watcher.create_subscription(msg.JointState, name, count(counter, stamps),
                                     interfaces.SAMPLE_DEPTH)
-    # The stamp of every arm sample, and of the first driving torque: the model node's reader
-    # matches the driver's writer when its own discovery gets there, which on a loaded machine
-    # was 0.7-2.1 s after this probe's (which the driver waits for). Samples published before
-    # it matched never reach it; from its first torque on, none may be missing.
-    stamps = seen['stamps'] = []
-    watcher.create_subscription(msg.JointState, interfaces.JOINT_STATES.resolved(),
-                                lambda m: stamps.append(stamp_ns(m.header.stamp)),
-                                interfaces.SAMPLE_DEPTH)
-    torque = seen['first torque'] = []
-    watcher.create_subscription(
-        msg.JointState, interfaces.DRIVING_TORQUE.resolved(),
-        lambda m: torque or torque.append(stamp_ns(m.header.stamp)), interfaces.SAMPLE_DEPTH)
+
+    def on_torque(serialized):  # only the first is decoded
+        if not first_torque:
+            torque = deserialize_message(serialized, msg.JointState)
+            first_torque.append(stamp_ns(torque.header.stamp))
+    watcher.create_subscription(msg.JointState, interfaces.DRIVING_TORQUE.resolved(), on_torque,
+                                interfaces.SAMPLE_DEPTH, raw=True)
     # One scheduling class for the whole path: config/nodes_sim.yaml runs the simulated arm and
     # the driver SCHED_FIFO above a model node at normal priority, which on a loaded machine then
     # falls behind and drops samples, and this test counts every sample through the model.
@@ -173,7 +181,7 @@ def graph(tmp_path, monkeypatch):
             ('wait_for_subscribers', 20.0))]
         processes['driver_node'] = launch('driver_node', sum(driver, []) + normal['driver_node'],
                                           env, tmp_path)
-        yield processes, domain, tmp_path, watcher, final, seen
+        yield processes, domain, tmp_path, watcher, final, seen, arm_stamps, first_torque
     finally:
         for process in processes.values():
             stop(process)
@@ -181,7 +189,11 @@ def graph(tmp_path, monkeypatch):
 
 
 def test_graph_publishes_and_every_sample_is_evaluated(graph):
-    processes, domain, tmp_path, node, final, seen = graph
+    processes, domain, tmp_path, node, final, seen, stamps, first_torque = graph
+
+    def since_first_torque():
+        """Return how many arm samples the probe got from the model's first torque's sample on."""
+        return sum(stamp >= first_torque[0] for stamp in stamps) if first_torque else 0
     # no bellows_ros on its path: only the ROS packages the venv (or a sourced ROS 2) holds
     # The probe takes its samples while the script runs: its queues hold 5 s, the script as long.
     plain = subprocess.Popen([sys.executable, '-c', PLAIN_SUBSCRIBER, '/joint_states',
@@ -220,10 +232,9 @@ def test_graph_publishes_and_every_sample_is_evaluated(graph):
     # report waits: wait for its count to catch up.
 
     def caught_up():
-        first = seen['first torque'][:1]
-        due = sum(stamp >= first[0] for stamp in seen['stamps']) if first else 1
         return final['driver_node: arm']['_message'].startswith('driver stopped') \
-            and int(final['model_node: driving torque']['evaluated']) >= due
+            and int(final['model_node: driving torque']['evaluated']) >= max(
+                1, since_first_torque())
     end = time.monotonic() + 30.0
     while time.monotonic() < end and not caught_up():
         probe.spin_once(node, timeout_sec=0.05)
@@ -231,12 +242,12 @@ def test_graph_publishes_and_every_sample_is_evaluated(graph):
     driver, model = final['driver_node: arm'], final['model_node: driving torque']
     published = int(driver['published'])
     assert published > 500, (driver, logs(tmp_path))
-    stamps, torque = seen.pop('stamps'), seen.pop('first torque')
     holes = sum(b - a > 1.5 * interfaces.SAMPLE_PERIOD * 1e9 for a, b in zip(stamps, stamps[1:]))
-    assert len(stamps) == published and torque, \
-        (f'probe: {len(stamps)} arm samples, {holes} holes in their stamps, the last '
-         f'{(time.time_ns() - stamps[-1]) * 1e-9:.1f} s ago', driver, logs(tmp_path))
-    since_first = sum(stamp >= torque[0] for stamp in stamps)
+    last = f'{(time.time_ns() - stamps[-1]) * 1e-9:.1f} s ago' if stamps else 'none'
+    assert len(stamps) == published and first_torque, \
+        (f'probe: {len(stamps)} arm samples, {holes} holes in their stamps, the last {last}',
+         driver, logs(tmp_path))
+    since_first = since_first_torque()
     assert since_first > 500, (published, since_first)  # it matched, and ran a while
     assert int(model['evaluated']) == since_first, \
         f'driver {driver}\nmodel {model}\nthis probe received {dict(seen)}, ' \
