@@ -27,6 +27,7 @@ import signal
 import subprocess
 import sys
 import time
+import tty
 
 from polling import wait_for
 import pytest
@@ -147,6 +148,10 @@ def test_the_driver_refuses_a_tty_that_does_not_name_itself_and_writes_nothing_t
     closing(master)
     closing(slave)
     os.set_blocking(master, False)
+    # The other program has its tty raw, as a serial program does. A new pty echoes what it is
+    # sent back to the master until someone makes it raw, and the driver may open it only after
+    # the greeting below: the echo would read as bytes the driver wrote.
+    tty.setraw(slave)
     port = tmp_path / 'board'
     os.symlink(os.ttyname(slave), port)
     board = ActuatorBoard(dataclasses.replace(CONFIG, port=str(port), reconnect_interval=0.05))
