@@ -31,8 +31,9 @@ import textwrap
 from node_processes import free_domain
 import pytest
 
-# a venv, colcon, the whole graph: a few minutes
-pytestmark = [pytest.mark.slow, pytest.mark.realtime]
+# A venv, colcon, the whole graph: a minute. Not `realtime`: it asserts that the torque flows on
+# the fallback executor, no rate, so it runs in the parallel phase beside the other tests.
+pytestmark = pytest.mark.slow
 
 TOP = Path(__file__).resolve().parent.parent
 SHARED_ROS = TOP.parent / 'shared' / 'ros2'
@@ -49,7 +50,7 @@ COUNT = textwrap.dedent("""\
     node.create_subscription(JointState, '/bellows/driving_torque',
                              lambda m: seen.append((time.monotonic(), len(m.effort))), 1000)
     end = time.monotonic() + float(sys.argv[1])
-    while time.monotonic() < end and len(seen) < 3000:
+    while time.monotonic() < end and len(seen) < 500:
         rclpy.spin_once(node, timeout_sec=0.05)
     if len(seen) < 2:
         print('torque messages: 0')
