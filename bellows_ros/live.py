@@ -313,16 +313,18 @@ def diagnose_window(config, rows, floors, causes=LIVE_CAUSES):
 
 def _serve(connection):
     """Serve in the worker process: say it is ready, answer (job, function, args) until None."""
-    connection.send(READY)
-    while True:
-        try:
-            request = connection.recv()
-        except EOFError:        # the node is gone
-            return
-        if request is None:
-            return
-        job, function, args = request
-        connection.send((job, function(*args)))
+    from bellows_ros.blas import one_blas_thread
+    with one_blas_thread():    # faster fits (bellows_ros/blas.py), and the node keeps its core
+        connection.send(READY)
+        while True:
+            try:
+                request = connection.recv()
+            except EOFError:        # the node is gone
+                return
+            if request is None:
+                return
+            job, function, args = request
+            connection.send((job, function(*args)))
 
 
 class DiagnosisWorker:

@@ -33,7 +33,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / 'bellows_ros'
 # Rank of each top-level part of the package; a module may import only its own rank or lower.
 LAYERS = {
     'errors': 0, 'outputs': 0, 'interfaces': 0, 'params': 0, 'table': 0, 'data': 0, 'bag': 0,
-    'bag_lock': 0,
+    'bag_lock': 0, 'blas': 0,
     'models': 1,
     'config': 2,
     'identify': 3, 'doctor': 3,                               # offline stack

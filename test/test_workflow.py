@@ -33,6 +33,7 @@ stiffness_controller_node, scenario_node, `bellows record`):
 
 The code gets only the records; the device's parameters are used to build it and nowhere else.
 """
+from concurrent.futures import ThreadPoolExecutor
 import json
 import math
 import re
@@ -147,7 +148,8 @@ def stiffness_error(bag, k_set):
 
 
 def identify_and_diagnose(data, out):
-    """Run steps 2 and 3 on `data` (bag or CSV); return report.json and extended.yaml."""
+    """Run steps 2 and 3 on `data` (bag or CSV) into a new `out`: report.json, extended.yaml."""
+    out.mkdir()
     fitted, report = out / 'fitted.yaml', out / 'report'
     bellows('identify', 'actuator', data, '--output', fitted, '--quiet')
     load_actuator_params(str(fitted))  # the identified file loads as parameters
@@ -171,11 +173,13 @@ def test_record_identify_diagnose_extend_track(tmp_path, monkeypatch):
     # 2.-3. From the bag, and from the CSV of the same record.
     csv = tmp_path / 'record.csv'
     bellows('export', 'actuator', bag, '--output', csv)
+    # The doctor's steps run no graph and need no quiet machine: bag and CSV side by side.
+    with ThreadPoolExecutor(2) as pool:
+        runs = {source: pool.submit(identify_and_diagnose, data, tmp_path / source)
+                for source, data in (('bag', bag), ('csv', csv))}
     extended = {}
-    for source, data in (('bag', bag), ('csv', csv)):
-        out = tmp_path / source
-        out.mkdir()
-        report, extended[source] = identify_and_diagnose(data, out)
+    for source, run in runs.items():
+        report, extended[source] = run.result()
         assert 'buckling' in report['causes'], (source, report['causes'])
         load_actuator_params(str(extended[source]))
 

@@ -25,6 +25,7 @@ import importlib
 import signal
 import sys
 
+from bellows_ros.blas import one_blas_thread
 from bellows_ros.errors import BellowsError
 from bellows_ros.outputs import Signalled, signals_as_exceptions
 
@@ -64,7 +65,7 @@ def main(argv=None):
     # writer would corrupt the chunk being written.
     signals = () if args.command == 'record' else (signal.SIGTERM, signal.SIGHUP)
     try:
-        with signals_as_exceptions(signals):
+        with signals_as_exceptions(signals), one_blas_thread():
             return module.run(args) or 0
     except Signalled as exc:
         print(f'bellows {args.command}: stopped by {exc}; nothing half written was kept',
