@@ -113,7 +113,7 @@ class ScenarioNode(Node):
         # a run's tracking error measures the machine, not the controller.
         self.vents = []  # s since the start of each True on bellows/vented
         self.subscription(interfaces.VENTED, self.on_vented)
-        # Best effort: the recorder must never hold up the driver's reliable writers (a reader
+        # Best effort: the scenario must never hold up the driver's reliable writers (a reader
         # that does not acknowledge makes them block) and may miss samples when it falls behind.
         sensor = qos_profile_sensor_data
         for topic, callback in ((interfaces.JOINT_STATES, self.on_joint_states),
@@ -258,7 +258,7 @@ class ScenarioNode(Node):
                 return lines + [f'segment_1 tracking ({label}): the run ended '
                                 f'{run[-1][0] if run else 0.0:.1f} s into the {length:g} s '
                                 f'trajectory (duration {self.duration:g} s is too short, or no '
-                                '/joint_states)']
+                                f'{interfaces.JOINT_STATES.resolved(self.get_namespace())})']
             rms.append(math.sqrt(sum(e * e for e in errors) / len(errors)))
             vents = [t for t in self.vents if start <= t <= start + length]
             lines.append(f'segment_1 tracking, {label} ({len(errors)} samples): RMS error '
