@@ -283,12 +283,7 @@ def test_a_driver_stopped_for_half_a_second_stamps_its_backlog_on_the_arms_clock
     stamps, then a burst stamped at the same instant, each sample's age hidden from the arm
     controller's `max_sample_age` (docs/bench_log.md, 2026-11-26).
     """
-    processes, domain, tmp_path, watcher, final, seen, _, _ = graph
-    stamps = []
-    watcher.create_subscription(
-        msg.JointState, interfaces.JOINT_STATES.resolved(),
-        lambda m: stamps.append(m.header.stamp.sec * 10**9 + m.header.stamp.nanosec),
-        interfaces.SAMPLE_DEPTH)
+    processes, domain, tmp_path, watcher, final, seen, stamps, _ = graph
 
     def spin(seconds):
         end = time.monotonic() + seconds
