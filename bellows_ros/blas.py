@@ -16,14 +16,9 @@
 One BLAS thread for the fits.
 
 The identification's and the doctor's linear algebra is on tall, narrow matrices (thousands of
-rows, a few parameters), where OpenBLAS's threads cost more than they share.
-
-Measured on this project's 2-core machine, 2026-11-29, the same 32 s actuator record (the
-workflow test's): `bellows diagnose actuator` took 48.3 s with OpenBLAS's default two threads and
-25.6 s with one (SciPy's SVD in `least_squares` and NumPy's `lstsq` are most of it);
-`bellows identify` and diagnose on the segment's big records took the same wall time either way
-(85 s) and 22 % less CPU with one. Two diagnoses side by side took 143 s with the default threads
-and 30 s with one each.
+rows, a few parameters), where OpenBLAS's threads cost more than they share: on two cores an
+actuator diagnosis took half the time on one thread, and two side by side a fifth
+(docs/bench_log.md, 2026-11-29).
 """
 
 
@@ -32,7 +27,9 @@ def one_blas_thread():
     Return a context in which NumPy's and SciPy's BLAS libraries each run one thread.
 
     SciPy ships an OpenBLAS of its own, loaded with `scipy.linalg`; it is imported here, so the
-    limit reaches it too (threadpoolctl limits the libraries loaded when the context is entered).
+    limit reaches it too (threadpoolctl limits the libraries loaded when it is called). The limit
+    holds from the call on, and leaving the context puts the threads back: a process that keeps
+    it for life (a pool's `initializer`) only calls it.
     """
     import numpy  # noqa: F401
     import scipy.linalg  # noqa: F401
