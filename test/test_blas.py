@@ -14,6 +14,7 @@
 
 """The fits run one BLAS thread (bellows_ros/blas.py): NumPy's and SciPy's, in every command."""
 import json
+from multiprocessing import get_context
 import os
 import subprocess
 import sys
@@ -22,6 +23,7 @@ import textwrap
 from threadpoolctl import threadpool_info, threadpool_limits
 
 from bellows_ros import cli
+from bellows_ros.blas import one_blas_thread
 
 
 def blas_threads():
@@ -65,3 +67,11 @@ def test_a_command_runs_with_one_blas_thread(monkeypatch):
     with threadpool_limits(limits=2, user_api='blas'):
         assert cli.main(['stiffness', 'unused.csv']) == 0
     assert seen and seen[0] and set(seen[0].values()) == {1}, seen
+
+
+def test_a_worker_process_started_with_it_keeps_one_thread(monkeypatch):
+    """As `bellows bench doctor` starts its workers, side by side."""
+    monkeypatch.setenv('OPENBLAS_NUM_THREADS', '2')
+    with get_context('spawn').Pool(1, initializer=one_blas_thread) as pool:
+        threads = pool.apply(blas_threads)
+    assert threads and set(threads.values()) == {1}, threads
