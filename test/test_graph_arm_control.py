@@ -24,16 +24,19 @@ Criteria: the segment really moves (a vented segment rests at Ψ ≈ 0; the swee
 the angle follows the set-point (RMS error over the sweep below 0.05 rad, the hold angles within
 0.02 rad at their ends), the controller's /diagnostics report its tracking error and commands, and
 the driver's watchdog vented the arm while it tracked only after a stall the controller measured
-(the controller keeps publishing at its rate; a stall of the shared host is not the code's).
+(the controller keeps publishing at its rate; a stall of the shared host is not the code's: such a
+vent and the controller's move back after it are left out of the error, and may not take more than
+30 % of the sweep).
 """
 import math
 import random
 import time
 
-from node_processes import free_domain, launch_arm, node_env, override, stop_all
+from node_processes import free_domain, launch_arm, node_env, override, SIM_CONFIG, stop_all
 import probe
 import pytest
 
+from bellows_ros import interfaces, params
 from bellows_ros.config.hardware import arm_bus_config
 from bellows_ros.control import angle_trajectory
 from bellows_ros.runtime.messages import msg
@@ -45,6 +48,27 @@ def interpolate(points, t):
     """Value of a (time, value) series at `t` (the last value at or before it)."""
     before = [v for s, v in points if s <= t]
     return before[-1] if before else math.nan
+
+
+def after_vents(vented, angle, setpoints, resume_speed):
+    """
+    Return the (start, end) times of each vent and the controller's move back after it.
+
+    `vented`: (time, bool) from bellows/vented. A vent lasts until a command takes again; the
+    set-point then moves back from where the segment fell, in a half-cosine of peak speed
+    `resume_speed` rad/s (arm_controller_node's `resume_speed`), and 0.5 s settles the gains.
+    """
+    spans, start = [], None
+    for t, on in vented:
+        if on and start is None:
+            start = t
+        elif not on and start is not None:
+            offset = interpolate(angle, t) - interpolate(setpoints, t)
+            spans.append((start, t + abs(offset) * math.pi / (2.0 * resume_speed) + 0.5))
+            start = None
+    if start is not None:
+        spans.append((start, math.inf))
+    return spans
 
 
 @pytest.mark.slow
@@ -59,7 +83,7 @@ def test_arm_controller_tracks_on_the_simulated_arm(tmp_path, monkeypatch):
     trajectory = angle_trajectory.SWEEP
     processes = launch_arm(env, group, tmp_path,
                            override('arm_controller_node', 'feedforward', 'paper_a'))
-    angle, setpoints, controller, driver = [], [], [], []
+    angle, setpoints, controller, driver, vented = [], [], [], [], []
     stopping = None  # the driver's last report may follow the controller's exit: not counted
 
     def on_diagnostics(array):
@@ -79,6 +103,8 @@ def test_arm_controller_tracks_on_the_simulated_arm(tmp_path, monkeypatch):
                                     m.position[m.name.index('segment_1')]))
             if 'segment_1' in m.name else None, 200)
         node.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
+        node.create_subscription(msg.Bool, interfaces.VENTED.resolved(),
+                                 lambda m: vented.append((time.time(), m.data)), 10)
         # Before the first set-point: samples flowing, the controller subscribed to the set-points
         # (sent before discovery matched them, the first second of the sweep is lost, and the
         # set-point then steps from the held angle to mid-move: an overshoot of the gains, not
@@ -129,18 +155,31 @@ def test_arm_controller_tracks_on_the_simulated_arm(tmp_path, monkeypatch):
             for t, c in controller if t >= first_setpoint]
     during = [(t, psi) for t, psi in angle if setpoints[0][0] <= t <= setpoints[-1][0]]
     assert len(during) > 1000, (len(during), logs)
-    errors = [interpolate(setpoints, t) - psi for t, psi in during]
-    rms = math.sqrt(sum(e * e for e in errors) / len(errors))
+    # A vent that a measured stall caused, and the move back after it, are the host's, not the
+    # tracking's: the error is scored outside them (once, in a CI run, a 0.1 s stall vented the
+    # segment and the fall made the whole sweep's RMS 0.071 rad). They may not take the sweep.
+    spans = after_vents([(t, on) for t, on in vented if t >= setpoints[0][0]], angle, setpoints,
+                        params.read_file(SIM_CONFIG, 'arm_controller_node')['resume_speed'])
+    scored = [(t, psi) for t, psi in during if not any(a <= t <= b for a, b in spans)]
+    errors = [interpolate(setpoints, t) - psi for t, psi in scored]
+    rms = math.sqrt(sum(e * e for e in errors) / len(errors)) if errors else math.nan
     reached = (max(psi for _, psi in during), min(psi for _, psi in during))
-    info = (f'RMS error {rms:.4f} rad, angle range {reached[1]:.3f}..{reached[0]:.3f} rad, '
-            f'{vents} vent(s) while tracking; sample age p99, max (us), stale skipped: {ages}')
+    t0 = setpoints[0][0]
+    shown = [(round(a - t0, 2), round(b - t0, 2)) for a, b in spans]
+    info = (f'RMS error {rms:.4f} rad over {len(scored)} of {len(during)} samples (vented and '
+            f'moving back: {shown} s into the sweep), '
+            f'angle range {reached[1]:.3f}..{reached[0]:.3f} rad, {vents} vent(s) while '
+            f'tracking; sample age p99, max (us), stale skipped: {ages}')
     assert vents == 0 or (stalls and int(last['restarts']) >= vents), info + '\n' + logs
+    assert len(scored) > 0.7 * len(during), info + '\n' + logs
     assert reached[0] > 0.6 and reached[1] < -0.6, info + '\n' + logs
     assert rms < 0.05, info + '\n' + logs
     # the end of every hold: settled on its angle
-    t_end = setpoints[0][0]
+    t_end = t0
     for target, move, hold in trajectory.waypoints:
         t_end += move + hold
+        if any(a <= t_end - 0.05 <= b for a, b in spans):
+            continue
         psi = interpolate(angle, t_end - 0.05)
         assert abs(psi - target) < 0.02, f'hold at {target} rad ended at {psi:.4f}; ' + info
     assert int(last['commands']) > 1000 and last['source'] == 'topic'
