@@ -59,7 +59,9 @@ fi
 phase() { "$@" && return 0; local status=$?; [ "$status" = 5 ] && return 0; return "$status"; }
 workers=$(nproc 2>/dev/null || echo 1)
 parallel=()
-[ "$workers" -gt 1 ] && parallel=(-n "$workers" --dist loadfile)
+# Whole modules to the workers, in collection order (test/conftest.py puts the slow ones first;
+# xdist's own order, by test count, left a one-test slow module for the end).
+[ "$workers" -gt 1 ] && parallel=(-n "$workers" --dist loadfile --no-loadscope-reorder)
 status=0
 echo "bellows test: 1/2, the tests not marked realtime (${workers} worker(s))" >&2
 # One BLAS thread per worker: the workers already take every core.

@@ -50,9 +50,10 @@ def pytest_collection_modifyitems(config, items):
     """
     In the parallel phase, modules with a slow test first (scripts/test.sh).
 
-    pytest-xdist hands whole modules to its workers in collection order. A slow module that comes
-    last in the alphabet ran alone at the end of the phase while the other worker idled; the
-    quick modules now fill the end instead. The order within a module is kept.
+    pytest-xdist hands whole modules to its workers in collection order (scripts/test.sh turns its
+    own reordering, by test count, off). A slow module of one test (test_sourced_ros, 40 s) ran
+    alone at the end of the phase while the other worker idled; the quick modules now fill the
+    end instead. The order within a module is kept.
     """
     if 'PYTEST_XDIST_WORKER' not in os.environ:  # a serial run keeps the usual order
         return
