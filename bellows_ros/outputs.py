@@ -67,14 +67,30 @@ def _same_file(a, b):
 def _writable_directory(directory, what):
     if not directory.is_dir():
         raise BellowsError(f'{what}: no such directory: {directory}')
-    probe = None
     try:  # the one test that holds for root, ACLs and read-only mounts alike: try it
-        probe = tempfile.NamedTemporaryFile(dir=directory, prefix='.bellows-probe-', delete=True)
+        _probe(directory)
     except OSError as exc:
         raise BellowsError(f'{what}: cannot write in {directory} ({exc.strerror})') from None
-    finally:
-        if probe is not None:
-            probe.close()
+
+
+def _probe(directory):
+    """
+    Create a file in `directory` and let it go; OSError if it cannot be written in.
+
+    The file has no name (O_TMPFILE), so a signal in between leaves nothing behind: a named probe
+    stayed in the user's directory once when SIGHUP came between its creation and its removal.
+    Where that fails (a directory not writable, a file system or kernel without unnamed files),
+    a named probe, removed at once, decides and its error is the one reported.
+    """
+    unnamed = getattr(os, 'O_TMPFILE', None)
+    if unnamed is not None:
+        try:
+            os.close(os.open(directory, unnamed | os.O_WRONLY, 0o600))
+            return
+        except OSError:
+            pass
+    with tempfile.NamedTemporaryFile(dir=directory, prefix='.bellows-probe-'):
+        pass
 
 
 _KINDS = ((stat.S_ISCHR, 'a character device'), (stat.S_ISBLK, 'a block device'),

@@ -20,6 +20,7 @@ nodes are made with mknod in tmp_path only (never a path under /dev). Also: a re
 is replaced only when its manifest says the package wrote every entry, a report given as a link
 is resolved, and no temporary file survives SIGTERM or SIGHUP.
 """
+import errno
 import fcntl
 import json
 import os
@@ -28,6 +29,7 @@ import socket
 import stat
 import subprocess
 import sys
+import tempfile
 import time
 
 import numpy as np
@@ -234,6 +236,35 @@ def test_an_ignored_hangup_stays_ignored(tmp_path):
     _, err = process.communicate(timeout=120)
     assert process.returncode == 0, err
     assert [p.name for p in out_dir.iterdir()] == ['out.csv']
+
+
+def test_the_writability_probe_has_no_name_a_signal_could_leave(tmp_path, monkeypatch):
+    """The probe of an output's directory is an unnamed file where the file system has them."""
+    try:
+        os.close(os.open(tmp_path, os.O_TMPFILE | os.O_WRONLY, 0o600))
+    except (AttributeError, OSError):
+        pytest.skip('no unnamed files (O_TMPFILE) here: the named probe is used')
+
+    def named(*args, **kwargs):
+        raise AssertionError('a named probe in the output directory')
+    monkeypatch.setattr(tempfile, 'NamedTemporaryFile', named)
+    assert outputs.check_output(tmp_path / 'out.csv') == tmp_path / 'out.csv'
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_without_unnamed_files_the_named_probe_is_removed(tmp_path, monkeypatch):
+    refused, real_open = [], os.open
+
+    def no_unnamed_files(path, flags, *args, **kwargs):
+        if flags & getattr(os, 'O_TMPFILE', -1) == getattr(os, 'O_TMPFILE', 0):
+            refused.append(path)
+            raise OSError(errno.EOPNOTSUPP, os.strerror(errno.EOPNOTSUPP))
+        return real_open(path, flags, *args, **kwargs)
+    monkeypatch.setattr(os, 'open', no_unnamed_files)
+    assert outputs.check_output(tmp_path / 'out.csv') == tmp_path / 'out.csv'
+    assert list(tmp_path.iterdir()) == []
+    if hasattr(os, 'O_TMPFILE'):
+        assert refused == [tmp_path]
 
 
 def simulate_then_signal(tmp_path, signum, disposition):
