@@ -153,18 +153,18 @@ def test_arm_controller_tracks_on_the_simulated_arm(tmp_path, monkeypatch):
     last = controller[-1][1]
     ages = [(c.get('sample_age_p99_us'), c.get('sample_age_max_us'), c['stale_skipped'])
             for t, c in controller if t >= first_setpoint]
-    during = [(t, psi) for t, psi in angle if setpoints[0][0] <= t <= setpoints[-1][0]]
+    t0 = setpoints[0][0]  # the sweep's start, on the system clock
+    during = [(t, psi) for t, psi in angle if t0 <= t <= setpoints[-1][0]]
     assert len(during) > 1000, (len(during), logs)
     # A vent that a measured stall caused, and the move back after it, are the host's, not the
     # tracking's: the error is scored outside them (once, in a CI run, a 0.1 s stall vented the
     # segment and the fall made the whole sweep's RMS 0.071 rad). They may not take the sweep.
-    spans = after_vents([(t, on) for t, on in vented if t >= setpoints[0][0]], angle, setpoints,
+    spans = after_vents([(t, on) for t, on in vented if t >= t0], angle, setpoints,
                         params.read_file(SIM_CONFIG, 'arm_controller_node')['resume_speed'])
     scored = [(t, psi) for t, psi in during if not any(a <= t <= b for a, b in spans)]
     errors = [interpolate(setpoints, t) - psi for t, psi in scored]
     rms = math.sqrt(sum(e * e for e in errors) / len(errors)) if errors else math.nan
     reached = (max(psi for _, psi in during), min(psi for _, psi in during))
-    t0 = setpoints[0][0]
     shown = [(round(a - t0, 2), round(b - t0, 2)) for a, b in spans]
     info = (f'RMS error {rms:.4f} rad over {len(scored)} of {len(during)} samples (vented and '
             f'moving back: {shown} s into the sweep), '
