@@ -105,16 +105,27 @@ def test_arm_controller_tracks_on_the_simulated_arm(tmp_path, monkeypatch):
         node.create_subscription(msg.DiagnosticArray, '/diagnostics', on_diagnostics, 50)
         node.create_subscription(msg.Bool, interfaces.VENTED.resolved(),
                                  lambda m: vented.append((time.time(), m.data)), 10)
-        # Before the first set-point: samples flowing, the controller subscribed to the set-points
-        # (sent before discovery matched them, the first second of the sweep is lost, and the
-        # set-point then steps from the held angle to mid-move: an overshoot of the gains, not
-        # tracking), and a driver report, so that a vent counted by then belongs to the start-up.
-        end = time.monotonic() + 20
-        while (len(angle) < 500 or not driver or publisher.get_subscription_count() == 0) \
-                and time.monotonic() < end:
-            probe.spin_once(node, timeout_sec=0.05)
+        # Before the sweep: samples flowing, a driver report (so that a vent counted by then
+        # belongs to the start-up), and the controller following this test's set-point. That the
+        # publisher has matched the controller's reader is not enough: the reader may match the
+        # writer later, and drops what comes before (once, in CI, the sweep's first second was
+        # lost; the set-point then stepped from the held angle to mid-move, an overshoot to
+        # 0.81 rad of the gains, not tracking). So the sweep's first set-point is sent until
+        # /diagnostics says the controller follows the topic.
+        psi_0, _, _ = angle_trajectory.setpoint(trajectory, 0.0)
+        next_send = time.monotonic()
+        end = next_send + 30
+        while (len(angle) < 500 or not driver or not controller
+               or controller[-1][1].get('source') != 'topic') and time.monotonic() < end:
+            if time.monotonic() >= next_send:
+                publisher.publish(msg.JointState(name=['segment_1'], position=[psi_0],
+                                                 velocity=[0.0]))
+                next_send = time.monotonic() + 0.02
+            probe.spin_once(node, timeout_sec=0.02)
         assert angle, 'no /joint_states from the graph'
         assert publisher.get_subscription_count() == 1, 'the controller never subscribed'
+        assert controller and controller[-1][1].get('source') == 'topic', \
+            'the controller never followed the set-point topic'
         # Both series on the system clock: the angle at the driver's stamp (the instant the arm
         # sampled it), the set-point at its sending. This process's own delays (a garbage
         # collection of the test session, a backlog of /joint_states) then shift neither.
