@@ -33,7 +33,7 @@ while [ $# -gt 0 ]; do
     --no-arm) arm=0 ;;
     --params) params="$2"; shift ;;
     --) shift; extra=("$@"); break ;;
-    -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,12p' "$0"; exit 0 ;;
     *) echo "launch_hw.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
   shift
