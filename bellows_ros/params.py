@@ -69,6 +69,31 @@ def default_file(name):
     return config_dir() / f'{name}.yaml'
 
 
+PACKAGE_URL = 'package://'
+
+
+def resolve(path):
+    """
+    Return the file a parameter file's name stands for.
+
+    A path is itself; a `package://<package>/<path>` URL names a file of that package's share
+    directory. The URL is ROS's convention (resource_retriever, URDF meshes), so a parameter
+    file that names another one works from a checkout, a pip and a colcon install alike. This
+    package is found as `config_dir` finds it (no ROS needed); another through the ament index.
+    """
+    text = str(path)
+    if not text.startswith(PACKAGE_URL):
+        return Path(path)
+    package, _, inside = text[len(PACKAGE_URL):].partition('/')
+    if package == 'bellows_ros':
+        return config_dir().parent / inside
+    try:
+        from ament_index_python.packages import get_package_share_directory
+        return Path(get_package_share_directory(package)) / inside
+    except Exception:  # ament_index absent (no ROS), or no such package in the index
+        raise ParameterError(f"{text}: no package '{package}' in the ament index") from None
+
+
 def flatten(tree, prefix=''):
     """Flatten nested dicts into ROS 2 dotted parameter names."""
     flat = {}
@@ -249,9 +274,10 @@ def read_sections(path):
     Read a ROS 2 parameter file: {section name: flat parameters}, in the file's order.
 
     Section names are normalised as rcl does (a leading slash added: `model_node` is
-    `/model_node`). A malformed file raises ParameterError naming the file and line.
+    `/model_node`). A malformed file raises ParameterError naming the file and line. `path` may
+    be a `package://` URL (`resolve`).
     """
-    path = Path(path)
+    path = resolve(path)
     try:
         if not path.is_file() and path.exists():  # a FIFO or /dev/zero: no end to read to
             raise ParameterError(f'{path}: not a regular file (a parameter file is a file)')

@@ -7,19 +7,19 @@
 #
 # Starts sim_arm_node (CAN over udp_multicast) and sim_actuator_node (serial on a pty), then
 # driver_node, model_node, stiffness_controller_node and arm_controller_node, all in the background
-# with their logs in DIR/logs. Then runs scenario_node (stiffness step 1400 -> 1900 N/m, segment_1
-# tracking an angle sweep): it prints a summary and writes DIR/scenario.png and .csv, and the
-# graph is stopped. With --no-scenario the graph runs until Ctrl-C. With --namespace NS every node
-# runs in /NS (its topics under /NS/...), so graphs in different namespaces run side by side,
-# each with its own pty and CAN group. With --record BAG, `bellows record` writes the devices'
-# samples (/joint_states, /bellows/chambers, /actuator/joint_states, /actuator/chambers,
-# /bellows/wrench) to the rosbag2 directory BAG while
-# the graph runs (root namespace only; docs/workflow.md). With --actuator-only the arm's nodes
-# (sim_arm_node, model_node, arm_controller_node) are left out and the actuator path runs
-# SCHED_FIFO as the arm's does (a lighter graph whose recording keeps every sample on a busy
-# machine; the scenario's angle part then reports no samples). Every process is stopped on
-# exit, Ctrl-C or error (trap). Works from a checkout, a pip install and a colcon install (the
-# executables are found as `ros2 run` finds them). DDS discovery stays on this host.
+# with their logs in DIR/logs. Then scenario_node (stiffness step 1400 -> 1900 N/m; segment_1
+# tracks an angle trajectory with paper A's feedforward, then without) prints a summary, writes
+# DIR/scenario.png and .csv, and the graph stops. With --no-scenario it runs until Ctrl-C. With
+# --namespace NS every node runs in /NS (its topics under /NS/...), so graphs in different
+# namespaces run side by side, each with its own pty and CAN group. With --record BAG, `bellows
+# record` writes the devices' samples (/joint_states, /bellows/chambers, /actuator/joint_states,
+# /actuator/chambers, /bellows/wrench) to the rosbag2 directory BAG while the graph runs (root
+# namespace only; docs/workflow.md). With --actuator-only the arm's nodes (sim_arm_node,
+# model_node, arm_controller_node) are left out and the actuator path runs SCHED_FIFO as the arm's
+# does (a lighter graph whose recording keeps every sample on a busy machine; the scenario's angle
+# part then reports no samples). Every process is stopped on exit, Ctrl-C or error (trap). Works
+# from a checkout, a pip install and a colcon install (the executables are found as `ros2 run`
+# finds them). DDS discovery stays on this host.
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 # From a checkout, set up first (idempotent: a no-op once done). An install has no setup.py.
@@ -46,7 +46,7 @@ while [ $# -gt 0 ]; do
     --namespace) namespace="$2"; shift ;;
     --record) record="$2"; shift ;;
     --actuator-only) arm=0 ;;
-    -h|--help) sed -n '2,23p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,22p' "$0"; exit 0 ;;
     *) echo "launch_sim.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
   shift

@@ -41,6 +41,26 @@ def test_node_section_lies_over_wildcard(tmp_path):
     assert params.read_file(path, 'model_node') == {'x': 3, 'y': 2}
 
 
+def test_a_package_url_names_a_file_of_the_packages_share(tmp_path):
+    url = 'package://bellows_ros/config/segment_sim_arm.yaml'
+    assert params.resolve(url) == params.config_dir() / 'segment_sim_arm.yaml'
+    assert params.read_file(url) == params.read_file(params.resolve(url))
+    assert params.resolve(tmp_path / 'p.yaml') == tmp_path / 'p.yaml'  # a path stays a path
+    with pytest.raises(ParameterError, match=r'package://no_such_package/x\.yaml: no package '
+                                             r"'no_such_package'"):
+        params.read_file('package://no_such_package/x.yaml')
+
+
+def test_the_simulated_arms_model_has_the_simulated_segments_rigid_body():
+    """config/segment_sim_arm.yaml restates segment.plant's M, C, N: held equal here."""
+    from bellows_ros.config.segment import load_segment
+    url = params.read_file(params.default_file('nodes_sim'), 'arm_controller_node')['params_file']
+    model, plant = load_segment(url).model, load_segment().plant
+    assert (model.dynamics_inertia, model.dynamics_damping, model.dynamics_gravity) == \
+        (plant.inertia, plant.damping, plant.gravity)
+    assert load_segment().model.dynamics_inertia == 0.0  # the shipped model stays quasi-static
+
+
 def test_unknown_parameter_is_named(tmp_path):
     user = write(tmp_path / 'u.yaml', '/**:\n  ros__parameters:\n    a: {bogus: 1.0}\n')
     with pytest.raises(ParameterError, match=r"u\.yaml: unknown parameter 'a\.bogus'"):

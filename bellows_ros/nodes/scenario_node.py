@@ -17,13 +17,19 @@ scenario_node: a short scripted scenario on the running graph, printed and plott
 
 1. Stiffness step: set-point `stiffness_low` (1400 N/m; raised to 1 % above the bottom of the
    actuator model's range when that is higher), then at `step_time` `stiffness_high` (1900 N/m).
-2. Angle tracking, like for like: from `trajectory_start` on, `segment_1` follows the built-in
-   angle `trajectory` (`sweep`: ±0.7 rad with holds) through the arm controller
+2. Angle tracking, like for like: `segment_1` follows the built-in angle `trajectory`
+   (`reversals`: moves at 0.4-2.6 rad/s, reversals and holds) through the arm controller
    (arm_controller_node), the set-points published on /arm/psi_setpoint at 50 Hz, twice on the
    same graph: first with paper A's model inverted as feedforward, then, after a hold of `GAP`
    s, feedback only (the controller's live parameter `feedforward` set to `none` through its
    parameter service; set back to what it was afterwards). `compare_feedforward: false` runs
    the trajectory once, with the controller as configured.
+   From `trajectory_start` on the trajectory's first set-point is held; the first run starts
+   once the arm is ready for it (`READY`): the controller says on /diagnostics that it follows
+   the topic, and the angle has stayed within `READY_TOLERANCE` of that set-point, unvented,
+   for `READY` s. A run that began while the graph was still coming up (a vent at activation,
+   set-points sent before the controller's reader matched) would score the start-up, not the
+   controller.
 
 What comes back is recorded: /actuator/stiffness, /joint_states (segment_1 Ψ),
 /actuator/joint_states (air_chamber x_c), /bellows/chambers (segment_1 pressures),
@@ -65,15 +71,18 @@ AIR_CHAMBER = interfaces.ACTUATOR_JOINTS[0]
 GAP = 3.0
 # The two runs of the comparison: (label, the arm controller's `feedforward`).
 RUNS = (('paper A feedforward', 'paper_a'), ('feedback only', 'none'))
+# s the arm holds the trajectory's first set-point, within READY_TOLERANCE rad, before a run.
+READY, READY_TOLERANCE = 1.0, 0.05
 
 PARAMETERS = (
-    Spec('duration', 56.0, 'length of the scenario, s', low=1.0, high=24 * 3600.0),
+    Spec('duration', 80.0, 'length of the scenario, s', low=1.0, high=24 * 3600.0),
     Spec('step_time', 5.0, 'time of the stiffness step, s', low=0.0, high=24 * 3600.0),
     Spec('stiffness_low', 1400.0, 'stiffness before the step, N/m', low=0.0, high=1e6),
     Spec('stiffness_high', 1900.0, 'stiffness after the step, N/m', low=0.0, high=1e6),
-    Spec('trajectory', 'sweep', 'built-in angle trajectory of segment_1',
+    Spec('trajectory', 'reversals', 'built-in angle trajectory of segment_1',
          choices=tuple(angle_trajectory.TRAJECTORIES)),
-    Spec('trajectory_start', 2.0, 'start of the trajectory, s', low=0.0, high=24 * 3600.0),
+    Spec('trajectory_start', 2.0, "from then on the trajectory's first set-point, then the "
+         'runs once the arm is ready, s', low=0.0, high=24 * 3600.0),
     Spec('compare_feedforward', True, "run the trajectory twice: paper A's feedforward, then "
          "feedback only (the arm controller's live parameter)"),
     Spec('output_dir', 'scenario_out', 'directory of scenario.png and scenario.csv',
@@ -122,15 +131,16 @@ class ScenarioNode(Node):
                                 (interfaces.DRIVING_TORQUE, self.on_torque)):
             self.create_subscription(getattr(self.msg, topic.message), topic.name, callback,
                                      sensor)
-        # The runs: (label, feedforward or None = as configured, start s).
-        span = angle_trajectory.duration(self.trajectory) + GAP
-        self.runs = ([(label, mode, self.trajectory_start + k * span)
-                      for k, (label, mode) in enumerate(RUNS)] if given['compare_feedforward']
-                     else [('as configured', None, self.trajectory_start)])
+        # Until the runs are placed (`ready`): the arm holds the trajectory's first set-point.
+        self.hold = angle_trajectory.setpoint(self.trajectory, 0.0)[0]
+        self.modes = ([(label, mode) for label, mode in RUNS] if given['compare_feedforward']
+                      else [('as configured', None)])
+        self.following = False     # the controller's /diagnostics: it follows the topic
+        self.settled_since = None  # s: since then Ψ within READY_TOLERANCE of `hold`, unvented
+        self.subscription(interfaces.DIAGNOSTICS, self.on_diagnostics)
+        self.runs = []             # (label, feedforward or None = as configured, start s)
+        self.switches = []         # (s, feedforward or None = back to the configured one)
         self.controller = AsyncParameterClient(self, interfaces.ARM_CONTROLLER_NODE)
-        self.switches = [(start - GAP / 2, mode) for _, mode, start in self.runs[1:]]
-        if self.switches:  # and back to what the controller had, once the last run is over
-            self.switches.append((self.runs[-1][2] + span - GAP / 2, None))
         self.switch_results = []  # (mode, SetParameters future)
         self.configured = None    # GetParameters future: the controller's feedforward before
         self.start_ns = self.get_clock().now().nanoseconds
@@ -151,10 +161,39 @@ class ScenarioNode(Node):
     def on_vented(self, msg):
         if msg.data:
             self.vents.append(self.elapsed())
+            self.settled_since = None
+
+    def on_diagnostics(self, array):
+        name = f'{interfaces.ARM_CONTROLLER_NODE}: {SEGMENT}'
+        for status in array.status:
+            if status.name == name:
+                self.following = any(kv.key == 'source' and kv.value == 'topic'
+                                     for kv in status.values)
 
     def on_joint_states(self, msg):
         if SEGMENT in msg.name:
-            self._add('psi', msg.position[msg.name.index(SEGMENT)], msg.header.stamp)
+            psi = msg.position[msg.name.index(SEGMENT)]
+            self._add('psi', psi, msg.header.stamp)
+            if self.runs:
+                return
+            if abs(psi - self.hold) > READY_TOLERANCE:
+                self.settled_since = None
+            elif self.settled_since is None:
+                self.settled_since = self.series['psi'][-1][0]
+
+    def ready(self, t):
+        """Whether the first run may start at `t` s (module docstring, 2.)."""
+        return (t >= self.trajectory_start and self.following
+                and self.settled_since is not None and t - self.settled_since >= READY)
+
+    def place_runs(self, start):
+        """Place the runs from `start` s on, and the feedforward switches between them."""
+        span = angle_trajectory.duration(self.trajectory) + GAP
+        self.runs = [(label, mode, start + k * span) for k, (label, mode) in enumerate(self.modes)]
+        self.switches = [(begin - GAP / 2, mode) for _, mode, begin in self.runs[1:]]
+        if self.switches:  # and back to what the controller had, once the last run is over
+            self.switches.append((self.runs[-1][2] + span - GAP / 2, None))
+            self.configured = self.controller.get_parameters(['feedforward'])
 
     def on_actuator_states(self, msg):
         if AIR_CHAMBER in msg.name:
@@ -183,8 +222,8 @@ class ScenarioNode(Node):
             self.setpoint_pub.publish(self.msg.Float64(data=k))
             self._last_setpoint = k
         self._ticks += 1
-        if self.switches and self.configured is None and t >= self.trajectory_start:
-            self.configured = self.controller.get_parameters(['feedforward'])
+        if not self.runs and self.ready(t):
+            self.place_runs(t)
         if self.switches and t >= self.switches[0][0]:
             _, mode = self.switches.pop(0)
             if mode is None:  # back to the configured value (when it was read)
@@ -193,7 +232,7 @@ class ScenarioNode(Node):
             self.switch_results.append((mode, self.controller.set_parameters(
                 [Parameter('feedforward', value=mode)])))
         if t >= self.trajectory_start:
-            run_start = max(start for _, _, start in self.runs if start <= t)
+            run_start = max((start for _, _, start in self.runs if start <= t), default=t)
             psi_d, psi_dot_d, _ = angle_trajectory.setpoint(self.trajectory, t - run_start)
             setpoint = self.msg.JointState(name=[SEGMENT], position=[psi_d],
                                            velocity=[psi_dot_d])
@@ -249,6 +288,13 @@ class ScenarioNode(Node):
         if refused:
             return [f'segment_1 tracking: the arm controller did not take feedforward '
                     f"'{refused[0]}' (is arm_controller_node running?): no comparison"]
+        if not self.runs:
+            held = self.settled_since is not None and \
+                self.elapsed() - self.settled_since >= READY
+            return [f'segment_1 tracking: no run, the arm was not ready in {self.duration:g} s '
+                    f'(arm_controller_node following {interfaces.PSI_SETPOINT.name}: '
+                    f'{"yes" if self.following else "no"}; Ψ within {READY_TOLERANCE:g} rad of '
+                    f'the first set-point for {READY:g} s: {"yes" if held else "no"})']
         rms, lines, spoiled = [], [], False
         length = angle_trajectory.duration(self.trajectory)
         for label, _, start in self.runs:
@@ -270,8 +316,8 @@ class ScenarioNode(Node):
         if len(rms) == 2 and spoiled:
             lines.append('feedforward / feedback only: not compared (a run was vented)')
         elif len(rms) == 2:
-            lines.append(f'feedforward / feedback only: {rms[0] / rms[1]:.2f} (same sweep, same '
-                         'graph, same gains)')
+            lines.append(f'feedforward / feedback only: {rms[0] / rms[1]:.2f} (same trajectory, '
+                         'same graph, same gains)')
         return lines
 
     def write(self):
@@ -298,7 +344,7 @@ class ScenarioNode(Node):
         axes[1].set_ylabel('pressure (bar abs)')
         deg = 180 / math.pi
         # Each run on the trajectory's own time: the angles, then the errors, one over the other.
-        first = self.runs[0][2]
+        first = self.runs[0][2] if self.runs else self.trajectory_start
         trajectory_t = [t * 0.02 for t in range(int(angle_trajectory.duration(self.trajectory)
                                                     / 0.02))]
         axes[2].plot([first + t for t in trajectory_t],
