@@ -243,6 +243,14 @@ class Probe:
         self.flood(seconds)
         return self.since(start + settle)
 
+    def watchdog_vents(self):
+        """The driver's count of watchdog vents, from its next /diagnostics report."""
+        self.status.pop('driver_node: arm', None)
+        deadline = time.monotonic() + 10
+        while 'driver_node: arm' not in self.status and time.monotonic() < deadline:
+            self.flood(0.1)
+        return int(self.status['driver_node: arm']['watchdog_vents'])
+
     def pressurise(self, log_dir):
         deadline = time.monotonic() + 40
         while (not self.pressures or self.pressures[-1][1] < 0.9 * COMMAND) \
@@ -273,9 +281,16 @@ def test_lifecycle_from_the_command_line(rig):
     assert 'successful' in probe.lifecycle(env, 'set', 'activate')
     assert probe.state() == 'active [3]'
     probe.pressurise(log_dir)
+    vents = probe.watchdog_vents()
     probe.refused_in_process('cleanup', 'active [3]')
     active = probe.later(1.5, settle=0.0)
-    assert active and min(active) > 0.9 * COMMAND, 'a refused cleanup stopped the commands'
+    assert active, 'no samples after a refused cleanup'
+    if min(active) <= 0.9 * COMMAND:
+        # A dip the transition did not cause: this process's flood paused past the driver's
+        # command watchdog (once, in CI, on the shared host), the driver vented and counted it.
+        # It still obeys: the commands take again.
+        probe.pressurise(log_dir)
+        assert probe.watchdog_vents() > vents, 'a refused cleanup stopped the commands'
     assert 'successful' in probe.lifecycle(env, 'set', 'deactivate')
     assert probe.state() == 'inactive [2]'
     assert max(probe.later(3.0, settle=1.5)) < VENTED, 'deactivate did not vent'
