@@ -35,9 +35,11 @@ Every file the package writes, written so that nothing is lost.
   second, not minutes of fitting.
 Temporary files are named `.<name>.<random>.tmp` and removed on every way out the process has: an
 error, Ctrl-C, and SIGTERM or SIGHUP (`signals_as_exceptions`, which the `bellows` command turns
-on, makes those run the clean-up). Only SIGKILL leaves one behind: while a temporary file (or a
-report directory being built) is written its writer holds a lock on it, and the next write of the
-same output removes the ones no process holds (`_remove_orphans`, `_remove_orphan_directories`).
+on, makes those run the clean-up; one that comes between the file's creation and the start of
+its clean-up is held until then, `_SignalsHeld`). Only SIGKILL leaves one behind: while a
+temporary file (or a report directory being built) is written its writer holds a lock on it, and
+the next write of the same output removes the ones no process holds (`_remove_orphans`,
+`_remove_orphan_directories`).
 Nothing else is ever removed.
 """
 import contextlib
@@ -198,25 +200,27 @@ def atomic_file(path, mode='w', check=None, **open_args):
     """
     path = _target(path, 'output')
     _remove_orphans(path)
-    fd, temporary = tempfile.mkstemp(dir=path.parent, prefix=f'.{path.name}.', suffix='.tmp')
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX)  # ours while we write: never taken for an orphan
-        with os.fdopen(fd, mode, **open_args) as stream:
-            yield stream
-            stream.flush()
-            os.fsync(stream.fileno())
-            if check is not None:
-                check(temporary)
-            _target(path, 'output')  # it may have changed while we wrote
-            if path.exists():  # keep the old file's permissions
-                os.chmod(temporary, path.stat().st_mode & 0o7777)
-            else:
-                os.chmod(temporary, 0o666 & ~_umask())
-            os.replace(temporary, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(temporary)  # our own temporary file, never the output
-        raise
+    with _SignalsHeld() as held:
+        fd, temporary = tempfile.mkstemp(dir=path.parent, prefix=f'.{path.name}.', suffix='.tmp')
+        try:
+            with os.fdopen(fd, mode, **open_args) as stream:
+                held.release()  # a signal that came since the file was made raises here
+                fcntl.flock(fd, fcntl.LOCK_EX)  # ours while we write: never taken for an orphan
+                yield stream
+                stream.flush()
+                os.fsync(stream.fileno())
+                if check is not None:
+                    check(temporary)
+                _target(path, 'output')  # it may have changed while we wrote
+                if path.exists():  # keep the old file's permissions
+                    os.chmod(temporary, path.stat().st_mode & 0o7777)
+                else:
+                    os.chmod(temporary, 0o666 & ~_umask())
+                os.replace(temporary, path)
+        except BaseException:
+            with contextlib.suppress(OSError):
+                os.unlink(temporary)  # our own temporary file, never the output
+            raise
 
 
 def write_text(path, text):
@@ -240,7 +244,41 @@ class Signalled(BaseException):
 
 
 def _raise_signalled(signum, frame):
+    if _SignalsHeld.depth:
+        _SignalsHeld.pending = signum
+        return
     raise Signalled(signum)
+
+
+class _SignalsHeld:
+    """
+    Hold a `Signalled` from a temporary file's creation until its clean-up is armed.
+
+    `with _SignalsHeld() as held:` create the file, enter the `try` that removes it, and there
+    call `held.release()`: a SIGTERM or SIGHUP that came in between raises then, inside the
+    `try`, instead of between the two, where nothing would remove the file. Leaving the block
+    releases too. Signal handlers run in the main thread only, so only there is anything held.
+    """
+
+    depth = 0       # holds open in the main thread
+    pending = None  # the signal that came while held
+
+    def __enter__(self):
+        self.held = threading.current_thread() is threading.main_thread()
+        _SignalsHeld.depth += self.held
+        return self
+
+    def release(self):
+        if not self.held:
+            return
+        self.held = False
+        _SignalsHeld.depth -= 1
+        if not _SignalsHeld.depth and _SignalsHeld.pending is not None:
+            signum, _SignalsHeld.pending = _SignalsHeld.pending, None
+            raise Signalled(signum)
+
+    def __exit__(self, *exc_info):
+        self.release()
 
 
 @contextlib.contextmanager
@@ -379,30 +417,37 @@ def report_directory(path):
     """
     path = check_report_directory(path)
     _remove_orphan_directories(path)
-    building = Path(tempfile.mkdtemp(dir=path.parent, prefix=f'.{path.name}.', suffix='.new'))
-    holder = _hold_directory(building)
-    try:
-        yield building
-        write_manifest(building)
-        os.chmod(building, 0o777 & ~_umask())
-        if not os.path.lexists(path):
-            os.rename(building, path)
-            return
-        check_report_directory(path)  # a file put there while the report was built stays
-        if not _exchange(building, path):
-            aside = Path(tempfile.mkdtemp(dir=path.parent, prefix=f'.{path.name}.', suffix='.old'))
-            os.close(holder)
-            holder = _hold_directory(aside)
-            os.rename(path, aside / 'report')
-            os.rename(building, path)
-            building = aside
-        # `building` now holds the old report, which this package wrote: only that goes.
-        shutil.rmtree(building)
-    except BaseException:
-        shutil.rmtree(building, ignore_errors=True)  # our own unfinished directory
-        raise
-    finally:
-        os.close(holder)
+    with _SignalsHeld() as held:
+        building = Path(tempfile.mkdtemp(dir=path.parent, prefix=f'.{path.name}.',
+                                         suffix='.new'))
+        holder = None
+        try:
+            holder = _hold_directory(building)
+            held.release()  # a signal that came since the directory was made raises here
+            yield building
+            write_manifest(building)
+            os.chmod(building, 0o777 & ~_umask())
+            if not os.path.lexists(path):
+                os.rename(building, path)
+                return
+            check_report_directory(path)  # a file put there while the report was built stays
+            if not _exchange(building, path):
+                with _SignalsHeld():  # until `building` names the directory made aside
+                    aside = Path(tempfile.mkdtemp(dir=path.parent, prefix=f'.{path.name}.',
+                                                  suffix='.old'))
+                    os.close(holder)
+                    holder = _hold_directory(aside)
+                    os.rename(path, aside / 'report')
+                    os.rename(building, path)
+                    building = aside
+            # `building` now holds the old report, which this package wrote: only that goes.
+            shutil.rmtree(building)
+        except BaseException:
+            shutil.rmtree(building, ignore_errors=True)  # our own unfinished directory
+            raise
+        finally:
+            if holder is not None:
+                os.close(holder)
 
 
 def _hold_directory(directory):

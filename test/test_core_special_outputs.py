@@ -292,6 +292,34 @@ def simulate_then_signal(tmp_path, signum, disposition):
     return process, out_dir
 
 
+def signal_once_made(monkeypatch, name):
+    """Make `tempfile.<name>` SIGTERM this process right after it made its file or directory."""
+    make = getattr(tempfile, name)
+
+    def make_then_signal(*args, **kwargs):
+        made = make(*args, **kwargs)
+        os.kill(os.getpid(), signal.SIGTERM)  # the handler runs before this returns
+        return made
+    monkeypatch.setattr(tempfile, name, make_then_signal)
+
+
+def test_a_signal_as_the_temporary_file_is_made_leaves_nothing(tmp_path, monkeypatch):
+    """SIGTERM between the temporary file's creation and its clean-up's `try`: held, then run."""
+    signal_once_made(monkeypatch, 'mkstemp')
+    with pytest.raises(outputs.Signalled), outputs.signals_as_exceptions():
+        with outputs.atomic_file(tmp_path / 'o.csv') as stream:
+            stream.write('never written\n')
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_signal_as_the_report_directory_is_made_leaves_nothing(tmp_path, monkeypatch):
+    signal_once_made(monkeypatch, 'mkdtemp')
+    with pytest.raises(outputs.Signalled), outputs.signals_as_exceptions():
+        with outputs.report_directory(tmp_path / 'report') as building:
+            (building / 'report.json').write_text('{}')
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_an_orphan_temporary_file_goes_with_the_next_write_a_held_one_stays(tmp_path):
     out = tmp_path / 'o.csv'
     orphan = tmp_path / '.o.csv.killed.tmp'        # left by a SIGKILL: nobody holds it

@@ -244,7 +244,7 @@ class Probe:
         return self.since(start + settle)
 
     def watchdog_vents(self):
-        """The driver's count of watchdog vents, from its next /diagnostics report."""
+        """Return the driver's count of watchdog vents, from its next /diagnostics report."""
         self.status.pop('driver_node: arm', None)
         deadline = time.monotonic() + 10
         while 'driver_node: arm' not in self.status and time.monotonic() < deadline:
