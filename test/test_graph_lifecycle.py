@@ -249,6 +249,7 @@ class Probe:
         deadline = time.monotonic() + 10
         while 'driver_node: arm' not in self.status and time.monotonic() < deadline:
             self.flood(0.1)
+        assert 'driver_node: arm' in self.status, 'no /diagnostics from the driver within 10 s'
         return int(self.status['driver_node: arm']['watchdog_vents'])
 
     def pressurise(self, log_dir):
