@@ -133,8 +133,7 @@ class ScenarioNode(Node):
                                      sensor)
         # Until the runs are placed (`ready`): the arm holds the trajectory's first set-point.
         self.hold = angle_trajectory.setpoint(self.trajectory, 0.0)[0]
-        self.modes = ([(label, mode) for label, mode in RUNS] if given['compare_feedforward']
-                      else [('as configured', None)])
+        self.modes = list(RUNS) if given['compare_feedforward'] else [('as configured', None)]
         self.following = False     # the controller's /diagnostics: it follows the topic
         self.settled_since = None  # s: since then Ψ within READY_TOLERANCE of `hold`, unvented
         self.subscription(interfaces.DIAGNOSTICS, self.on_diagnostics)
@@ -181,10 +180,13 @@ class ScenarioNode(Node):
             elif self.settled_since is None:
                 self.settled_since = self.series['psi'][-1][0]
 
+    def held(self, t):
+        """Whether Ψ has stayed at the first set-point, unvented, for `READY` s by `t` s."""
+        return self.settled_since is not None and t - self.settled_since >= READY
+
     def ready(self, t):
         """Whether the first run may start at `t` s (module docstring, 2.)."""
-        return (t >= self.trajectory_start and self.following
-                and self.settled_since is not None and t - self.settled_since >= READY)
+        return t >= self.trajectory_start and self.following and self.held(t)
 
     def place_runs(self, start):
         """Place the runs from `start` s on, and the feedforward switches between them."""
@@ -289,8 +291,7 @@ class ScenarioNode(Node):
             return [f'segment_1 tracking: the arm controller did not take feedforward '
                     f"'{refused[0]}' (is arm_controller_node running?): no comparison"]
         if not self.runs:
-            held = self.settled_since is not None and \
-                self.elapsed() - self.settled_since >= READY
+            held = self.held(self.elapsed())
             return [f'segment_1 tracking: no run, the arm was not ready in {self.duration:g} s '
                     f'(arm_controller_node following {interfaces.PSI_SETPOINT.name}: '
                     f'{"yes" if self.following else "no"}; Ψ within {READY_TOLERANCE:g} rad of '
