@@ -18,7 +18,8 @@
 No time is asserted (shared machine): only that every figure is measured, is a sane number, and
 that the counts the bench reports agree with each other. One quick run of every graph bench
 (`graph`, `graph_actuator`, `graph_floor`: the modules `--only graph` selects) serves the tests
-that read its results.
+that read its results; of bench/graph.py's grid it measures the variants that between them take
+every value of each of its dimensions (`graph.variants(quick=True)`).
 """
 import contextlib
 import io
@@ -87,6 +88,14 @@ def test_the_graph_benches_are_what_only_graph_selects():
     assert chosen_modules('graph') == ['graph', 'graph_actuator', 'graph_floor']
 
 
+def test_the_quick_run_covers_the_grid():
+    """`--quick` measures a few variants of the grid that take every value of each dimension."""
+    grid, quick = graph.variants(), graph.variants(quick=True)
+    assert set(quick) <= set(grid) and len(quick) < len(grid)
+    for dimension in (1, 2, 3):  # privilege, composed, segments
+        assert {v[dimension] for v in quick} == {v[dimension] for v in grid}, dimension
+
+
 @pytest.fixture(scope='module')
 def graph_results():
     """Run `bellows bench --only graph --quick --json` once: {name: result as a dict}."""
@@ -113,7 +122,11 @@ def test_graph_bench_reports_every_figure_for_each_variant(graph_results):
     assert all(re.fullmatch(r'graph(\.user)?(\.composed)?(\.1seg)?', prefix)
                for prefix, *_ in grid)
     assert not [name for name in results if '.rclpy' in name or '.dds' in name]
-    for prefix, _, composed, _ in grid:
+    # The quick run measured its variants (test_the_quick_run_covers_the_grid), and only those.
+    quick = graph.variants(quick=True)
+    assert ({prefix for prefix, *_ in grid if f'{prefix}.rate' in results}
+            == {prefix for prefix, *_ in quick})
+    for prefix, _, composed, _ in quick:
         evaluated = results[f'{prefix}.fraction_evaluated']
         # samples flowed (3 s window; the rate is host-bound)
         assert evaluated['extra']['published'] > 100
@@ -135,7 +148,7 @@ def test_graph_bench_reports_every_figure_for_each_variant(graph_results):
         processes = ('sim_arm_node', graph.COMPOSED) if composed else graph.NODES
         for name in processes:
             assert results[f'{prefix}.cpu.{name}']['value'] > 0.01    # every process worked
-    for prefix, privilege, composed, segments in grid:
+    for prefix, privilege, composed, segments in quick:
         rate = results[f'{prefix}.rate']
         reference = results[f'{prefix}.latency_p50']['reference']
         assert reference == f'graph.model_step_inprocess_{segments}seg'

@@ -34,6 +34,10 @@ own on the bench's domain (GraphRun). Everything stays on this host (LOOPBACK_EN
   nodes/arm_graph.py composes them): what composition saves against separate processes
   (`cpu.driver_node+model_node` against the sum of the two);
 - `.1seg`: one simulated segment (the default launch's), against the arm's four.
+Each variant is measured over a 10 s window that starts 4 s after its samples flow. `--quick`
+is a smoke run: the two variants of QUICK_VARIANTS, which between them take every value of each
+dimension (`graph` and `graph.user.composed.1seg`), each over 3 s after 2 s, and wake-up
+references of 1 s.
 Figures:
 - achieved rate: arm samples per second the model node evaluated (target 1000 Hz);
 - fraction of the samples the driver published that the model node evaluated (target >= 0.99),
@@ -133,10 +137,17 @@ def _model_reference(segments):
 
 SEGMENTS = (4, 1)     # the arm's four; the default launch's one
 PRIVILEGES = ('root', 'user')
+# s: each variant's window, and how long its graph runs before it (the model's first reports)
+WINDOW, SETTLE = 10.0, 4.0
+# --quick, a smoke run: two variants that between them take each value of each dimension (root
+# and user, separate and composed, 4 and 1 segments), and shorter waits (s): the window (it holds
+# two model reports at least: `late_fraction`), the settling, each wake-up reference.
+QUICK_VARIANTS = ('graph', 'graph.user.composed.1seg')
+QUICK_WINDOW, QUICK_SETTLE, QUICK_WAKEUP = 3.0, 2.0, 1.0
 
 
-def variants():
-    """Return the grid measured, (prefix, privilege, composed, segments) per variant."""
+def variants(quick=False):
+    """Return the grid, (prefix, privilege, composed, segments) per variant; quick: its few."""
     grid = []
     for privilege in PRIVILEGES:
         for composed in (False, True):
@@ -145,11 +156,14 @@ def variants():
                                                ('composed', composed),
                                                (f'{segments}seg', segments != 4)) if on]
                 grid.append(('.'.join(['graph', *marks]), privilege, composed, segments))
+    if quick:
+        return [variant for variant in grid if variant[0] in QUICK_VARIANTS]
     return grid
 
 
 def run(quick=False):
-    window = 3.0 if quick else 10.0
+    window, settle = (QUICK_WINDOW, QUICK_SETTLE) if quick else (WINDOW, SETTLE)
+    wakeup = QUICK_WAKEUP if quick else window
     references = {segments: _model_reference(segments) for segments in SEGMENTS}
     results = list(references.values())
     host = {name: params.read_file(ROBOT_CONFIG, name)['realtime_priority']
@@ -158,19 +172,21 @@ def run(quick=False):
                   'user': dict.fromkeys(NODES, 0)}
     limit = params.read_file(CONFIG, 'model_node')['cpu_latency_limit']
     latency = {'root': limit, 'user': -1.0}
-    results.append(_wakeup_reference('graph.platform.wakeup_lateness', window,
+    results.append(_wakeup_reference('graph.platform.wakeup_lateness', wakeup,
                                      host['model_node'], limit))
-    results.append(_wakeup_reference('graph.platform.wakeup_lateness_no_latency_limit', window,
+    results.append(_wakeup_reference('graph.platform.wakeup_lateness_no_latency_limit', wakeup,
                                      0, -1.0))
-    for prefix, privilege, composed, segments in variants():
+    for prefix, privilege, composed, segments in variants(quick):
         results += _measure(prefix, window, segments, scheduling[privilege],
-                            latency[privilege], references[segments], composed=composed)
+                            latency[privilege], references[segments], composed=composed,
+                            settle=settle)
     return results
 
 
-def _measure(prefix, window, segments, priorities, latency_limit, reference, composed=False):
+def _measure(prefix, window, segments, priorities, latency_limit, reference, composed=False,
+             settle=SETTLE):
     """
-    Run the three nodes for `window` s; return their figures.
+    Run the three nodes for `window` s after `settle` s; return their figures.
 
     Each node runs at the given `realtime_priority` and `cpu_latency_limit`; `composed` runs the
     driver and the model node in one process (COMPOSE).
@@ -223,7 +239,7 @@ def _measure(prefix, window, segments, priorities, latency_limit, reference, com
             if time.monotonic() > end:
                 raise BellowsError(f'bench {prefix}: the driver published no sample in 60 s')
             graph.spin(0.05)
-        graph.spin(4.0)  # the model's first reports, past the start
+        graph.spin(settle)  # the model's first reports, past the start
         counts0 = _counts(final)
         windows.clear()
         limit_in_force = realtime.cpu_latency_in_force()
