@@ -15,25 +15,32 @@
 """
 rosbag2 recordings (sqlite3 or MCAP) as data tables (docs/interfaces.md "Data files").
 
-The rows are the joint-state samples of the wanted device group (the arm's on `/joint_states`,
-the actuator's on `/actuator/joint_states`); pressures (`/bellows/chambers`,
-`/actuator/chambers`) and the force/torque sensor (`/bellows/wrench`) are aligned onto them by
-stamp, zero-order hold: each row takes the latest message stamped at or before it (the first
-message for rows before any). A row whose channel was silent for longer than
-`table.MAX_HELD_STEPS` sample steps is marked (`Table.held`), and the readers refuse it
-(`table.check_held`): a channel that stops, starts late or has a hole is never filled in.
+The rows are the samples of the wanted device group, one message each (`bellows_ros.interfaces`):
+the arm's on `/joint_states`, the actuator's on `/actuator/joint_states`; a row's joint values,
+chamber pressures and the actuator's spring force are found by name in its own message. The
+arm's force/torque sensor (`/bellows/wrench`) is aligned onto the rows by stamp, zero-order hold:
+each row takes the latest message stamped at or before it (the first message for rows before
+any). A value a sample holds as NaN (its device measured none) counts as a message missing from
+that channel: the hold fills it in from the sample before. A row whose channel was silent for
+longer than `table.MAX_HELD_STEPS` sample steps is marked (`Table.held`), and the readers refuse
+it (`table.check_held`): a channel that stops, starts late or has a hole is never filled in.
 `t` is the sample stamp in seconds from the first row.
-A recording made before the actuator had topics of its own holds its samples on `/joint_states`
-and `/bellows/chambers`: where the bag has no `/actuator/...` topic, that one is read instead.
+
+Older recordings are read too. Before one message per sample (a sample message that names no
+chambers), the pressures came on `/bellows/chambers` and `/actuator/chambers` and the actuator's
+spring force on `/bellows/wrench` (frame_id `actuator`), each aligned as the wrench is. Before
+the actuator had topics of its own, its samples were on `/joint_states` and `/bellows/chambers`:
+where the bag has no `/actuator/...` topic, that one is read instead.
 
 Topic and joint names are the contract's (`bellows_ros.interfaces`, also for the wrench axes),
 in the root namespace. Columns:
 - segment (`segment_1`): psi, psi_dot = position, velocity of joint `segment_1`;
   p1, p2 = effort of chambers `segment_1/chain_1`, `segment_1/chain_2`;
   tau_ext = `wrench.torque.z` of the wrench with frame_id `segment_1`.
-- actuator: x_c, x_s = positions of `air_chamber`, `spring`; p = effort of chamber `actuator`;
-  f = `wrench.force.z` of the wrench with frame_id `actuator`.
+- actuator: x_c, x_s = positions of `air_chamber`, `spring`; f = effort of `spring` (older:
+  `wrench.force.z` of the wrench with frame_id `actuator`); p = effort of chamber `actuator`.
 """
+import math
 from pathlib import Path
 
 from lz4.frame import LZ4FrameDecompressor
@@ -49,12 +56,18 @@ from bellows_ros.params import load_bounded, MAX_YAML_BYTES
 from bellows_ros.table import check_increasing, COLUMNS, Table
 
 SEGMENT = interfaces.segment_joint(1)
-JOINT_STATES, CHAMBERS, ACTUATOR_JOINT_STATES, ACTUATOR_CHAMBERS, WRENCH = (
-    topic.resolved() for topic in (interfaces.JOINT_STATES, interfaces.CHAMBERS,
-                                   interfaces.ACTUATOR_JOINT_STATES, interfaces.ACTUATOR_CHAMBERS,
+SPRING = interfaces.ACTUATOR_JOINTS[1]
+JOINT_STATES, ACTUATOR_JOINT_STATES, WRENCH = (
+    topic.resolved() for topic in (interfaces.JOINT_STATES, interfaces.ACTUATOR_JOINT_STATES,
                                    interfaces.WRENCH))
+# Older recordings' topics, from before one message per sample: the chambers' pressures, and the
+# actuator's spring force as `wrench.force.z` of the wrench with this frame_id.
+LEGACY_CHAMBERS = '/bellows/chambers'
+LEGACY_ACTUATOR_CHAMBERS = '/actuator/chambers'
+LEGACY_ACTUATOR_FRAME = 'actuator'
 TYPES = {name: interfaces.by_name()[name]
-         for name in (JOINT_STATES, CHAMBERS, ACTUATOR_JOINT_STATES, ACTUATOR_CHAMBERS, WRENCH)}
+         for name in (JOINT_STATES, ACTUATOR_JOINT_STATES, WRENCH)}
+TYPES.update(dict.fromkeys((LEGACY_CHAMBERS, LEGACY_ACTUATOR_CHAMBERS), TYPES[JOINT_STATES]))
 
 # The message types of a recording, without ROS: rosbags' Jazzy type store, plus the types it
 # lacks (it holds only ROS 2's core packages), as their .msg text installs them with Jazzy's
@@ -81,7 +94,8 @@ for _name, _text in EXTRA_DEFINITIONS.items():
     TYPESTORE.register(get_types_from_msg(_text, _name))
 
 # Messages a bag's table is read from, at most: the reader holds them all (~150 bytes each);
-# 30 million is about three hours of the three actuator topics at 1 kHz.
+# 30 million is about eight hours of one sample topic at 1 kHz (three hours of an older
+# recording's three actuator topics).
 MAX_BAG_MESSAGES = 30_000_000
 # Bytes one MCAP chunk may inflate to. rosbag2 and `bellows record` write chunks of about 1 MiB;
 # a chunk is read whole, so this is the memory one read of a bag may take at once.
@@ -108,7 +122,8 @@ def _bounded(decompressor):
 storage_mcap.DECOMPRESSORS.update(zstd=_bounded(storage_mcap.zstd.ZstdDecompressor),
                                   lz4=_bounded(LZ4FrameDecompressor))
 # The actuator's topics, and where a recording from before they existed held its samples.
-ACTUATOR_FALLBACK = {ACTUATOR_JOINT_STATES: JOINT_STATES, ACTUATOR_CHAMBERS: CHAMBERS}
+ACTUATOR_FALLBACK = {ACTUATOR_JOINT_STATES: JOINT_STATES,
+                     LEGACY_ACTUATOR_CHAMBERS: LEGACY_CHAMBERS}
 
 
 def _first_line(exc):
@@ -158,29 +173,59 @@ def _actuator_topic(reader, topic):
     return topic, topic
 
 
-def _joint_rows(path, reader, typestore, topic, names, field_names, named=None):
-    """Stamps and values of `names` (each field of field_names) from messages that contain them."""
-    stamps, rows = [], []
+def _joint_rows(path, reader, typestore, topic, wanted, own=(), named=None):
+    """
+    Stamps and values of `wanted` ((name, field) pairs) from the messages that name them all.
+
+    `own` ((name, field) pairs): a sample's own chamber pressures and force, returned as a third
+    array, NaN where a message holds none; None when no message names them all (a recording from
+    before one message per sample, which sent them on topics of their own).
+    """
+    joint_index = interfaces.SampleIndex(name for name, _ in wanted)
+    own_index = interfaces.SampleIndex(name for name, _ in own)
+    stamps, rows, own_rows, named_own = [], [], [], False
     for msg in _messages(path, reader, typestore, topic):
-        index = {name: i for i, name in enumerate(msg.name)}
-        if not all(name in index for name in names):
+        layout = joint_index(msg.name)
+        if layout is None:
             continue
         row = []
-        for name in names:
-            for field_name in field_names:
-                values = getattr(msg, field_name)
-                if len(values) <= index[name]:
-                    raise DataError(path, f"{topic}: joint '{name}' has no {field_name} "
-                                          f'(stamp {_stamp(msg)} ns)')
-                row.append(float(values[index[name]]))
+        for (name, field_name), i in zip(wanted, layout):
+            values = getattr(msg, field_name)
+            if len(values) <= i:
+                raise DataError(path, f"{topic}: joint '{name}' has no {field_name} "
+                                      f'(stamp {_stamp(msg)} ns)')
+            row.append(float(values[i]))
         stamps.append(_stamp(msg))
         rows.append(row)
+        if own:
+            where = own_index(msg.name)
+            named_own = named_own or where is not None
+            fields = [getattr(msg, field_name) for _, field_name in own]
+            own_rows.append([math.nan] * len(own) if where is None else
+                            [float(v[i]) if i < len(v) else math.nan
+                             for v, i in zip(fields, where)])
     if not stamps:
-        raise DataError(path, f"no messages on {named or topic} with joint(s) {', '.join(names)}")
-    return np.array(stamps, dtype=np.int64), np.array(rows, dtype=float)
+        names = ', '.join(dict.fromkeys(name for name, _ in wanted))
+        raise DataError(path, f'no messages on {named or topic} with joint(s) {names}')
+    return (np.array(stamps, dtype=np.int64), np.array(rows, dtype=float),
+            np.array(own_rows, dtype=float) if named_own else None)
+
+
+def _own_channel(path, topic, stamps, values, what):
+    """
+    Return (name, stamps, values) of a channel that a sample message holds itself.
+
+    A sample holding NaN (its device measured none) is left out, as a missing message of a
+    channel on a topic of its own was: the hold fills it in, or refuses a long gap.
+    """
+    present = ~np.isnan(values).any(axis=1)
+    if not present.any():
+        raise DataError(path, f'no {what} on {topic}: NaN in every message')
+    return f'{what} on {topic}', stamps[present], values[present]
 
 
 def _wrench_rows(path, reader, typestore, frame, axis):
+    """Return (WRENCH, stamps, values) of `axis` of the wrenches of `frame`."""
     stamps, values = [], []
     for msg in _messages(path, reader, typestore, WRENCH):
         if msg.header.frame_id in (frame, ''):
@@ -188,8 +233,8 @@ def _wrench_rows(path, reader, typestore, frame, axis):
             stamps.append(_stamp(msg))
             values.append(float(getattr(getattr(msg.wrench, kind), component)))
     if not stamps:
-        raise DataError(path, f"no messages on /bellows/wrench with frame_id '{frame}'")
-    return np.array(stamps, dtype=np.int64), np.array(values, dtype=float)[:, None]
+        raise DataError(path, f"no messages on {WRENCH} with frame_id '{frame}'")
+    return WRENCH, np.array(stamps, dtype=np.int64), np.array(values, dtype=float)[:, None]
 
 
 def _median_step(stamps):
@@ -283,36 +328,46 @@ def read_bag_table(path, system):
                                   f'{MAX_BAG_MESSAGES:,} (bag.MAX_BAG_MESSAGES), more than '
                                   'this reader holds in memory; record shorter parts')
         if system == 'segment':
-            stamps, joints = _joint_rows(path, reader, typestore, JOINT_STATES, [SEGMENT],
-                                         ('position', 'velocity'))
-            chamber_stamps, chambers = _joint_rows(
-                path, reader, typestore, CHAMBERS,
-                [interfaces.chain_chamber(1, 1), interfaces.chain_chamber(1, 2)], ('effort',))
-            wrench_stamps, torque = _wrench_rows(path, reader, typestore, SEGMENT, ('torque', 'z'))
-            pressures, pressure_gaps = _hold(stamps, chamber_stamps, chambers)
-            torque, torque_gaps = _hold(stamps, wrench_stamps, torque)
-            columns = {'psi': joints[:, 0], 'psi_dot': joints[:, 1], 'p1': pressures[:, 0],
-                       'p2': pressures[:, 1], 'tau_ext': torque[:, 0]}
-            held = {'p1': (CHAMBERS, *pressure_gaps), 'p2': (CHAMBERS, *pressure_gaps),
-                    'tau_ext': (WRENCH, *torque_gaps)}
+            chambers = [(interfaces.chain_chamber(1, chain), 'effort') for chain in (1, 2)]
+            stamps, joints, own = _joint_rows(path, reader, typestore, JOINT_STATES,
+                                              [(SEGMENT, 'position'), (SEGMENT, 'velocity')],
+                                              chambers)
+            if own is None:  # an older recording: the pressures on a topic of their own
+                pressures = (LEGACY_CHAMBERS, *_joint_rows(path, reader, typestore,
+                                                           LEGACY_CHAMBERS, chambers)[:2])
+            else:
+                names = ', '.join(name for name, _ in chambers)
+                pressures = _own_channel(path, JOINT_STATES, stamps, own, f'effort of {names}')
+            columns = {'psi': joints[:, 0], 'psi_dot': joints[:, 1]}
+            channels = {('p1', 'p2'): pressures,
+                        ('tau_ext',): _wrench_rows(path, reader, typestore, SEGMENT,
+                                                   ('torque', 'z'))}
         elif system == 'actuator':
             topic, named = _actuator_topic(reader, ACTUATOR_JOINT_STATES)
-            stamps, joints = _joint_rows(path, reader, typestore, topic,
-                                         list(interfaces.ACTUATOR_JOINTS), ('position',), named)
-            topic, named = _actuator_topic(reader, ACTUATOR_CHAMBERS)
-            chamber_stamps, pressure = _joint_rows(path, reader, typestore, topic,
-                                                   [interfaces.ACTUATOR_CHAMBER], ('effort',),
-                                                   named)
-            chamber_topic = topic
-            wrench_stamps, force = _wrench_rows(path, reader, typestore, interfaces.ACTUATOR_FRAME,
-                                                ('force', 'z'))
-            pressure, pressure_gaps = _hold(stamps, chamber_stamps, pressure)
-            force, force_gaps = _hold(stamps, wrench_stamps, force)
-            columns = {'x_c': joints[:, 0], 'x_s': joints[:, 1], 'p': pressure[:, 0],
-                       'f': force[:, 0]}
-            held = {'p': (chamber_topic, *pressure_gaps), 'f': (WRENCH, *force_gaps)}
+            chamber = (interfaces.ACTUATOR_CHAMBER, 'effort')
+            stamps, joints, own = _joint_rows(
+                path, reader, typestore, topic,
+                [(joint, 'position') for joint in interfaces.ACTUATOR_JOINTS],
+                [chamber, (SPRING, 'effort')], named)
+            if own is None:  # an older recording: pressure and force on topics of their own
+                topic, named = _actuator_topic(reader, LEGACY_ACTUATOR_CHAMBERS)
+                pressure = (topic, *_joint_rows(path, reader, typestore, topic, [chamber],
+                                                named=named)[:2])
+                force = _wrench_rows(path, reader, typestore, LEGACY_ACTUATOR_FRAME,
+                                     ('force', 'z'))
+            else:
+                pressure = _own_channel(path, topic, stamps, own[:, :1],
+                                        f'effort of {interfaces.ACTUATOR_CHAMBER}')
+                force = _own_channel(path, topic, stamps, own[:, 1:], f'effort of {SPRING}')
+            columns = {'x_c': joints[:, 0], 'x_s': joints[:, 1]}
+            channels = {('p',): pressure, ('f',): force}
         else:
             raise DataError(path, f"unknown system '{system}' (segment or actuator)")
+        held = {}
+        for channel_columns, (channel, channel_stamps, channel_values) in channels.items():
+            values, gaps = _hold(stamps, channel_stamps, channel_values)
+            for i, name in enumerate(channel_columns):
+                columns[name], held[name] = values[:, i], (channel, *gaps)
     finally:
         reader.close()
     required, optional = COLUMNS[system]

@@ -24,17 +24,20 @@ absolute on purpose, as ROS defines them: `/diagnostics` (one aggregator reads e
 status) and `/clock` (one time source); and `/bellows/estop`, one stop for every driver.
 
 Message conventions:
-- each device group has sample topics of its own, one message per sample, both halves of a
-  sample with the same stamp: the arm's segments on `joint_states` and `bellows/chambers`, the
-  actuator's `air_chamber`/`spring` and its chamber on `actuator/joint_states` and
-  `actuator/chambers`; so a 1 kHz node of one group never receives (decodes, then drops) the
-  other's samples. Subscribers still filter by joint name: another publisher may share a topic.
-  Recordings from before the split (the actuator on `joint_states` and `bellows/chambers`) are
+- each device group has one sample topic, one message per sample: the arm's on `joint_states`,
+  the actuator's on `actuator/joint_states`; so a 1 kHz node of one group never receives
+  (decodes, then drops) the other's samples, and no node re-joins a sample from several
+  messages. A sample message names the group's joints and then its chambers (`arm_sample_names`,
+  `actuator_sample_names`): a joint's `position` and `velocity` are its state and its `effort`
+  the force or torque measured on it (NaN where none is); a chamber's `effort` is its absolute
+  pressure (Pa) and its `position` and `velocity` are NaN. Subscribers find values by name
+  (`SampleIndex`): another publisher may share a topic, and may name fewer or more entries.
+  Recordings from before (the chambers on `bellows/chambers` and `actuator/chambers`, the
+  actuator's force on `bellows/wrench`, and before that the actuator on `joint_states`) are
   still read (`bellows_ros.bag`);
-- `bellows/wrench`: `header.frame_id` names the sensor's device group. For an arm segment
-  (`frame_id` `segment_<i>`) the measured external torque tau_ext is `wrench.torque.z` (z along the
-  segment's bending axis, positive in the direction of positive Psi); for the actuator
-  (`frame_id` `actuator`) the spring force f is `wrench.force.z` (positive compressing the spring).
+- `bellows/wrench`: an arm's force/torque sensor, `header.frame_id` `segment_<i>`: the measured
+  external torque tau_ext is `wrench.torque.z` (z along the segment's bending axis, positive in
+  the direction of positive Psi).
 """
 from dataclasses import dataclass
 
@@ -82,15 +85,12 @@ class Topic:
 
 
 JOINT_STATES = Topic('joint_states', 'sensor_msgs/msg/JointState', SAMPLE_DEPTH,
-                     'arm: segment angles and rates')
-CHAMBERS = Topic('bellows/chambers', 'sensor_msgs/msg/JointState', SAMPLE_DEPTH,
-                 'arm: chain pressures, Pa abs, in effort')
+                     'arm: segment angles and rates; chain pressures, Pa abs, in effort')
 ACTUATOR_JOINT_STATES = Topic('actuator/joint_states', 'sensor_msgs/msg/JointState',
-                              SAMPLE_DEPTH, 'actuator: compressions x_c, x_s')
-ACTUATOR_CHAMBERS = Topic('actuator/chambers', 'sensor_msgs/msg/JointState', SAMPLE_DEPTH,
-                          'actuator: chamber pressure, Pa abs, in effort')
+                              SAMPLE_DEPTH, 'actuator: compressions x_c, x_s; spring force f, N, '
+                              'and chamber pressure, Pa abs, in effort')
 WRENCH = Topic('bellows/wrench', 'geometry_msgs/msg/WrenchStamped', SAMPLE_DEPTH,
-               'external force/torque sensor: the actuator spring force, a segment torque')
+               "an arm force/torque sensor: a segment's external torque")
 DRIVING_TORQUE = Topic('bellows/driving_torque', 'sensor_msgs/msg/JointState', SAMPLE_DEPTH,
                        'driving torque per segment, N·m, A(2)')
 EXTERNAL_TORQUE = Topic('bellows/external_torque', 'sensor_msgs/msg/JointState', SAMPLE_DEPTH,
@@ -129,7 +129,7 @@ VENTED = Topic('bellows/vented', 'std_msgs/msg/Bool', 1,
                'the emergency stop, the command watchdog), False once a command has taken; sent '
                'on each change', latched=True)
 
-TOPICS = (JOINT_STATES, CHAMBERS, ACTUATOR_JOINT_STATES, ACTUATOR_CHAMBERS, WRENCH,
+TOPICS = (JOINT_STATES, ACTUATOR_JOINT_STATES, WRENCH,
           DRIVING_TORQUE, EXTERNAL_TORQUE, PRESSURE_COMMAND, STIFFNESS_SETPOINT, STIFFNESS,
           MOTOR_COMMAND, PSI_SETPOINT, JOINT_TRAJECTORY, TRAJECTORY_STATE, DIAGNOSTICS, CLOCK,
           ESTOP, VENTED)
@@ -143,7 +143,6 @@ def by_name(namespace='/'):
 # Joint, chamber and frame names.
 ACTUATOR_JOINTS = ('air_chamber', 'spring')
 ACTUATOR_CHAMBER = 'actuator'
-ACTUATOR_FRAME = 'actuator'
 
 
 def segment_joint(segment):
@@ -154,3 +153,45 @@ def segment_joint(segment):
 def chain_chamber(segment, chain):
     """Chamber name of chain `chain` (1, 2) of segment `segment` (1-based): 'segment_1/chain_2'."""
     return f'{segment_joint(segment)}/chain_{chain}'
+
+
+def arm_sample_names(segments):
+    """Names of an arm sample message: the segments' joints, then their chambers (chain 1, 2)."""
+    return tuple([segment_joint(i) for i in segments] +
+                 [chain_chamber(i, chain) for i in segments for chain in (1, 2)])
+
+
+def actuator_sample_names():
+    """Names of an actuator sample message: its joints, then its chamber."""
+    return ACTUATOR_JOINTS + (ACTUATOR_CHAMBER,)
+
+
+class SampleIndex:
+    """
+    Find entries of sample messages by name, the lookup kept per list of names.
+
+    `SampleIndex(wanted)(msg.name)` -> the index of each wanted name in `msg.name`, or None when
+    the message lacks one. A publisher sends the same names in every message, so the lookup is
+    built once per list of names (bounded: a flood of different lists cannot grow it).
+    """
+
+    MAX_LAYOUTS = 16
+
+    def __init__(self, wanted):
+        self.wanted = tuple(wanted)
+        self._layouts = {}
+
+    def __call__(self, names):
+        key = tuple(names)
+        try:
+            return self._layouts[key]
+        except KeyError:
+            pass
+        where = {name: i for i, name in enumerate(key)}
+        layout = None
+        if all(name in where for name in self.wanted):
+            layout = tuple(where[name] for name in self.wanted)
+        if len(self._layouts) >= self.MAX_LAYOUTS:
+            self._layouts.clear()
+        self._layouts[key] = layout
+        return layout

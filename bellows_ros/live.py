@@ -55,7 +55,7 @@ here: the controller feeds samples and reports the numbers on /diagnostics.
   as timed out, and the process is restarted for the next.
 - `LiveDoctor`: the three together, as the controller uses them.
 """
-from collections import deque, OrderedDict
+from collections import deque
 import functools
 import math
 import multiprocessing
@@ -84,10 +84,6 @@ PERSIST = 2         # updates in a row above the limit before the residual has l
 FIT_RATE = 50.0     # Hz of the block means the live diagnosis fits (leak and buckling are slow)
 STARTUP_BOUND = 120.0   # s a worker process may take to start (imports) before it is given up
 READY = 'ready'
-# Slots of the three messages of one sample (`LiveDoctor.put`), and how many incomplete samples
-# are kept before the oldest is given up (counted in `unpaired`).
-STATE, PRESSURE, FORCE = 0, 1, 2
-MAX_PENDING = 100
 
 
 class RingBuffer:
@@ -417,12 +413,9 @@ class LiveDoctor:
     """
     The rolling comparison, the ring buffer and the worker, as the controller uses them.
 
-    `put(stamp_ns, slot, value)` on the sample thread, for each of a sample's three messages
-    (STATE: (x_c, x_s), PRESSURE: p, FORCE: f) in any order: the sample goes into the buffer once
-    the three with its stamp are in (the pressure of one instant with the compression of the
-    same); `sample(t, x_c, x_s, p, f)` for a caller that has them together. One thread at a time
-    (a node's callbacks in its default, mutually exclusive callback group). Their cost is counted
-    (`cost_us`, per sample buffered: `SampleCost`);
+    `sample(t, x_c, x_s, p, f)` on the sample thread, one actuator sample (one message): a row
+    into the ring buffer. One thread at a time (a node's callbacks in its default, mutually
+    exclusive callback group). Its cost is counted (`cost_us`: `SampleCost`);
     `update()` from a timer: the new samples into `health`, a diagnosis of the last `diagnosis_s`
     seconds submitted when the residual has left the floor (again every `rediagnose_s` while it
     stays out), a finished one collected into `verdict`. `verdict` is cleared when the residual
@@ -442,26 +435,6 @@ class LiveDoctor:
         self._read = 0
         self._submitted_at = None
         self.cost = SampleCost()
-        self._pending = OrderedDict()       # stamp (ns) -> [(x_c, x_s), p, f], incomplete
-        self.unpaired = 0
-
-    def put(self, stamp_ns, slot, value):
-        """Take one message of a sample on the sample thread (class docstring)."""
-        start = time.perf_counter()
-        entry = self._pending.get(stamp_ns)
-        if entry is None:
-            entry = self._pending[stamp_ns] = [None, None, None]
-            if len(self._pending) > MAX_PENDING:
-                self._pending.popitem(last=False)
-                self.unpaired += 1
-        entry[slot] = value
-        buffered = 0
-        if entry[0] is not None and entry[1] is not None and entry[2] is not None:
-            del self._pending[stamp_ns]
-            (x_c, x_s), p, f = entry
-            self.buffer.append((stamp_ns * 1e-9, x_c, x_s, p, f))
-            buffered = 1
-        self.cost.add(time.perf_counter() - start, buffered)
 
     def sample(self, t, x_c, x_s, p, f):
         """Take one whole sample on the sample thread: a row into the ring buffer, counted."""

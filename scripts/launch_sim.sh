@@ -12,9 +12,9 @@
 # DIR/scenario.png and .csv, and the graph stops. With --no-scenario it runs until Ctrl-C. With
 # --namespace NS every node runs in /NS (its topics under /NS/...), so graphs in different
 # namespaces run side by side, each with its own pty and CAN group. With --record BAG, `bellows
-# record` writes the devices' samples (/joint_states, /bellows/chambers, /actuator/joint_states,
-# /actuator/chambers, /bellows/wrench) to the rosbag2 directory BAG while the graph runs (root
-# namespace only; docs/workflow.md). With --actuator-only the arm's nodes (sim_arm_node,
+# record` writes the devices' samples (/joint_states, /actuator/joint_states, one message each)
+# and /bellows/wrench (an arm's torque sensor) to the rosbag2 directory BAG while the graph runs
+# (root namespace only; docs/workflow.md). With --actuator-only the arm's nodes (sim_arm_node,
 # model_node, arm_controller_node) are left out and the actuator path runs SCHED_FIFO as the arm's
 # does (a lighter graph whose recording keeps every sample on a busy machine; the scenario's angle
 # part then reports no samples). Every process is stopped on exit, Ctrl-C or error (trap). Works
@@ -123,8 +123,8 @@ start driver_node
 start stiffness_controller_node
 [ "$arm" = 1 ] && start arm_controller_node
 if [ -n "$record" ]; then
-  "$bin/bellows" record --output "$record" --topics /joint_states /bellows/chambers \
-    /actuator/joint_states /actuator/chambers /bellows/wrench >"$node_logs/record.log" 2>&1 &
+  "$bin/bellows" record --output "$record" --topics /joint_states /actuator/joint_states \
+    /bellows/wrench >"$node_logs/record.log" 2>&1 &
   pids+=($!)
   echo "launch_sim: bellows record -> $record (pid $!)" >&2
 fi

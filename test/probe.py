@@ -26,11 +26,15 @@ Plain rclpy, nothing of bellows_ros's node base: what any ROS 2 user's node sees
 its own process (`probe.init(['--ros-args', ...])` for its parameters) spins it with
 `probe.adopt(node)` and `probe.spin_once(node)`.
 """
+from array import array
+import math
+
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 import rclpy.node
 from rclpy.task import Future
 
+from bellows_ros import interfaces
 from bellows_ros.runtime.messages import msg  # noqa: F401 (the ROS packages' classes)
 from bellows_ros.runtime.node import LATCHED  # noqa: F401 (the probes' QoS for latched topics)
 
@@ -83,3 +87,29 @@ def shutdown():
         node.destroy_node()
     _executors.clear()
     rclpy.try_shutdown()
+
+
+def arm_sample(stamp, psi, psi_dot, pressures, segments=(1,)):
+    """
+    Return one arm sample message as the driver publishes it (interfaces.py).
+
+    stamp: ns; psi, psi_dot: rad, rad/s per segment; pressures: Pa abs, (chain 1, chain 2) per
+    segment, flat.
+    """
+    nan = [math.nan] * len(pressures)
+    sample = msg.JointState(name=list(interfaces.arm_sample_names(segments)),
+                            position=array('d', [*psi, *nan]),
+                            velocity=array('d', [*psi_dot, *nan]),
+                            effort=array('d', [math.nan] * len(segments) + list(pressures)))
+    sample.header.stamp.sec, sample.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
+    return sample
+
+
+def chamber_pressures(sample):
+    """Return the chamber pressures (Pa abs) an arm sample message carries, by chamber name."""
+    return {name: p for name, p in zip(sample.name, sample.effort) if '/chain_' in name}
+
+
+def highest_pressure(sample):
+    """Return the highest chamber pressure (Pa abs) of an arm sample message."""
+    return max(chamber_pressures(sample).values())

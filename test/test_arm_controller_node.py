@@ -18,7 +18,6 @@ arm_controller_node in the test's process: it never commands from an old sample.
 The samples are handed to the node's own callbacks, stamped in the past or now on the node's
 clock; what it publishes is read back by a peer node.
 """
-from array import array
 import math
 import time
 
@@ -50,7 +49,7 @@ def controller(monkeypatch):
 
 def feed(node, stamps, psi=0.1):
     """
-    Hand `node` one sample of segment 1 at angle `psi` rad per stamp (ns), both halves.
+    Hand `node` one sample of segment 1 at angle `psi` rad per stamp (ns).
 
     A stamp of None is the node clock's present: a sample as young as it can be, however slowly a
     loaded machine runs this loop.
@@ -58,14 +57,7 @@ def feed(node, stamps, psi=0.1):
     p0 = load_segment_params().p0
     for stamp in stamps:
         stamp = node.get_clock().now().nanoseconds if stamp is None else stamp
-        state = probe.msg.JointState(name=['segment_1'], position=array('d', [psi]),
-                                     velocity=array('d', [0.0]))
-        chambers = probe.msg.JointState(name=['segment_1/chain_1', 'segment_1/chain_2'],
-                                        effort=array('d', [p0 + 1e5, p0 + 1e5]))
-        for half in (state, chambers):
-            half.header.stamp.sec, half.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
-        node.on_joint_states(state)
-        node.on_chambers(chambers)
+        node.control(probe.arm_sample(stamp, [psi], [0.0], [p0 + 1e5, p0 + 1e5]))
 
 
 def vent_and_resume(node, psi):

@@ -24,11 +24,11 @@ import subprocess
 import sys
 import warnings
 
-from bag_messages import (header as _header, JOINT_STATE, joints as _joints,  # noqa: F401
-                          STORE, WRENCH, wrench as _wrench)
+from bag_messages import (ACTUATOR_LAYOUTS, ARM_LAYOUTS, wrench, write_actuator_bag,
+                          write_arm_bag, write_bag)
 import numpy as np
 import pytest
-from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.rosbag2 import StoragePlugin
 import yaml
 
 from bellows_ros import data, params
@@ -36,39 +36,17 @@ from bellows_ros.cli import main as bellows
 from bellows_ros.errors import DataError, ParameterError
 
 
-# The actuator's sample topics: its own, or (a bag recorded before they existed) the arm's.
-ACTUATOR_TOPICS = {'own': ('/actuator/joint_states', '/actuator/chambers'),
-                   'shared': ('/joint_states', '/bellows/chambers')}
-
-
-def write_actuator_bag(path, rows, storage=StoragePlugin.SQLITE3, joint_type=JOINT_STATE,
-                       log_time=lambda k, ns: ns, layout='own'):
-    """
-    rows: (stamp ns, x_c, x_s, p, f) -> the actuator's three topics, a message each per row.
-
-    Messages are logged at `log_time(row index, stamp)` (the header stamp by default); `layout`
-    is a key of ACTUATOR_TOPICS.
-    """
-    joint_topic, chamber_topic = ACTUATOR_TOPICS[layout]
-    with Writer(path, version=8, storage_plugin=storage) as writer:
-        joints = writer.add_connection(joint_topic, joint_type, typestore=STORE)
-        chambers = writer.add_connection(chamber_topic, JOINT_STATE, typestore=STORE)
-        forces = writer.add_connection('/bellows/wrench', WRENCH, typestore=STORE)
-        for k, (ns, x_c, x_s, p, f) in enumerate(rows):
-            joint_message = (_joints(ns, ('air_chamber', 'spring'), position=(x_c, x_s))
-                             if joint_type == JOINT_STATE else _wrench(ns, x_c))
-            for connection, message, kind in (
-                    (joints, joint_message, joint_type),
-                    (chambers, _joints(ns, ('actuator',), effort=(p,)), JOINT_STATE),
-                    (forces, _wrench(ns, f), WRENCH)):
-                writer.write(connection, log_time(k, ns),
-                             STORE.serialize_cdr(message, kind))
-
-
 def actuator_rows(n=20, p_scale=1.0):
     start = 5 * 10 ** 9
     return [(start + k * 1_000_000, 0.01 + 1e-4 * k, 0.002, (1.2e5 + 100.0 * k) * p_scale,
              3.0 + 0.1 * k) for k in range(n)]
+
+
+def arm_rows(n=20):
+    """(stamp ns, psi, psi_dot, p1, p2, tau_ext) of segment_1 at 1 kHz."""
+    start = 5 * 10 ** 9
+    return [(start + k * 1_000_000, 0.3 * math.sin(k / 9), 0.3 / 9 * math.cos(k / 9),
+             2e5 + 300.0 * k, 1.5e5 - 200.0 * k, -0.01 * k) for k in range(n)]
 
 
 def write_csv(path, header, rows):
@@ -138,31 +116,73 @@ def test_a_truncated_storage_file_is_one_line(tmp_path, storage):
 
 
 def test_a_topic_of_the_wrong_type_is_named(tmp_path):
-    write_actuator_bag(tmp_path / 'bag', actuator_rows(), joint_type=WRENCH)
+    write_bag(tmp_path / 'bag', [[('/actuator/joint_states', wrench(ns, x_c))]
+                                 for ns, x_c, *_ in actuator_rows()])
     with pytest.raises(DataError, match='/actuator/joint_states holds geometry_msgs/msg/'
                                         'WrenchStamped, expected sensor_msgs/msg/JointState'):
         data.read_table(tmp_path / 'bag', 'actuator')
 
 
-def test_a_bag_from_before_the_actuator_topics_exports_the_same(tmp_path, capsys):
-    """The actuator's samples on /joint_states, /bellows/chambers (an older bag): read alike."""
-    rows = actuator_rows(50)
-    for layout in ACTUATOR_TOPICS:
-        write_actuator_bag(tmp_path / layout, rows, layout=layout)
-        status, err = run_cli(['export', 'actuator', str(tmp_path / layout), '--output',
+@pytest.mark.parametrize('system', ['segment', 'actuator'])
+def test_the_same_samples_in_every_format_read_and_export_alike(tmp_path, capsys, system):
+    """
+    One message per sample, and the older formats (pressures and force on topics of their own).
+
+    A value the sample lacks (NaN in a sample message, no message on a topic of its own) is held
+    alike, and marked alike as held.
+    """
+    if system == 'segment':
+        rows, layouts, write, lacks = arm_rows(50), ARM_LAYOUTS, write_arm_bag, (3, 4)
+    else:
+        rows, layouts, write, lacks = actuator_rows(50), ACTUATOR_LAYOUTS, write_actuator_bag, (3,)
+    rows = [list(row) for row in rows]
+    for k in (0, 20, 21, 22):  # the first sample, and three in a row: held, within the limit
+        for column in lacks:
+            rows[k][column] = None
+    rows[30][-1] = None  # the force or torque
+    tables = {}
+    for layout in layouts:
+        write(tmp_path / layout, rows, layout=layout)
+        tables[layout] = data.read_table(tmp_path / layout, system)
+        status, err = run_cli(['export', system, str(tmp_path / layout), '--output',
                                str(tmp_path / f'{layout}.csv')], capsys)
         assert status == 0 and '50 rows' in err, err
-    assert (tmp_path / 'own.csv').read_text() == (tmp_path / 'shared.csv').read_text()
-    table = data.read_table(tmp_path / 'shared.csv', 'actuator')
-    np.testing.assert_allclose(table['p'], [row[3] for row in rows])
+    now = tables['sample']
+    for layout in layouts:
+        assert tables[layout].names == now.names and tables[layout].held.keys() == now.held.keys()
+        for name in now.names:
+            np.testing.assert_array_equal(tables[layout][name], now[name], err_msg=name)
+        for name, (_, age, step) in now.held.items():
+            np.testing.assert_array_equal(tables[layout].held[name][1], age, err_msg=name)
+            assert tables[layout].held[name][2] == step
+        assert (tmp_path / f'{layout}.csv').read_text() == (tmp_path / 'sample.csv').read_text()
+    # Held: the first sample's from the next, the three's from the one before them.
+    lacked, force = {'segment': ('p1', 'tau_ext'), 'actuator': ('p', 'f')}[system]
+    assert now[lacked][0] == rows[1][lacks[0]] and now[lacked][22] == rows[19][lacks[0]]
+    assert now[force][30] == rows[29][-1]
 
 
-@pytest.mark.parametrize('bad', [math.nan, math.inf, -math.inf])
-@pytest.mark.parametrize('column', [1, 3, 4])  # x_c, p, f
-def test_a_non_finite_value_in_a_bag_is_refused_like_in_a_csv(tmp_path, bad, column):
+def test_a_force_no_sample_holds_is_refused_as_a_missing_wrench_was(tmp_path):
+    rows = [(ns, x_c, x_s, p, None) for ns, x_c, x_s, p, _ in actuator_rows()]
+    for layout, needle in (('sample', 'no effort of spring on /actuator/joint_states: NaN in '
+                                      'every message'),
+                           ('split', "no messages on /bellows/wrench with frame_id 'actuator'")):
+        write_actuator_bag(tmp_path / layout, rows, layout=layout)
+        with pytest.raises(DataError, match=needle):
+            data.read_table(tmp_path / layout, 'actuator')
+
+
+# In a sample message a NaN pressure or force is one the device did not measure (the test above).
+NON_FINITE = [(layout, column, bad) for layout in ('sample', 'split') for column in (1, 3, 4)
+              for bad in (math.nan, math.inf, -math.inf)
+              if not (layout == 'sample' and column > 1 and math.isnan(bad))]
+
+
+@pytest.mark.parametrize('layout, column, bad', NON_FINITE)  # column: x_c, p, f
+def test_a_non_finite_value_in_a_bag_is_refused_like_in_a_csv(tmp_path, layout, column, bad):
     rows = [list(row) for row in actuator_rows()]
     rows[7][column] = bad
-    write_actuator_bag(tmp_path / 'bag', rows)
+    write_actuator_bag(tmp_path / 'bag', rows, layout=layout)
     name = {1: 'x_c', 3: 'p', 4: 'f'}[column]
     with pytest.raises(DataError, match=rf"column '{name}': {bad} is not a finite number \(stamp "
                                         rf'{rows[7][0]} ns\)'):

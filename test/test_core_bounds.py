@@ -341,10 +341,11 @@ def test_a_bag_over_the_message_limit_is_refused_before_reading(tmp_path, monkey
     from test_core_one_writer import write_bag
 
     from bellows_ros import bag as bag_reader
-    path = write_bag(tmp_path / 'bag', n=50)
     monkeypatch.setattr(bag_reader, 'MAX_BAG_MESSAGES', 100)
-    with pytest.raises(BellowsError, match=r'150 messages .* over 100'):
-        data.read_table(path, 'actuator')
+    for layout, n in (('sample', 150), ('split', 50)):  # split: 3 topics, each counted
+        path = write_bag(tmp_path / layout, n=n, layout=layout)
+        with pytest.raises(BellowsError, match=r'150 messages .* over 100'):
+            data.read_table(path, 'actuator')
 
 
 @pytest.mark.parametrize('module, system', [('sim_actuator_node', 'actuator'),

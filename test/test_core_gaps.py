@@ -14,18 +14,17 @@
 """
 Gaps are never filled silently (issue #30, class 3).
 
-A bag whose channel (the wrench, the chamber pressures) stops part-way, starts late or has a hole
+A bag whose channel (the spring force, the chamber pressure: NaN in the samples, or in an older
+recording the wrench and chambers topics' messages) stops part-way, starts late or has a hole
 longer than a few samples: export, identify, diagnose and stiffness refuse it in one line naming
 the channel, the column and the times, and point to `bellows export --start/--end`; export with
-that span writes the part that was recorded. A few dropped messages stay a normal record.
+that span writes the part that was recorded. A few dropped values stay a normal record.
 """
+from bag_messages import write_actuator_bag
 from hypothesis import given, settings, strategies as st
 import numpy as np
 import pytest
-from rosbags.rosbag2 import Writer
 from rosbags.rosbag2.enums import StoragePlugin
-
-from test_core_one_writer import _joints, _wrench, JOINT_STATE, STORE, WRENCH
 
 from bellows_ros.bag import _hold
 from bellows_ros.cli import main
@@ -49,27 +48,23 @@ def spring_record(cycles=2):
             'f': 2.0 + K * x_s + rng.normal(0, 0.05, len(t))}
 
 
-def write_bag(path, data, wrench=None, chambers=None):
-    """Write `data` as the actuator's topics; `wrench`/`chambers`: rows with that message."""
+# The channels' names in the refusal, by layout (bag_messages): the samples' own, or (recorded
+# before) the topics of their own.
+FORCE = {'sample': 'effort of spring on /actuator/joint_states', 'split': '/bellows/wrench'}
+PRESSURE = {'sample': 'effort of actuator on /actuator/joint_states',
+            'split': '/actuator/chambers'}
+
+
+def write_bag(path, data, wrench=None, chambers=None, layout='sample'):
+    """Write `data` as the actuator's samples; `wrench`/`chambers`: rows with a force, pressure."""
     n = len(data['t'])
     wrench = np.ones(n, bool) if wrench is None else wrench
     chambers = np.ones(n, bool) if chambers is None else chambers
     start = 5 * 10 ** 9
-    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
-        joints = writer.add_connection('/actuator/joint_states', JOINT_STATE, typestore=STORE)
-        pressure = writer.add_connection('/actuator/chambers', JOINT_STATE, typestore=STORE)
-        forces = writer.add_connection('/bellows/wrench', WRENCH, typestore=STORE)
-        for k in range(n):
-            ns = start + int(round(data['t'][k] * 1e9))
-            writer.write(joints, ns, STORE.serialize_cdr(_joints(
-                ns, ('air_chamber', 'spring'), position=(data['x_c'][k], data['x_s'][k])),
-                JOINT_STATE))
-            if chambers[k]:
-                writer.write(pressure, ns, STORE.serialize_cdr(
-                    _joints(ns, ('actuator',), effort=(data['p'][k],)), JOINT_STATE))
-            if wrench[k]:
-                writer.write(forces, ns, STORE.serialize_cdr(_wrench(ns, data['f'][k]), WRENCH))
-    return path
+    rows = [(start + int(round(data['t'][k] * 1e9)), data['x_c'][k], data['x_s'][k],
+             data['p'][k] if chambers[k] else None, data['f'][k] if wrench[k] else None)
+            for k in range(n)]
+    return write_actuator_bag(path, rows, StoragePlugin.MCAP, layout=layout, version=9)
 
 
 def keep(n, kind):
@@ -106,16 +101,24 @@ def test_a_wrench_with_a_gap_is_refused_naming_channel_and_time(data, tmp_path, 
     err = capsys.readouterr().err
     lines = err.strip().splitlines()
     assert len(lines) == 1 and 'Traceback' not in err, err
-    assert '/bellows/wrench' in lines[0] and "column 'f'" in lines[0], lines[0]
+    assert FORCE['sample'] in lines[0] and "column 'f'" in lines[0], lines[0]
     assert 'bellows export' in lines[0] and ' s' in lines[0], lines[0]
     assert not (tmp_path / 'o.csv').exists() and not (tmp_path / 'p.yaml').exists()
 
 
-def test_chambers_that_stop_are_refused_too(data, tmp_path):
-    bag = write_bag(tmp_path / 'bag', data,
-                    chambers=keep(len(data['t']), 'stops at the midpoint'))
-    with pytest.raises(DataError, match=r"column 'p': /actuator/chambers stops early: no "
+@pytest.mark.parametrize('layout', sorted(FORCE))
+def test_chambers_that_stop_are_refused_too(data, tmp_path, layout):
+    bag = write_bag(tmp_path / 'bag', data, chambers=keep(len(data['t']), 'stops at the midpoint'),
+                    layout=layout)
+    with pytest.raises(DataError, match=rf"column 'p': {PRESSURE[layout]} stops early: no "
                                         r'message after t = 3\.995 s'):
+        read_table(bag, 'actuator')
+
+
+@pytest.mark.parametrize('gap', GAPS)
+def test_a_wrench_with_a_gap_in_an_older_recording_is_refused(data, tmp_path, gap):
+    bag = write_bag(tmp_path / 'bag', data, wrench=keep(len(data['t']), gap), layout='split')
+    with pytest.raises(DataError, match="column 'f': /bellows/wrench .*bellows export"):
         read_table(bag, 'actuator')
 
 
@@ -147,11 +150,12 @@ def test_the_stiffness_of_the_recorded_part_is_measured(tmp_path, capsys):
                          for line in lines), lines
 
 
-def test_a_few_dropped_messages_are_a_normal_record(data, tmp_path):
+@pytest.mark.parametrize('layout', sorted(FORCE))
+def test_a_few_dropped_values_are_a_normal_record(data, tmp_path, layout):
     rows = np.ones(len(data['t']), bool)
     rows[100:104] = False   # 4 samples: a busy moment, under MAX_HELD_STEPS
     rows[900:905] = False
-    bag = write_bag(tmp_path / 'bag', data, wrench=rows, chambers=rows)
+    bag = write_bag(tmp_path / 'bag', data, wrench=rows, chambers=rows, layout=layout)
     assert len(read_table(bag, 'actuator')) == len(data['t'])
 
 

@@ -25,11 +25,9 @@ import sys
 import threading
 import time
 
-from bag_messages import (header as _header, JOINT_STATE, joints as _joints,  # noqa: F401
-                          STORE, WRENCH, wrench as _wrench)
+from bag_messages import write_actuator_bag
 import numpy as np
 import pytest
-from rosbags.rosbag2 import Writer
 from rosbags.rosbag2.enums import StoragePlugin
 
 from bellows_ros.cli import main
@@ -37,27 +35,14 @@ from bellows_ros.cli import main
 LOCK = '.bellows-writer.lock'
 
 
-def write_bag(path, n=400, wrench_rows=None):
-    """Write an actuator bag of `n` rows at 1 kHz; the wrench only on the rows `wrench_rows`."""
+def write_bag(path, n=400, wrench_rows=None, layout='sample'):
+    """Write an actuator bag of `n` samples at 1 kHz; the force only in the rows `wrench_rows`."""
     start = 5 * 10 ** 9
     wrench_rows = range(n) if wrench_rows is None else wrench_rows
-    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
-        joints = writer.add_connection('/actuator/joint_states', JOINT_STATE, typestore=STORE)
-        chambers = writer.add_connection('/actuator/chambers', JOINT_STATE, typestore=STORE)
-        forces = writer.add_connection('/bellows/wrench', WRENCH, typestore=STORE)
-        for k in range(n):
-            ns = start + k * 1_000_000
-            writer.write(joints, ns, STORE.serialize_cdr(
-                _joints(ns, ('air_chamber', 'spring'),
-                        position=(0.01 + 1e-5 * np.sin(k / 30), 0.002 + 1e-3 * np.sin(k / 50))),
-                JOINT_STATE))
-            writer.write(chambers, ns, STORE.serialize_cdr(
-                _joints(ns, ('actuator',), effort=(1.2e5 + 100.0 * np.sin(k / 40),)),
-                JOINT_STATE))
-            if k in wrench_rows:
-                writer.write(forces, ns, STORE.serialize_cdr(_wrench(ns, 3.0 + np.sin(k / 50)),
-                                                             WRENCH))
-    return path
+    rows = [(start + k * 1_000_000, 0.01 + 1e-5 * np.sin(k / 30), 0.002 + 1e-3 * np.sin(k / 50),
+             1.2e5 + 100.0 * np.sin(k / 40), 3.0 + np.sin(k / 50) if k in wrench_rows else None)
+            for k in range(n)]
+    return write_actuator_bag(path, rows, StoragePlugin.MCAP, layout=layout, version=9)
 
 
 def kill_bag(bag):

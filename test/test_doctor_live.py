@@ -21,11 +21,12 @@ samples (encoder x_c, x_s, measured p and f), as the controller does.
 """
 import math
 import time
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from bellows_ros import live
+from bellows_ros import interfaces, live
 from bellows_ros.config.actuator import load_actuator
 from bellows_ros.doctor import actuator_causes
 from bellows_ros.models.actuator_plant import ActuatorPlant
@@ -83,20 +84,36 @@ def test_ring_buffer_keeps_the_last_samples_in_order():
     assert len(ring.since(8)[0]['t']) == 0
 
 
-def test_the_three_messages_of_a_sample_are_joined_by_stamp_in_any_order():
+def test_one_message_per_sample_goes_into_the_buffer_whole():
+    from bellows_ros.nodes.stiffness_controller_node import StiffnessControllerNode
     doctor = live.LiveDoctor(CONFIG, rate=10.0)
-    doctor.put(2_000_000, live.PRESSURE, 1.2e5)
-    doctor.put(1_000_000, live.STATE, (0.01, 0.0))
-    doctor.put(2_000_000, live.FORCE, 3.0)
-    assert doctor.buffer.count == 0             # no sample has all three yet
-    doctor.put(2_000_000, live.STATE, (0.02, 0.001))
+    node = SimpleNamespace(
+        live=doctor,
+        counts=dict.fromkeys(['samples_without_pressure', 'samples_without_force'], 0),
+        sample_index=interfaces.SampleIndex(interfaces.actuator_sample_names()),
+        _last_stamp=None, samples=0, _elapsed=0.0, control_every=10 ** 6)
+
+    def sample(ns, x_c, x_s, f, p, names=('air_chamber', 'spring', 'actuator')):
+        # as the driver publishes it: the spring's effort the force, the chamber's the pressure
+        values = {'air_chamber': (x_c, math.nan), 'spring': (x_s, f), 'actuator': (math.nan, p)}
+        StiffnessControllerNode.on_sample(node, SimpleNamespace(
+            name=list(names), position=[values[n][0] for n in names],
+            effort=[values[n][1] for n in names],
+            header=SimpleNamespace(stamp=SimpleNamespace(sec=0, nanosec=ns))))
+
+    assert interfaces.actuator_sample_names() == ('air_chamber', 'spring', 'actuator')
+    sample(1_000_000, 0.01, 0.0, 3.0, 1.2e5)
+    sample(2_000_000, 0.02, 0.001, math.nan, 1.3e5)      # no force: controlled, not compared
+    sample(3_000_000, 0.03, 0.002, 4.0, math.nan)        # no pressure: neither
+    sample(4_000_000, 0.04, 0.003, 5.0, 1.4e5, names=('spring', 'actuator', 'air_chamber'))
+    sample(5_000_000, 0.05, 0.004, 6.0, 1.5e5, names=('air_chamber', 'spring'))  # not ours
     rows = doctor.buffer.last(5)
-    assert [list(rows[c]) for c in live.COLUMNS] == [[0.002], [0.02], [0.001], [1.2e5], [3.0]]
-    for k in range(live.MAX_PENDING + 1):       # halves that never complete are given up
-        doctor.put(10_000_000 + k, live.FORCE, 0.0)
-    assert doctor.unpaired == 2 and doctor.buffer.count == 1   # 1 ms and the first of these
+    assert [list(rows[c]) for c in live.COLUMNS] == [
+        [0.001, 0.004], [0.01, 0.04], [0.0, 0.003], [1.2e5, 1.4e5], [3.0, 5.0]]
+    assert node.counts == {'samples_without_pressure': 1, 'samples_without_force': 1}
+    assert node.samples == 3
     mean_us, max_us = doctor.cost_us()
-    assert 0.0 < mean_us and 0.0 < max_us      # counted over every call, per sample buffered
+    assert 0.0 < mean_us and 0.0 < max_us      # counted per sample buffered
 
 
 def test_a_healthy_run_stays_within_the_floor(healthy):
@@ -260,9 +277,7 @@ def test_the_controllers_model_health_status_says_each_state(leaking):
     assert report().level == diagnostics.STALE
     seen = []
     for k, row in enumerate(leaking):
-        doctor.put(int(round(row[0] * 1e9)), live.STATE, (row[1], row[2]))
-        doctor.put(int(round(row[0] * 1e9)), live.FORCE, row[4])
-        doctor.put(int(round(row[0] * 1e9)), live.PRESSURE, row[3])
+        doctor.sample(*row[:5])
         if k % 1000 == 999:
             stat = report()
             seen.append((row[0], stat.level, stat.message, stat.get('state')))

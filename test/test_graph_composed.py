@@ -59,8 +59,8 @@ def test_the_composed_arm_graph_runs_the_three_nodes(tmp_path, monkeypatch):
         watcher = probe.Node('composed_probe')
         watcher.create_subscription(msg.JointState, interfaces.DRIVING_TORQUE.resolved(),
                                     lambda m: torques.append(m), 1000)
-        watcher.create_subscription(msg.JointState, interfaces.CHAMBERS.resolved(),
-                                    lambda m: pressures.append(max(m.effort)), 1000)
+        watcher.create_subscription(msg.JointState, interfaces.JOINT_STATES.resolved(),
+                                    lambda m: pressures.append(probe.highest_pressure(m)), 1000)
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline and not (
                 torques and pressures and max(pressures) > 1.5e5):

@@ -15,14 +15,13 @@
 The stop that latches, under load: `/bellows/estop` and `~/vent` vent the arm until `~/release`.
 
 A simulated arm and the driver run as node processes; this process (a plain rclpy node) floods
-pressure commands (4 bar on every chamber, 1 kHz) and watches `/bellows/chambers`. Once the
-chambers are up, `ros2 topic pub /bellows/estop` (the README's stop, latched) says True while the
-commands keep coming. The chambers must fall to ambient
-and stay there while the commands keep coming; `False` alone must not release them, and
-`~/release` is refused while the stop is held. Then `~/vent` and `~/release` (std_srvs/Trigger,
-called with the real `ros2 service call` of ROS 2) vent and release it.
-The driver's /diagnostics say it is vented, and its `bellows/vented` says when it starts and
-stops holding the chambers vented.
+pressure commands (4 bar on every chamber, 1 kHz) and watches the pressures on `/joint_states`.
+Once the chambers are up, `ros2 topic pub /bellows/estop` (the README's stop, latched) says True
+while the commands keep coming. The chambers must fall to ambient and stay there while the commands
+keep coming; `False` alone must not release them, and `~/release` is refused while the stop is
+held. Then `~/vent` and `~/release` (std_srvs/Trigger, called with the real `ros2 service call` of
+ROS 2) vent and release it. The driver's /diagnostics say it is vented, and its `bellows/vented`
+says when it starts and stops holding the chambers vented.
 """
 import random
 import subprocess
@@ -72,9 +71,9 @@ def test_estop_vents_under_a_command_flood_and_false_does_not_release(tmp_path, 
         watcher.create_subscription(msg.Bool, interfaces.VENTED.resolved(),
                                     lambda m: vented.append((time.monotonic(), m.data)),
                                     probe.LATCHED)
-        watcher.create_subscription(msg.JointState, interfaces.CHAMBERS.resolved(),
-                                    lambda m: pressures.append((time.monotonic(), max(m.effort))),
-                                    1000)
+        watcher.create_subscription(
+            msg.JointState, interfaces.JOINT_STATES.resolved(),
+            lambda m: pressures.append((time.monotonic(), probe.highest_pressure(m))), 1000)
         watcher.create_subscription(
             msg.DiagnosticArray, '/diagnostics',
             lambda a: status.update({s.name: {kv.key: kv.value for kv in s.values}

@@ -15,17 +15,17 @@
 """
 driver_node is a managed node, driven from outside with ROS 2's own `ros2 lifecycle`.
 
-The driver is an rclpy LifecycleNode; its transitions must be rcl_lifecycle's, with nothing
-added or left out, as a bare rclpy LifecycleNode lists them through the same command line. Then
-a simulated arm and the driver run as node processes, this process floods pressure commands
-(4 bar on both chambers of segment 1) and watches `/bellows/chambers` while `ros2 lifecycle set`
-drives the driver: nothing is published unconfigured; inactive publishes samples and refuses
-commands; active obeys them; deactivate vents; a transition the state does not have is refused
-by the command line and changes neither the state nor the chambers; cleanup closes the devices
-and a new configure opens them again; a `~/vent` survives deactivate/activate until `~/release`;
-shutdown vents and waits for ambient, and says after how long. The end of the process does the
-same from active. Every transition a state does not offer, in each of the four states, is refused
-and leaves the chambers as they were; shutdown is taken from each state that offers it.
+The driver is an rclpy LifecycleNode; its transitions must be rcl_lifecycle's, with nothing added
+or left out, as a bare rclpy LifecycleNode lists them through the same command line. Then a
+simulated arm and the driver run as node processes, this process floods pressure commands (4 bar on
+both chambers of segment 1) and watches their pressures on `/joint_states` while `ros2 lifecycle
+set` drives the driver: nothing is published unconfigured; inactive publishes samples and refuses
+commands; active obeys them; deactivate vents; a transition the state does not have is refused by
+the command line and changes neither the state nor the chambers; cleanup closes the devices and a
+new configure opens them again; a `~/vent` survives deactivate/activate until `~/release`; shutdown
+vents and waits for ambient, and says after how long. The end of the process does the same from
+active. Every transition a state does not offer, in each of the four states, is refused and leaves
+the chambers as they were; shutdown is taken from each state that offers it.
 
 Each verb goes through the command line once (`test_lifecycle_from_the_command_line`); the
 repeats and the matrix of refusals ask the driver's lifecycle services from this process, as
@@ -140,8 +140,8 @@ class Probe:
         self.node = probe.Node('lifecycle_probe')
         self.pressures, self.status, self.not_found = [], {}, 0
         self.node.create_subscription(
-            msg.JointState, interfaces.CHAMBERS.resolved(),
-            lambda m: self.pressures.append((time.monotonic(), max(m.effort))), 1000)
+            msg.JointState, interfaces.JOINT_STATES.resolved(),
+            lambda m: self.pressures.append((time.monotonic(), probe.highest_pressure(m))), 1000)
         self.node.create_subscription(
             msg.DiagnosticArray, '/diagnostics',
             lambda a: self.status.update({s.name: {kv.key: kv.value for kv in s.values}

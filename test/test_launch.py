@@ -295,24 +295,20 @@ def test_two_namespaced_graphs_run_side_by_side(prefix, tmp_path, monkeypatch):
                                stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
     names = {'/arm_a': [], '/arm_b': [], '/': []}
     actuator_names = {'/arm_a': [], '/arm_b': [], '/': []}   # on the actuator's own topics
-    actuator = {interfaces.ACTUATOR_JOINTS, (interfaces.ACTUATOR_CHAMBER,)}
-    arm_a = {(interfaces.segment_joint(1),),
-             (interfaces.chain_chamber(1, 1), interfaces.chain_chamber(1, 2))}
-    arm_b = {tuple(interfaces.segment_joint(i) for i in (1, 2)),
-             tuple(interfaces.chain_chamber(i, j) for i in (1, 2) for j in (1, 2))}
+    actuator = {interfaces.actuator_sample_names()}
+    arm_a = {interfaces.arm_sample_names([1])}
+    arm_b = {interfaces.arm_sample_names([1, 2])}
     monkeypatch.setenv('ROS_DOMAIN_ID', env['ROS_DOMAIN_ID'])
     probe.init()
     try:
         watcher = probe.Node('namespace_probe')
         for namespace, seen in names.items():
-            for topic in (interfaces.JOINT_STATES, interfaces.CHAMBERS):
-                watcher.create_subscription(msg.JointState, topic.resolved(namespace),
-                                            lambda m, seen=seen: seen.append(tuple(m.name)),
-                                            1000)
-            for topic in (interfaces.ACTUATOR_JOINT_STATES, interfaces.ACTUATOR_CHAMBERS):
-                watcher.create_subscription(
-                    msg.JointState, topic.resolved(namespace),
-                    lambda m, seen=actuator_names[namespace]: seen.append(tuple(m.name)), 1000)
+            watcher.create_subscription(
+                msg.JointState, interfaces.JOINT_STATES.resolved(namespace),
+                lambda m, seen=seen: seen.append(tuple(m.name)), 1000)
+            watcher.create_subscription(
+                msg.JointState, interfaces.ACTUATOR_JOINT_STATES.resolved(namespace),
+                lambda m, seen=actuator_names[namespace]: seen.append(tuple(m.name)), 1000)
         deadline = time.monotonic() + GUARD
         # Until each graph's arm speaks (its actuator may come up seconds earlier on a busy host)
         while not (set(names['/arm_a']) & arm_a and set(names['/arm_b']) & arm_b) \

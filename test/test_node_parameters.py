@@ -123,7 +123,7 @@ def test_any_value_is_allowed_or_refused_with_a_parameter_error(case):
 # One bad value per node, as a user gives it (-p name:=value), through the node's start-up.
 STARTS = [
     ('model_node', 'segments:=[5]', 'segments'),
-    ('model_node', 'max_pending:=-5', 'max_pending'),
+    ('model_node', 'latency_budget:=0.0', 'latency_budget'),
     ('arm_controller_node', 'control_every:=0', 'control_every'),
     ('arm_controller_node', 'feedforward:=paper_b', 'feedforward'),
     ('stiffness_controller_node', 'control_every:=0', 'control_every'),

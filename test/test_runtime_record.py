@@ -51,15 +51,16 @@ def stamp(ns):
 
 def segment_messages(k, t_ns):
     """Sample k of a synthetic segment recording; values are simple functions of k."""
-    joints = msg.JointState(name=['segment_1'], position=[0.001 * k], velocity=[0.5])
-    chambers = msg.JointState(name=['segment_1/chain_1', 'segment_1/chain_2'],
-                              effort=[2e5 + k, 1e5])
+    nan = float('nan')
+    joints = msg.JointState(name=list(interfaces.arm_sample_names([1])),
+                            position=[0.001 * k, nan, nan], velocity=[0.5, nan, nan],
+                            effort=[nan, 2e5 + k, 1e5])
     wrench = msg.WrenchStamped()
     wrench.wrench.torque.z = -0.01 * k
     wrench.header.frame_id = 'segment_1'
-    for m in (joints, chambers, wrench):
+    for m in (joints, wrench):
         m.header.stamp = stamp(t_ns)
-    return {'/joint_states': joints, '/bellows/chambers': chambers, '/bellows/wrench': wrench}
+    return {'/joint_states': joints, '/bellows/wrench': wrench}
 
 
 @pytest.mark.slow
@@ -68,7 +69,7 @@ def test_record_then_read_back(tmp_path, monkeypatch):
     output = tmp_path / 'bag'
     recorder = subprocess.Popen(
         [BELLOWS, 'record', '--output', str(output), '--duration', '4',
-         '--topics', '/joint_states', '/bellows/chambers', '/bellows/wrench'],
+         '--topics', '/joint_states', '/bellows/wrench'],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
         env=dict(os.environ, ROS_DOMAIN_ID=DOMAIN))
     try:
@@ -97,7 +98,7 @@ def test_record_then_read_back(tmp_path, monkeypatch):
     assert '/joint_states: 300 messages' in out
     assert len(list(output.glob('*.mcap'))) == 1
     with Reader(output) as reader:
-        assert reader.message_count == 900
+        assert reader.message_count == 600
     table = read_table(output, 'segment')
     k = np.arange(300)
     np.testing.assert_allclose(table['t'], k * 1e-3, atol=1e-12)
@@ -147,8 +148,11 @@ def write_bag(path, messages, storage='sqlite3'):
                          STORE.serialize_cdr(to_store(message), ros_type(message)))
 
 
-# The actuator's sample topics: its own, or shared with the arm's (recorded before the split).
-LAYOUTS = {'own': ('/actuator/joint_states', '/actuator/chambers'),
+# The actuator's sample topic and, in an older recording, its chambers topic: its own, or shared
+# with the arm's (recorded before the actuator had topics of its own). 'sample': the contract now,
+# one message per sample; a value the device did not measure is NaN.
+LAYOUTS = {'sample': ('/actuator/joint_states', None),
+           'own': ('/actuator/joint_states', '/actuator/chambers'),
            'shared': ('/joint_states', '/bellows/chambers')}
 
 
@@ -157,8 +161,15 @@ def test_actuator_zero_order_hold_on_sqlite3(tmp_path, layout):
     joint_topic, chamber_topic = LAYOUTS[layout]
     base = 10 * 1_000_000_000
     messages = []
+    nan = float('nan')
     for k in range(10):  # joints at 1 kHz, pressure at 500 Hz, force at 250 Hz
-        joints = msg.JointState(name=['air_chamber', 'spring'], position=[0.02, 0.001 * k])
+        if chamber_topic is None:
+            joints = msg.JointState(name=list(interfaces.actuator_sample_names()),
+                                    position=[0.02, 0.001 * k, nan],
+                                    effort=[nan, float(k) if k % 4 == 1 else nan,
+                                            1e5 + k if k % 2 == 0 else nan])
+        else:
+            joints = msg.JointState(name=['air_chamber', 'spring'], position=[0.02, 0.001 * k])
         joints.header.stamp = stamp(base + k * 1_000_000)
         messages.append((joint_topic, joints))
         # The arm's messages (on the same topics, in an older bag) are no part of the table.
@@ -168,6 +179,8 @@ def test_actuator_zero_order_hold_on_sqlite3(tmp_path, layout):
                                       effort=[3e5, 3e5])
         arm_chambers.header.stamp = arm.header.stamp
         messages += [('/joint_states', arm), ('/bellows/chambers', arm_chambers)]
+        if chamber_topic is None:
+            continue
         if k % 2 == 0:
             chambers = msg.JointState(name=['actuator'], effort=[1e5 + k])
             chambers.header.stamp = stamp(base + k * 1_000_000)
@@ -187,6 +200,14 @@ def test_actuator_zero_order_hold_on_sqlite3(tmp_path, layout):
 
 
 def test_missing_topic_is_a_clear_error(tmp_path):
+    nan = float('nan')
+    joints = msg.JointState(name=list(interfaces.actuator_sample_names()),
+                            position=[0.0, 0.0, nan], effort=[nan, nan, 1e5])
+    write_bag(tmp_path / 'sample', [('/actuator/joint_states', joints)])
+    with pytest.raises(DataError, match='no effort of spring on /actuator/joint_states: NaN in '
+                                        'every message'):
+        read_table(tmp_path / 'sample', 'actuator')
+    # Recorded before one message per sample: the force came on /bellows/wrench.
     joints = msg.JointState(name=['air_chamber', 'spring'], position=[0.0, 0.0])
     chambers = msg.JointState(name=['actuator'], effort=[1e5])
     write_bag(tmp_path / 'bag', [('/actuator/joint_states', joints),
@@ -228,7 +249,7 @@ def test_a_recorder_stalled_for_seconds_loses_nothing(tmp_path):
     output = tmp_path / 'bag'
     recorder = subprocess.Popen(
         [BELLOWS, 'record', '--output', str(output), '--topics', '/joint_states',
-         '/bellows/chambers', '/bellows/wrench'],
+         '/bellows/wrench'],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
         env=dict(os.environ, ROS_DOMAIN_ID=domain))
     n = 4000

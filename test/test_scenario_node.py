@@ -17,7 +17,6 @@ scenario_node in the test's process: when the runs start, and what the compariso
 
 Samples, vents and /diagnostics are handed to the node's own callbacks, stamped on its clock.
 """
-from array import array
 
 import probe
 import pytest
@@ -41,12 +40,9 @@ def scenario(monkeypatch, tmp_path):
 
 
 def angle(node, t, psi):
-    """Hand `node` segment_1's angle `psi` rad, sampled `t` s after the scenario's start."""
-    state = probe.msg.JointState(name=['segment_1'], position=array('d', [psi]),
-                                 velocity=array('d', [0.0]))
+    """Hand `node` a sample of segment_1 at angle `psi` rad, taken `t` s after the start."""
     stamp = node.start_ns + round(t * 1e9)
-    state.header.stamp.sec, state.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
-    node.on_joint_states(state)
+    node.on_joint_states(probe.arm_sample(stamp, [psi], [0.0], [2e5, 2e5]))
 
 
 def controller_source(node, source):

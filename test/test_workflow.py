@@ -125,7 +125,7 @@ def run_scenario(env, out, device, controller_params, k_low, k_high, step_time, 
                                 + override('driver_node', 'actuator.port', port), env, out))
         recorder = subprocess.Popen(
             [str(BIN / 'bellows'), 'record', '--output', str(bag), '--topics',
-             '/actuator/joint_states', '/actuator/chambers', '/bellows/wrench'], env=env,
+             '/actuator/joint_states'], env=env,
             stdout=open(out / 'record.log', 'w'), stderr=subprocess.STDOUT)
         processes.append(recorder)
         time.sleep(2.0)

@@ -28,23 +28,29 @@ publications (same message types, same QoS: bellows_ros/interfaces.py), publishi
 rates pre-built messages, with the same scheduling (the config's `realtime_priority` and
 `cpu_latency_limit`), spun the same way (runtime.run: EventsExecutor in bounded slices), each a
 process of its own, in a graph of floor nodes that reproduces the whole graph's topic traffic:
-- a node that publishes on each input sample publishes a pre-built message per input: the
-  model's floor both torques per arm sample (on its chambers half, the one the driver publishes
-  second), the arm controller's floor a pressure command every `control_every` samples, the
-  stiffness controller's floor a motor command every `control_every` actuator samples and the
-  stiffness every `publish_every` commands; each subscribes to the same topics as its node;
 - the devices and the driver, whose inputs are not DDS, keep their loop shape: the simulated
   devices' floors a 1 kHz PeriodicLoop thread with an empty body (what the devices tick their
   plants and their bus or serial link on; no plant, no CAN, no pty), the driver's floor one
-  1 kHz thread per device group publishing that group's pre-built sample messages (the driver
-  publishes from its two device reader threads): joint_states and bellows/chambers of 4
-  segments, actuator/joint_states, actuator/chambers and bellows/wrench;
+  1 kHz thread per device group (the driver publishes from its two device reader threads)
+  publishing that group's pre-built sample message each tick: on joint_states the 4 segments'
+  angles, rates and chamber pressures (`arm_sample_names`), on actuator/joint_states the
+  actuator's compressions, spring force and chamber pressure (`actuator_sample_names`);
+- a node that publishes on each input sample publishes a pre-built message per input: the
+  model's floor both torques per arm sample, the arm controller's floor a pressure command
+  every `control_every` arm samples (and ~/state every 20 ms of samples), the stiffness
+  controller's floor a motor command every `control_every` actuator samples and the stiffness
+  every `publish_every` commands; each subscribes to the same topics as its node, with the same
+  QoS (the arm controller best effort, newest only, to the arm samples), so each 1 kHz node
+  receives its own group's sample topic only;
 - the scenario's floor a 50 Hz timer publishing the angle set-point each tick and the stiffness
-  set-point once a second, subscribed as the scenario is (best effort for the samples);
+  set-point once a second, subscribed as the scenario is (best effort for the samples of both
+  groups and the driving torque; the stiffness, the vented state and /diagnostics);
 - every floor node but the scenario's publishes one pre-built /diagnostics array a second, as
   each node's diagnostics.Updater does.
 What a node costs above its floor is its own work (models, plants, devices, checks); the floor
 is what rclpy, Fast DDS and the Python callbacks cost for its traffic on this machine now.
+Each graph is measured over a 20 s window once it has settled 3 s (`--quick`, a smoke run: 3 s
+after 1 s).
 
 Figures (CPU: utime + stime from /proc/<pid>/stat over the window, a fraction of one core):
 - `graph.floor.cpu.<node>`, `graph.whole.cpu.<node>` (reference the floor, ratio), with the
@@ -64,6 +70,7 @@ Figures (CPU: utime + stime from /proc/<pid>/stat over the window, a fraction of
 Nothing here asserts a time. A node that exits is an error (BellowsError with its log line).
 """
 from array import array
+import math
 import os
 from pathlib import Path
 import random
@@ -95,6 +102,9 @@ TOTAL_TARGET = 1.3            # core: the whole graph (the issue's target)
 TORQUE_TARGET = 1000.0        # Hz: every sample's driving torque
 START_TIMEOUT = 120.0         # s: a loaded shared machine starts seven Python processes slowly
 SETTLE = 3.0                  # s: discovery and the first reports, before the window
+# s: --quick, a smoke run of both graphs (each node works, each figure is measured): the window,
+# and the settling before it once the torque and the scenario's set-points flow
+QUICK_WINDOW, QUICK_SETTLE = 3.0, 1.0
 THREADS_SHOWN = 6             # busiest threads of a process in `extra`
 # A floor node process: FLOORS[name] run as the nodes run (runtime.run).
 FLOOR_MAIN = ('import sys; from bellows_ros.bench.graph_floor import FLOORS; '
@@ -102,9 +112,9 @@ FLOOR_MAIN = ('import sys; from bellows_ros.bench.graph_floor import FLOORS; '
 
 
 def run(quick=False):
-    window = 5.0 if quick else 20.0
-    floor = _run_graph('floor', window)
-    whole = _run_graph('whole', window)
+    window, settle = (QUICK_WINDOW, QUICK_SETTLE) if quick else (20.0, SETTLE)
+    floor = _run_graph('floor', window, settle)
+    whole = _run_graph('whole', window, settle)
     results = []
     for kind, run_ in (('floor', floor), ('whole', whole)):
         for name in NODES:
@@ -171,8 +181,8 @@ def _floor_arguments(name):
     return [arg for key, value in given.items() for arg in ('-p', f'{key}:={value}')]
 
 
-def _run_graph(kind, window):
-    """Start the `kind` ('whole' or 'floor') graph, measure it over `window` s; its figures."""
+def _run_graph(kind, window, settle):
+    """Start the `kind` ('whole' or 'floor') graph; its figures over `window` s after `settle`."""
     domain = str(random.randint(*DOMAINS['graph_floor']))
     group = f'{CAN_GROUPS["graph_floor"]}.{random.randint(2, 250)}'
     env = node_environment(domain)
@@ -229,7 +239,7 @@ def _run_graph(kind, window):
         graph.start('scenario_node', command('scenario_node'), env)
         wait('scenario (a publisher of the stiffness set-point)', lambda: node.count_publishers(
             interfaces.STIFFNESS_SETPOINT.resolved()) > 0)
-        graph.spin(SETTLE)
+        graph.spin(settle)
         pids = {name: process.pid for name, process in graph.processes.items()}
         threads0 = {name: _thread_seconds(pid) for name, pid in pids.items()}
         bench0 = _own_cpu_seconds()
@@ -402,35 +412,29 @@ class DriverFloor(_FloorNode):
 
     def __init__(self, **kwargs):
         super().__init__('driver_node', **kwargs)
-        joints = [interfaces.segment_joint(s) for s in self.segments]
-        chains = [interfaces.chain_chamber(s, c) for s in self.segments for c in (1, 2)]
-        state_pub = self.publisher(interfaces.JOINT_STATES)
-        chamber_pub = self.publisher(interfaces.CHAMBERS)
+        arm_pub = self.publisher(interfaces.JOINT_STATES)
+        actuator_pub = self.publisher(interfaces.ACTUATOR_JOINT_STATES)
         self.publisher(interfaces.VENTED).publish(msg.Bool(data=True))  # latched, on change
-        actuator_state_pub = self.publisher(interfaces.ACTUATOR_JOINT_STATES)
-        actuator_chamber_pub = self.publisher(interfaces.ACTUATOR_CHAMBERS)
-        wrench_pub = self.publisher(interfaces.WRENCH)
         for topic in (interfaces.PRESSURE_COMMAND, interfaces.MOTOR_COMMAND, interfaces.ESTOP):
             self.subscription(topic, _ignore)
-        state = _joint_state(joints, position=[0.1] * len(joints),
-                             velocity=[0.0] * len(joints))
-        chambers = _joint_state(chains, effort=[2e5] * len(chains))
-        actuator_state = _joint_state(interfaces.ACTUATOR_JOINTS, position=[0.0, 0.0])
-        actuator_chambers = _joint_state([interfaces.ACTUATOR_CHAMBER], effort=[2e5])
-        wrench = msg.WrenchStamped()
-        wrench.header.frame_id = interfaces.ACTUATOR_FRAME
+        # The driver's messages, field for field: the joints' state and the chambers' pressure,
+        # NaN where an entry has no value (interfaces.py).
+        n, nan = len(self.segments), math.nan
+        arm = _joint_state(interfaces.arm_sample_names(self.segments),
+                           position=[0.1] * n + [nan] * 2 * n,
+                           velocity=[0.0] * n + [nan] * 2 * n,
+                           effort=[nan] * n + [2e5] * 2 * n)
+        actuator = _joint_state(interfaces.actuator_sample_names(),
+                                position=[0.01, 0.01, nan], effort=[nan, 20.0, 2e5])
         lock = threading.Lock()  # both device threads publish, as the driver's readers do
 
         def arm_sample():
             with lock:
-                state_pub.publish(state)
-                chamber_pub.publish(chambers)
+                arm_pub.publish(arm)
 
         def actuator_sample():
             with lock:
-                actuator_state_pub.publish(actuator_state)
-                actuator_chamber_pub.publish(actuator_chambers)
-                wrench_pub.publish(wrench)
+                actuator_pub.publish(actuator)
         self.loop(arm_sample, 'arm-floor')
         self.loop(actuator_sample, 'actuator-floor')
 
@@ -446,11 +450,10 @@ class ModelFloor(_FloorNode):
         drive = _joint_state(joints, effort=[0.5] * len(joints))
         external = _joint_state(joints, effort=[0.0] * len(joints))
 
-        def on_chambers(_):
+        def on_sample(_):
             drive_pub.publish(drive)
             external_pub.publish(external)
-        self.subscription(interfaces.JOINT_STATES, _ignore)
-        self.subscription(interfaces.CHAMBERS, on_chambers)
+        self.subscription(interfaces.JOINT_STATES, on_sample)
 
 
 class StiffnessControllerFloor(_FloorNode):
@@ -464,17 +467,15 @@ class StiffnessControllerFloor(_FloorNode):
         every, publish_every = self.given['control_every'], self.given['publish_every']
         samples = [0]
 
-        def on_joint_states(_):
+        def on_sample(_):
             samples[0] += 1
             if samples[0] % every:
                 return
             motor_pub.publish(duty)
             if (samples[0] // every) % publish_every == 0:
                 stiffness_pub.publish(stiffness)
-        for topic in (interfaces.STIFFNESS_SETPOINT, interfaces.ACTUATOR_CHAMBERS,
-                      interfaces.WRENCH):
-            self.subscription(topic, _ignore)
-        self.subscription(interfaces.ACTUATOR_JOINT_STATES, on_joint_states)
+        self.subscription(interfaces.STIFFNESS_SETPOINT, _ignore)
+        self.subscription(interfaces.ACTUATOR_JOINT_STATES, on_sample)
 
 
 class ArmControllerFloor(_FloorNode):
@@ -497,16 +498,16 @@ class ArmControllerFloor(_FloorNode):
         every = self.given['control_every']
         samples = [0]
 
-        def on_chambers(_):
+        def on_sample(_):
             samples[0] += 1
             if (samples[0] - 1) % every == 0:
                 command_pub.publish(command)
             if state_pub is not None and samples[0] % self.STATE_EVERY == 0:
                 state_pub.publish(state)
-        self.subscription(interfaces.JOINT_STATES, _ignore, newest_only=True)
+        # As the node: best effort, newest only (a command acts on the present).
+        self.subscription(interfaces.JOINT_STATES, on_sample, newest_only=True)
         for topic in (interfaces.PSI_SETPOINT, interfaces.JOINT_TRAJECTORY, interfaces.VENTED):
             self.subscription(topic, _ignore)
-        self.subscription(interfaces.CHAMBERS, on_chambers, newest_only=True)
 
 
 class ScenarioFloor(_FloorNode):
@@ -527,9 +528,11 @@ class ScenarioFloor(_FloorNode):
                 setpoint_pub.publish(setpoint)
             ticks[0] += 1
             angle_pub.publish(angle)
-        self.subscription(interfaces.STIFFNESS, _ignore)
+        for topic in (interfaces.STIFFNESS, interfaces.VENTED, interfaces.DIAGNOSTICS):
+            self.subscription(topic, _ignore)
+        # Best effort, as the scenario takes them (it never holds up the driver's writers).
         for topic in (interfaces.JOINT_STATES, interfaces.ACTUATOR_JOINT_STATES,
-                      interfaces.CHAMBERS, interfaces.DRIVING_TORQUE):
+                      interfaces.DRIVING_TORQUE):
             self.create_subscription(msg.JointState, topic.name, _ignore,
                                      qos_profile_sensor_data)
         self.create_timer(0.02, command)

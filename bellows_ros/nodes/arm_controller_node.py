@@ -18,9 +18,9 @@ arm_controller_node: angle tracking of the arm's segments, PID plus model-based 
 Wiring only; the logic is in `control.angle_tracking` (PID, feedforward through the pressure
 allocation of `control.pressure_allocation`) and `control.angle_trajectory` (built-in set-points).
 
-  /joint_states + /bellows/chambers (the two halves of each 1 kHz sample, paired by stamp as the
-      model node pairs them): every sample steps each segment's own paper-A model (its contact
-      memory, Algorithm 1); every `control_every`-th sample a command goes out:
+  /joint_states (one message per 1 kHz sample: Ψ, Ψ̇ and the chain pressures): every sample
+      steps each segment's own paper-A model (its contact memory, Algorithm 1); every
+      `control_every`-th sample a command goes out:
   /bellows/pressure_command (JointState, effort = chain pressures, Pa abs, names
       `segment_i/chain_j`), inside the driver's limits [p0, p_max] of config/segment.yaml, at
       1 kHz / control_every — well inside the command watchdog of the interface contract
@@ -53,8 +53,8 @@ trajectory ('' | 'reversals' | 'sweep'), trajectory_delay (s), pid.kp (N·m/rad)
 (N·m/(rad·s)), pid.kd (N·m·s/rad), pid.velocity_cutoff (Hz), pid.integral_limit (N·m),
 feedforward_lead (s: the valves' lag the feedforward anticipates, 0 = none), co_contraction (Pa
 above ambient on both chains), control_every (samples per command), params_file (str: YAML over
-config/segment.yaml, e.g. identified parameters and the arm's segment.dynamics), max_pending
-(unmatched half-samples kept), max_sample_age (s: no command from a sample older than this),
+config/segment.yaml, e.g. identified parameters and the arm's segment.dynamics),
+max_sample_age (s: no command from a sample older than this),
 resume_speed (rad/s: after a vent, the set-point moves back from the measured angle at this
 peak speed), realtime_priority, cpu_latency_limit (runtime/realtime.py). The gains (pid.*),
 feedforward, feedforward_lead, co_contraction, max_sample_age and resume_speed are live:
@@ -78,7 +78,7 @@ from bellows_ros.errors import ParameterError
 from bellows_ros.hardware.can_protocol import dbc_segments
 from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.nodes import diagnostics
-from bellows_ros.nodes.sample_pairing import CHAMBERS, JOINTS, SamplePairs, segment_rows
+from bellows_ros.nodes.arm_sample import ArmSampleReader
 from bellows_ros.runtime import Node, realtime, run
 from bellows_ros.runtime.node import stamp_ns
 from bellows_ros.runtime.parameters import Spec
@@ -111,8 +111,6 @@ PARAMETERS = (
          'of the command watchdog)', low=1,
          high=int(interfaces.COMMAND_WATCHDOG / 4 / SAMPLE_PERIOD)),
     Spec('params_file', '', "YAML laid over config/segment.yaml ('' = defaults)"),
-    Spec('max_pending', 100, 'unmatched half-samples kept before the oldest is dropped',
-         low=1, high=interfaces.SAMPLE_DEPTH),
     Spec('max_sample_age', 0.02, 'no command from a sample older than this, s', low=1e-3,
          high=1.0, read_only=False),
     Spec('resume_speed', 0.5, 'peak speed of the move back to the set-point after a vent, rad/s',
@@ -205,7 +203,7 @@ class ArmControllerNode(Node):
         trajectory, self.delay = given['trajectory'], given['trajectory_delay']
         lead = given['feedforward_lead']
         self.control_every, params_file = given['control_every'], given['params_file'] or None
-        max_pending, max_age = given['max_pending'], given['max_sample_age']
+        max_age = given['max_sample_age']
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
         path = angle_trajectory.by_name(trajectory) if trajectory else None
@@ -216,7 +214,6 @@ class ArmControllerNode(Node):
         self.loops = [SegmentLoop(i, AngleTracker(params, gains, feedforward), path)
                       for i in segments]
         self.feedforward = feedforward
-        self.pairs = SamplePairs(max_pending)
         self.max_age_ns = round(max_age * 1e9)
         self.resume_speed = given['resume_speed']
         self.samples = 0
@@ -232,7 +229,7 @@ class ArmControllerNode(Node):
         self.stats = LoopStats()
         self.ages = deque(maxlen=1000)  # s, age of the sample at each command (or skip)
         self.report = diagnostics.LoopReport(self.stats)
-        self._p_limit = 2.0 * params.p_max
+        self.reader = ArmSampleReader(segments, 2.0 * params.p_max)
 
         self.command_pub = self.publisher(interfaces.PRESSURE_COMMAND)
         self.state_pub = None
@@ -241,8 +238,7 @@ class ArmControllerNode(Node):
         else:  # no control_msgs wheel on PyPI (runtime/messages.py)
             self.get_logger().info('control_msgs is not installed: ~/state is not published')
         # The newest samples only: a command acts on the present (interfaces.md, "QoS").
-        self.subscription(interfaces.JOINT_STATES, self.on_joint_states, newest_only=True)
-        self.subscription(interfaces.CHAMBERS, self.on_chambers, newest_only=True)
+        self.subscription(interfaces.JOINT_STATES, self.control, newest_only=True)
         self.subscription(interfaces.PSI_SETPOINT, self.on_setpoint)
         self.subscription(interfaces.JOINT_TRAJECTORY, self.on_trajectory)
         self.subscription(interfaces.VENTED, self.on_vented)
@@ -327,24 +323,13 @@ class ArmControllerNode(Node):
         self.trajectory_start = start
         return list(knots)
 
-    def on_joint_states(self, msg):
-        if self.loops[0].name in msg.name:
-            self._half(msg, JOINTS)
-
-    def on_chambers(self, msg):
-        if self.loops[0].chains[0] in msg.name:
-            self._half(msg, CHAMBERS)
-
-    def _half(self, msg, slot):
-        sample = self.pairs.add(msg, slot)
-        if sample is not None:
-            self.control(*sample)
-
     # --- the loop -------------------------------------------------------------------------------
-    def control(self, stamp, joints, chambers):
+    def control(self, msg):
         start = time.perf_counter()
-        inputs = segment_rows(joints, chambers, ((loop.name, loop.chains) for loop in self.loops),
-                              self._p_limit)
+        if self.loops[0].name not in msg.name:
+            return  # another publisher's joints on the topic
+        stamp = stamp_ns(msg.header.stamp)
+        inputs = self.reader.rows(msg)
         if inputs is None:
             self.counts['rejected_samples'] += 1
             return
@@ -396,13 +381,13 @@ class ArmControllerNode(Node):
             loop.largest = max(loop.largest, abs(error))
             loop.saturated += out.saturated
         command = self.msg.JointState(name=names, effort=efforts)
-        command.header.stamp = joints.header.stamp
+        command.header.stamp = msg.header.stamp
         self.command_pub.publish(command)
         self.counts['commands'] += 1
         if self.state_pub is not None and (
                 self.last_state is None or stamp - self.last_state >= STATE_PERIOD * 1e9 - 1):
             self.last_state = stamp
-            self.publish_state(joints.header.stamp, t)
+            self.publish_state(msg.header.stamp, t)
         self.stats.record(dt * self.control_every, 0.0, time.perf_counter() - start)
 
     def publish_state(self, stamp, now):
@@ -445,7 +430,6 @@ class ArmControllerTask(diagnostics.DiagnosticTaskGroup):
         node = self.node
         values, rate, _ = node.report.values()
         values.update({k: str(v) for k, v in node.counts.items()})
-        values['unmatched_dropped'] = str(node.pairs.dropped)
         p50 = math.nan
         if node.ages:  # how late the samples reach the controller (latency and backlog)
             ages = np.array(node.ages)

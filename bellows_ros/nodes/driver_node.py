@@ -15,16 +15,15 @@
 """
 driver_node: the arm on CAN and/or the actuator on serial, wired to the topic contract.
 
-One message per device sample and group (docs/interfaces.md), each group on topics of its own: the
-arm on `/joint_states` and `/bellows/chambers`, the actuator on `/actuator/joint_states` and
-`/actuator/chambers` (so that no 1 kHz node decodes the other group's samples), and the actuator's
-load cell on `/bellows/wrench` (frame `actuator`, force.z = spring force). The
-devices' 1 kHz sampling is the clock: messages go out from the drivers' reader threads as each
-sample arrives, stamped with the time the device took it: the device's clock mapped onto the node
-clock (`sample_delivery.DeviceClock`), so a burst read after a stall keeps its 1 ms spacing. For
-the arm the arrival that anchors that mapping is the bus's receive timestamp
-(`sample_delivery.arrival_ns`), so samples a starved reader takes late from the socket carry their
-true age; there is no ROS timer at 1 kHz.
+One message per device sample, each group on a topic of its own (docs/interfaces.md): the arm on
+`/joint_states` (segment angles and rates, chain pressures), the actuator on
+`/actuator/joint_states` (compressions, the load cell's spring force, the chamber pressure), so
+that no 1 kHz node decodes the other group's samples. The devices' 1 kHz sampling is the clock:
+messages go out from the drivers' reader threads as each sample arrives, stamped with the time the
+device took it: the device's clock mapped onto the node clock (`sample_delivery.DeviceClock`), so a
+burst read after a stall keeps its 1 ms spacing. For the arm the arrival that anchors that mapping
+is the bus's receive timestamp (`sample_delivery.arrival_ns`), so samples a starved reader takes
+late from the socket carry their true age; there is no ROS timer at 1 kHz.
 Commands (`/bellows/pressure_command`, `/actuator/motor_command`) pass through the hardware layer's
 safety limits (clamping, end stops, watchdogs).
 
@@ -48,10 +47,10 @@ Parameters (config/nodes_*.yaml, section `driver_node`):
   shutdown_timeout (s), ambient_tolerance (Pa): shutdown waits up to shutdown_timeout for every
       chamber to read within ambient_tolerance of ambient (the segment's p0).
   wait_for_subscribers (s): before opening the devices, wait up to this long for the sample
-      topics of every enabled group (`/joint_states` and `/bellows/chambers` for the arm,
-      `/actuator/joint_states` and `/actuator/chambers` for the actuator) to have a subscriber
-      (like `ros2 topic pub --wait-matching-subscriptions`), so that a consumer started first
-      sees every sample; 0 = no wait (the default: a robot's driver publishes whoever listens).
+      topic of every enabled group (`/joint_states` for the arm, `/actuator/joint_states` for
+      the actuator) to have a subscriber (like `ros2 topic pub --wait-matching-subscriptions`),
+      so that a consumer started first sees every sample; 0 = no wait (the default: a robot's
+      driver publishes whoever listens).
   realtime_priority (int): SCHED_FIFO priority for the node's threads, 1-99; 0 = normal
       scheduling (runtime/realtime.py).
   cpu_latency_limit (s): CPU wake-up latency held while the node runs, 0 = idle CPUs poll;
@@ -59,6 +58,7 @@ Parameters (config/nodes_*.yaml, section `driver_node`):
 """
 from array import array
 import dataclasses
+import math
 import os
 import stat
 import threading
@@ -81,6 +81,7 @@ from bellows_ros.runtime import LifecycleNode, realtime, run
 from bellows_ros.runtime.parameters import Spec
 
 _DISCOVERY_SETTLE = 0.5  # s, see DriverNode._wait_for_subscribers
+ACTUATOR_NAMES = interfaces.actuator_sample_names()
 
 
 class SampleClock:
@@ -208,16 +209,12 @@ class DriverNode(LifecycleNode):
             raise BellowsError('driver_node: neither arm.enabled nor actuator.enabled is set')
 
         # Each device group on its own sample topics: only the enabled groups' are advertised.
-        self.state_pub = self.chamber_pub = None
-        self.actuator_state_pub = self.actuator_chamber_pub = None
+        self.state_pub = self.actuator_state_pub = None
         if self.use_arm:
             self.state_pub = self.publisher(interfaces.JOINT_STATES)
-            self.chamber_pub = self.publisher(interfaces.CHAMBERS)
             self.vented_pub = self.publisher(interfaces.VENTED)
         if self.use_actuator:
             self.actuator_state_pub = self.publisher(interfaces.ACTUATOR_JOINT_STATES)
-            self.actuator_chamber_pub = self.publisher(interfaces.ACTUATOR_CHAMBERS)
-        self.wrench_pub = self.publisher(interfaces.WRENCH)
         self._publish_lock = threading.Lock()  # both reader threads publish
         self.arm = self.actuator = None
         self.reports = {}
@@ -389,9 +386,13 @@ class DriverNode(LifecycleNode):
         config = dataclasses.replace(config, interface=interface or config.interface,
                                      channel=channel or config.channel,
                                      n_segments=n_segments or config.n_segments)
-        self.arm_names = [interfaces.segment_joint(i + 1) for i in range(config.n_segments)]
-        self.chain_names = [interfaces.chain_chamber(i + 1, j)
-                            for i in range(config.n_segments) for j in (1, 2)]
+        segments = range(1, config.n_segments + 1)
+        self.arm_names = interfaces.arm_sample_names(segments)
+        self.chain_names = [interfaces.chain_chamber(i, j) for i in segments for j in (1, 2)]
+        # The sample message's constant parts: its joints have no effort, its chambers no
+        # position or rate (interfaces.py).
+        self._arm_nans = array('d', [math.nan] * len(self.chain_names))
+        self._arm_no_effort = array('d', [math.nan] * config.n_segments)
         self.arm_clock = SampleClock(interfaces.SAMPLE_PERIOD)
         self.arm_stamps = None  # made at the first sample: does the bus time its arrivals?
         self.reports['arm'] = diagnostics.LoopReport(self.arm_clock.stats)
@@ -437,9 +438,8 @@ class DriverNode(LifecycleNode):
         time.sleep(_DISCOVERY_SETTLE)
 
     def _sample_publishers(self):
-        """Return the enabled groups' sample publishers (joint states, chambers)."""
-        return [p for p in (self.state_pub, self.chamber_pub, self.actuator_state_pub,
-                            self.actuator_chamber_pub) if p is not None]
+        """Return the enabled groups' sample publishers."""
+        return [p for p in (self.state_pub, self.actuator_state_pub) if p is not None]
 
     def close(self):
         """End of the process: shut down (vent, wait for ambient) from wherever it is."""
@@ -461,8 +461,7 @@ class DriverNode(LifecycleNode):
             # Samples still being repaired (a packet lost under load) must reach the readers
             # before the participant goes; bounded, so a reader that died cannot hold it up.
             end = time.monotonic() + 1.0
-            for publisher in (*self._sample_publishers(), self.wrench_pub,
-                              self.diagnostics.publisher):
+            for publisher in (*self._sample_publishers(), self.diagnostics.publisher):
                 left = max(0.0, end - time.monotonic())
                 publisher.wait_for_all_acked(Duration(seconds=left))
         self.actuator = self.arm = None
@@ -480,16 +479,13 @@ class DriverNode(LifecycleNode):
         start = time.monotonic()
         stamp = Time(nanoseconds=self.actuator_stamps.stamp(
             int(round(sample.t_device * 1e9)), self.get_clock().now().nanoseconds)).to_msg()
-        state = self._header(self.msg.JointState(name=list(interfaces.ACTUATOR_JOINTS),
-                                                 position=[sample.x_c, sample.x_s]), stamp)
-        chambers = self._header(self.msg.JointState(name=[interfaces.ACTUATOR_CHAMBER],
-                                                    effort=[sample.p]), stamp)
-        wrench = self._header(self.msg.WrenchStamped(), stamp, interfaces.ACTUATOR_FRAME)
-        wrench.wrench.force.z = sample.f
+        # One message: air chamber and spring compressions, the load cell's spring force as the
+        # spring's effort, the chamber pressure as the chamber's (interfaces.py).
+        state = self._header(self.msg.JointState(
+            name=list(ACTUATOR_NAMES), position=array('d', (sample.x_c, sample.x_s, math.nan)),
+            effort=array('d', (math.nan, sample.f, sample.p))), stamp)
         with self._publish_lock:
             self.actuator_state_pub.publish(state)
-            self.actuator_chamber_pub.publish(chambers)
-            self.wrench_pub.publish(wrench)
             self.published['actuator'] += 1
         self.actuator_clock.tick(sample.index, sample.t_receive, time.monotonic() - start)
 
@@ -511,15 +507,13 @@ class DriverNode(LifecycleNode):
                              for a, b, held in zip(sample.psi, previous.psi, self._psi_dot)]
         self._last_arm = sample
         # float64[] as array('d'): rclpy takes it without a per-element check (about 12 µs less
-        # per message at 1 kHz), and the DDS runtime packs it as it packs a list.
-        state = self._header(self.msg.JointState(name=list(self.arm_names),
-                                                 position=array('d', sample.psi),
-                                                 velocity=array('d', self._psi_dot)), stamp)
-        chambers = self._header(self.msg.JointState(name=list(self.chain_names),
-                                                    effort=array('d', sample.pressures)), stamp)
+        # per message at 1 kHz).
+        state = self._header(self.msg.JointState(
+            name=list(self.arm_names), position=array('d', sample.psi) + self._arm_nans,
+            velocity=array('d', self._psi_dot) + self._arm_nans,
+            effort=self._arm_no_effort + array('d', sample.pressures)), stamp)
         with self._publish_lock:
             self.state_pub.publish(state)
-            self.chamber_pub.publish(chambers)
             self.published['arm'] += 1
         self._publish_vented()   # the watchdog and the first accepted command change it
         self.arm_clock.tick(sample.index, sample.t_receive, time.monotonic() - start)

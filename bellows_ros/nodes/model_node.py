@@ -15,10 +15,9 @@
 """
 model_node: paper A's driving torque for every sample of every configured segment.
 
-Event-driven (no timer): the driver publishes each sample as a `/joint_states` message (Ψ, Ψ̇) and
-a `/bellows/chambers` message (chain pressures) with the same stamp; when both halves of a stamp
-have arrived, every segment's `SegmentModel.step(psi, psi_dot, p1, p2)` runs once (its strain
-memory carries from sample to sample, Algorithm 1) and the node publishes
+Event-driven (no timer): the driver publishes each sample as one `/joint_states` message (Ψ, Ψ̇,
+chain pressures); for each, every segment's `SegmentModel.step(psi, psi_dot, p1, p2)` runs once
+(its strain memory carries from sample to sample, Algorithm 1) and the node publishes
 
   /bellows/driving_torque   effort = τ_drive per segment (2), N·m, stamped with the sample's stamp
   /bellows/external_torque  effort = τ_ext = M Ψ̈ + C Ψ̇ + N(Ψ) − τ_drive (2), N·m (quasi-static
@@ -26,8 +25,6 @@ memory carries from sample to sample, Algorithm 1) and the node publishes
 
 Parameters: segments (int array, which segments to evaluate), params_file (str: identified
 parameters from `bellows identify`, laid over config/segment.yaml; '' = defaults),
-max_pending (int: unmatched half-samples kept before the oldest is dropped and counted; as
-deep as the sample queues, whose bursts may bring one topic's halves well before the other's),
 latency_budget (s: a torque published later than this after its sample's stamp is counted `late`),
 realtime_priority (int: SCHED_FIFO priority 1-99 for the node's threads, 0 = normal scheduling),
 cpu_latency_limit (s: CPU wake-up latency held while the node runs, 0 = idle CPUs poll, negative =
@@ -55,8 +52,8 @@ from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.models.derivatives import rate
 from bellows_ros.models.segment import external_torque, SegmentModel
 from bellows_ros.nodes import diagnostics
-from bellows_ros.nodes.sample_pairing import CHAMBERS, JOINTS, SamplePairs, segment_rows
-from bellows_ros.runtime import Node, realtime, run
+from bellows_ros.nodes.arm_sample import ArmSampleReader
+from bellows_ros.runtime import Node, realtime, run, stamp_ns
 from bellows_ros.runtime.parameters import Spec
 
 
@@ -65,12 +62,6 @@ PARAMETERS = (
          low=1, high=dbc_segments(), items=(1, dbc_segments()), unique=True),
     Spec('params_file', '', "identified parameters laid over config/segment.yaml ('' = "
          'defaults)'),
-    # As deep as the reliable reader queues: a reader delivers what it holds in bursts (a hole
-    # repaired, an executor that fell behind), and one topic's burst of up to SAMPLE_DEPTH halves
-    # may come before the other's. With 100 such a burst dropped whole samples whose other half
-    # was still queued (1107 of 6126 in one run of test_graph_sample).
-    Spec('max_pending', interfaces.SAMPLE_DEPTH, 'unmatched half-samples kept before the oldest '
-         'is dropped', low=1, high=interfaces.SAMPLE_DEPTH),
     Spec('latency_budget', 0.002, 'a torque published later than this after its sample is '
          'counted late, s', low=1e-4, high=1.0, read_only=False),
     # Model health (bellows_ros.live): read once at start (the limits hold for this window).
@@ -93,18 +84,15 @@ class ModelNode(Node):
     def __init__(self, **kwargs):
         super().__init__('model_node', **kwargs)
         given = self.declare_specs(PARAMETERS)
-        segments, max_pending = given['segments'], given['max_pending']
+        segments = given['segments']
         params_file, latency_budget = given['params_file'] or None, given['latency_budget']
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
         self.params = load_segment_params(params_file)
         self.names = [interfaces.segment_joint(i) for i in segments]
-        self.chains = [(interfaces.chain_chamber(i, 1), interfaces.chain_chamber(i, 2))
-                       for i in segments]
         self.models = [SegmentModel(self.params) for _ in segments]
         self.previous_psi_dot = [None] * len(segments)
         self.psi_ddot = [0.0] * len(segments)
-        self.pairs = SamplePairs(max_pending)
         self.health = live.segment_health(self.names, given['model_health.calibration'],
                                           given['model_health.window'])
         self.health_buffer = live.RingBuffer(int(HEALTH_BUFFER_S * HEALTH_RATE),
@@ -117,15 +105,14 @@ class ModelNode(Node):
         self.report = diagnostics.LoopReport(self.stats)
         self.latency = []
         self.latency_budget_ns = round(latency_budget * 1e9)
-        self.reported = dict.fromkeys(['rejected', 'unmatched_dropped', 'missed'], 0)
-        self._last_stamp = None    # of the last evaluated sample (Ψ̈'s time step)
-        self._last_paired = None   # of the last paired sample, evaluated or rejected
-        self._p_limit = 2.0 * self.params.p_max
+        self.reported = dict.fromkeys(['rejected', 'missed'], 0)
+        self._last_stamp = None      # of the last evaluated sample (Ψ̈'s time step)
+        self._last_received = None   # of the last sample received, evaluated or rejected
+        self.samples = ArmSampleReader(segments, 2.0 * self.params.p_max)
 
         self.drive_pub = self.publisher(interfaces.DRIVING_TORQUE)
         self.external_pub = self.publisher(interfaces.EXTERNAL_TORQUE)
-        self.subscription(interfaces.JOINT_STATES, self.on_joint_states)
-        self.subscription(interfaces.CHAMBERS, self.on_chambers)
+        self.subscription(interfaces.JOINT_STATES, self.evaluate)
         self.diagnostics = diagnostics.Updater(self)
         self.diagnostics.setHardwareID('none')  # software: no device of its own
         self.diagnostics.add('driving torque', self.diagnose_evaluation)
@@ -138,32 +125,20 @@ class ModelNode(Node):
         self.get_logger().info(f"evaluating {', '.join(self.names)}"
                                + (f' with {params_file}' if params_file else ''))
 
-    # --- pairing the two halves of a sample ------------------------------------------------------
     def on_parameters(self, changed):
         """Take a live latency_budget (ros2 param set) from the next torque on."""
         if 'latency_budget' in changed:
             self.latency_budget_ns = round(changed['latency_budget'] * 1e9)
             self.latency_status.max_acceptable = changed['latency_budget']
 
-    def on_joint_states(self, msg):
-        if self.names[0] in msg.name:
-            self._half(msg, JOINTS)
-
-    def on_chambers(self, msg):
-        if self.chains[0][0] in msg.name:
-            self._half(msg, CHAMBERS)
-
-    def _half(self, msg, slot):
-        sample = self.pairs.add(msg, slot)
-        if sample is not None:
-            self.evaluate(*sample)
-
-    # --- the model
-    # ---------------------------------------------------------------------------------
-    def evaluate(self, stamp, joints, chambers):
+    # --- the model -------------------------------------------------------------------------------
+    def evaluate(self, msg):
         start = time.perf_counter()
+        if self.names[0] not in msg.name:
+            return  # another publisher's joints on the topic
+        stamp = stamp_ns(msg.header.stamp)
         self._count_missed(stamp)
-        inputs = segment_rows(joints, chambers, zip(self.names, self.chains), self._p_limit)
+        inputs = self.samples.rows(msg)
         if inputs is None:
             self.counts['rejected'] += 1
             return
@@ -173,7 +148,7 @@ class ModelNode(Node):
         # and the latency is taken at its publication (docs/nodes.md, "Timing").
         # float64[] as array('d'): rclpy takes it without a per-element check.
         out_drive = self.msg.JointState(name=list(self.names), effort=array('d', drive))
-        out_drive.header = joints.header
+        out_drive.header = msg.header
         self.drive_pub.publish(out_drive)
         now = self.get_clock().now().nanoseconds  # on the node clock
         latency = now - stamp
@@ -184,7 +159,7 @@ class ModelNode(Node):
         self.counts['evaluated'] += 1
         dt = None if self._last_stamp is None else (stamp - self._last_stamp) * 1e-9
         self._last_stamp = stamp
-        external = self.publish_external(joints.header, inputs, drive, dt or 0.0)
+        external = self.publish_external(msg.header, inputs, drive, dt or 0.0)
         started = time.perf_counter()
         self.health_buffer.append((stamp * 1e-9, *external))
         self.health_cost.add(time.perf_counter() - started)
@@ -192,16 +167,16 @@ class ModelNode(Node):
 
     def _count_missed(self, stamp):
         """
-        Count the samples between the previous paired one and `stamp` that never arrived.
+        Count the samples between the previous one and `stamp` that never arrived.
 
         Lost before this node, or dropped by a queue that overflowed: the strain memory steps
         over them (docs/nodes.md, "When the CPU is short"). A rejected sample arrived.
         """
-        if self._last_paired is not None:
-            gap = (stamp - self._last_paired) * 1e-9
+        if self._last_received is not None:
+            gap = (stamp - self._last_received) * 1e-9
             if 1.5 * interfaces.SAMPLE_PERIOD < gap <= MAX_MISSED_GAP:
                 self.counts['missed'] += round(gap / interfaces.SAMPLE_PERIOD) - 1
-        self._last_paired = stamp
+        self._last_received = stamp
 
     def publish_external(self, header, inputs, drive, dt):
         """Publish τ_ext (2) per segment on /bellows/external_torque, return it; Ψ̈ from Ψ̇'s."""
@@ -220,8 +195,6 @@ class ModelNode(Node):
         """Report the evaluation: rate, counts, latency percentiles; what is wrong."""
         values, rate, _ = self.report.values()
         values.update({k: str(v) for k, v in self.counts.items()})
-        values['unmatched_dropped'] = str(self.pairs.dropped)
-        values['pending'] = str(len(self.pairs.pending))
         if self.latency:
             ordered = sorted(self.latency)
             values['latency_p50_us'] = f'{ordered[len(ordered) // 2] * 1e-3:.1f}'
@@ -229,22 +202,16 @@ class ModelNode(Node):
             self.latency = []
         stat.update(values)
         rejected = self.counts['rejected'] - self.reported['rejected']
-        dropped = self.pairs.dropped - self.reported['unmatched_dropped']
         missed = self.counts['missed'] - self.reported['missed']
-        self.reported.update(rejected=self.counts['rejected'],
-                             unmatched_dropped=self.pairs.dropped, missed=self.counts['missed'])
+        self.reported.update(rejected=self.counts['rejected'], missed=self.counts['missed'])
         if rate == 0.0:
             stat.summary(diagnostics.STALE, 'no samples since the last report (no driver '
-                         f'publishing {interfaces.JOINT_STATES.name} and '
-                         f'{interfaces.CHAMBERS.name}?)')
+                         f'publishing {interfaces.JOINT_STATES.name}?)')
             return stat
         stat.summary(diagnostics.OK, f'evaluating {rate:.0f} samples/s')
         if rejected:
             stat.mergeSummary(diagnostics.WARN, f'{rejected} samples rejected (non-finite, or '
                               'a pressure outside [0, 2 p_max])')
-        if dropped:
-            stat.mergeSummary(diagnostics.WARN, f'{dropped} half-samples dropped without their '
-                              'other half (max_pending)')
         if missed:
             stat.mergeSummary(diagnostics.WARN, f'{missed} samples never arrived (gaps in the '
                               'stamps)')
@@ -261,8 +228,7 @@ class ModelNode(Node):
                                      self._health_update_ms)
         if self.health_buffer.count == 0:
             stat.summary(diagnostics.STALE, 'no samples evaluated (no driver publishing '
-                         f'{interfaces.JOINT_STATES.name} and {interfaces.CHAMBERS.name}?): '
-                         'not comparing')
+                         f'{interfaces.JOINT_STATES.name}?): not comparing')
         elif state == 'calibrating':
             stat.summary(diagnostics.OK, 'calibrating: taking the noise floors of the first '
                          f'{health.calibration:g} s')

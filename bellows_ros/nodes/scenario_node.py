@@ -31,12 +31,11 @@ scenario_node: a short scripted scenario on the running graph, printed and plott
    set-points sent before the controller's reader matched) would score the start-up, not the
    controller.
 
-What comes back is recorded: /actuator/stiffness, /joint_states (segment_1 Ψ),
-/actuator/joint_states (air_chamber x_c), /bellows/chambers (segment_1 pressures),
-/bellows/driving_torque (segment_1 τ_drive). At the end it prints a summary (step settling time
-and overshoot; the RMS tracking error of each run and their ratio) and writes
-`output_dir/scenario.csv` and `output_dir/scenario.png`, whose angle and error panels show both
-runs on the trajectory's own time axis.
+What comes back is recorded: /actuator/stiffness, /joint_states (segment_1 Ψ and pressures),
+/actuator/joint_states (air_chamber x_c), /bellows/driving_torque (segment_1 τ_drive). At the end
+it prints a summary (step settling time and overshoot; the RMS tracking error of each run and their
+ratio) and writes `output_dir/scenario.csv` and `output_dir/scenario.png`, whose angle and error
+panels show both runs on the trajectory's own time axis.
 
 Parameters: duration (s), step_time (s), stiffness_low, stiffness_high (N/m), trajectory (str),
 trajectory_start (s), compare_feedforward (bool), output_dir (str), actuator_params (str),
@@ -64,7 +63,6 @@ from bellows_ros.runtime.parameters import Spec
 
 # The scenario drives and records segment 1 of the arm, and the actuator.
 SEGMENT = interfaces.segment_joint(1)
-CHAINS = (interfaces.chain_chamber(1, 1), interfaces.chain_chamber(1, 2))
 AIR_CHAMBER = interfaces.ACTUATOR_JOINTS[0]
 # s: the hold at the trajectory's end point (rest) between the two runs; the controller's
 # feedforward is switched at its middle.
@@ -125,9 +123,10 @@ class ScenarioNode(Node):
         # Best effort: the scenario must never hold up the driver's reliable writers (a reader
         # that does not acknowledge makes them block) and may miss samples when it falls behind.
         sensor = qos_profile_sensor_data
+        self.sample_index = interfaces.SampleIndex(
+            (SEGMENT, interfaces.chain_chamber(1, 1), interfaces.chain_chamber(1, 2)))
         for topic, callback in ((interfaces.JOINT_STATES, self.on_joint_states),
                                 (interfaces.ACTUATOR_JOINT_STATES, self.on_actuator_states),
-                                (interfaces.CHAMBERS, self.on_chambers),
                                 (interfaces.DRIVING_TORQUE, self.on_torque)):
             self.create_subscription(getattr(self.msg, topic.message), topic.name, callback,
                                      sensor)
@@ -170,9 +169,13 @@ class ScenarioNode(Node):
                                      for kv in status.values)
 
     def on_joint_states(self, msg):
-        if SEGMENT in msg.name:
-            psi = msg.position[msg.name.index(SEGMENT)]
+        layout = self.sample_index(msg.name)
+        if layout is not None:
+            segment, chain_1, chain_2 = layout
+            psi = msg.position[segment]
             self._add('psi', psi, msg.header.stamp)
+            self._add('p1', msg.effort[chain_1], msg.header.stamp)
+            self._add('p2', msg.effort[chain_2], msg.header.stamp)
             if self.runs:
                 return
             if abs(psi - self.hold) > READY_TOLERANCE:
@@ -200,11 +203,6 @@ class ScenarioNode(Node):
     def on_actuator_states(self, msg):
         if AIR_CHAMBER in msg.name:
             self._add('x_c', msg.position[msg.name.index(AIR_CHAMBER)], msg.header.stamp)
-
-    def on_chambers(self, msg):
-        if CHAINS[0] in msg.name:
-            self._add('p1', msg.effort[msg.name.index(CHAINS[0])], msg.header.stamp)
-            self._add('p2', msg.effort[msg.name.index(CHAINS[1])], msg.header.stamp)
 
     def on_torque(self, msg):
         if SEGMENT in msg.name:

@@ -19,9 +19,9 @@ Wiring only; the logic is in `control.stiffness` (set-point, gas-amount correcti
 measured pressure) and `control.pd` (PD on the encoder position).
 
   /actuator/stiffness_setpoint (Float64, N/m) -> target compression x_c*
-  /actuator/joint_states (air_chamber, spring) + /actuator/chambers (its pressure), every
-      `control_every`-th sample (200 Hz by default: the lead screw moves 2.3 mm/s at most, so a
-      faster loop gains nothing and costs a DDS message per sample):
+  /actuator/joint_states (one message per sample: x_c, x_s, the spring force, the pressure),
+      every `control_every`-th sample (200 Hz by default: the lead screw moves 2.3 mm/s at most,
+      so a faster loop gains nothing and costs a DDS message per sample):
       PD(x_c*, x_c) -> /actuator/motor_command (Float64, duty -1..1)
   /actuator/stiffness (Float64, N/m): present stiffness from the measured state, every
       `publish_every`-th control step.
@@ -31,15 +31,14 @@ the rising branch (`models.stiffness_map`), logs it and its range at start, refu
 outside the range (error, previous target kept) and warns when a leak pushes the held set-point
 out of it; /diagnostics carries branch, range and warning.
 
-The doctor live (docs/doctor.md, `bellows_ros.live`): every sample (x_c, x_s from
-/actuator/joint_states, the pressure, the spring force from /bellows/wrench) goes into a ring
-buffer; once a second the residuals of the model at its identified gas amount (measured pressure
-and force minus (17), (7)-(12)) are compared with their noise floors, taken from the first
-`model_health.calibration` seconds, and reported as `model_health` on /diagnostics. When they leave
-the floor, the doctor diagnoses the last `model_health.diagnosis_window` seconds in a separate
-process (one at a time, killed after `model_health.time_bound` s) and the status turns WARN naming
-the cause and its fitted size. The sample callback only appends a row; its cost is counted
-(`cost_per_sample_us`).
+The doctor live (docs/doctor.md, `bellows_ros.live`): every sample (x_c, x_s, the pressure, the
+spring force) goes into a ring buffer; once a second the residuals of the model at its identified
+gas amount (measured pressure and force minus (17), (7)-(12)) are compared with their noise floors,
+taken from the first `model_health.calibration` seconds, and reported as `model_health` on
+/diagnostics. When they leave the floor, the doctor diagnoses the last
+`model_health.diagnosis_window` seconds in a separate process (one at a time, killed after
+`model_health.time_bound` s) and the status turns WARN naming the cause and its fitted size. The
+sample callback only appends a row; its cost is counted (`cost_per_sample_us`).
 
 Parameters: actuator_params (str: YAML over config/actuator.yaml), pd.kp (1/m), pd.kd (s/m),
 pd.velocity_cutoff (Hz), pd.duty_max, pd.deadband (m), gas_time_constant (s),
@@ -125,7 +124,7 @@ class StiffnessControllerNode(Node):
             diagnosis_s=given['model_health.diagnosis_window'],
             time_bound=given['model_health.time_bound'],
             rediagnose_s=given['model_health.rediagnose'])
-        self.force = None
+        self.sample_index = interfaces.SampleIndex(interfaces.actuator_sample_names())
         self._health_update_ms = math.nan
         self.pd = PDController(gains)
         k_low, k_high = self.setpoint.range()
@@ -136,7 +135,6 @@ class StiffnessControllerNode(Node):
         if initial:
             self.setpoint.set_stiffness(initial)
         self.target = None
-        self.pressure = None
         self.samples = 0
         self._last_stamp = None
         self._elapsed = 0.0  # s since the last control step
@@ -148,10 +146,8 @@ class StiffnessControllerNode(Node):
         self.motor_pub = self.publisher(interfaces.MOTOR_COMMAND)
         self.stiffness_pub = self.publisher(interfaces.STIFFNESS)
         self.subscription(interfaces.STIFFNESS_SETPOINT, self.on_setpoint)
-        # The actuator's own sample topics: the arm's 1 kHz samples never reach this node.
-        self.subscription(interfaces.ACTUATOR_CHAMBERS, self.on_chambers)
-        self.subscription(interfaces.ACTUATOR_JOINT_STATES, self.on_joint_states)
-        self.subscription(interfaces.WRENCH, self.on_wrench)
+        # The actuator's own sample topic: the arm's 1 kHz samples never reach this node.
+        self.subscription(interfaces.ACTUATOR_JOINT_STATES, self.on_sample)
         self.diagnostics = diagnostics.Updater(self)
         self.diagnostics.setHardwareID('none')  # software: the driver reports the devices
         self.diagnostics.add('control', self.diagnose_control)
@@ -181,39 +177,35 @@ class StiffnessControllerNode(Node):
         self.get_logger().info(
             f'stiffness set-point {msg.data:.1f} N/m -> x_c {self.target:.5f} m')
 
-    def on_chambers(self, msg):
-        if interfaces.ACTUATOR_CHAMBER in msg.name:
-            self.pressure = msg.effort[msg.name.index(interfaces.ACTUATOR_CHAMBER)]
-            self.live.put(stamp_ns(msg.header.stamp), live.PRESSURE, self.pressure)
-
-    def on_wrench(self, msg):
-        if msg.header.frame_id == interfaces.ACTUATOR_FRAME:
-            self.force = msg.wrench.force.z
-            self.live.put(stamp_ns(msg.header.stamp), live.FORCE, self.force)
-
-    def on_joint_states(self, msg):
-        chamber, spring = interfaces.ACTUATOR_JOINTS
-        if chamber not in msg.name:
-            return
+    def on_sample(self, msg):
         start = time.perf_counter()
-        x_c = msg.position[msg.name.index(chamber)]
-        x_s = msg.position[msg.name.index(spring)]
+        layout = self.sample_index(msg.name)
+        if layout is None:
+            return  # another publisher's joints on the topic
+        chamber, spring, gas = layout
+        x_c, x_s = msg.position[chamber], msg.position[spring]
+        # The load cell's force is the spring's effort, the pressure the chamber's; an absent
+        # or unreadable one is NaN (interfaces.py).
+        effort = msg.effort
+        force = effort[spring] if len(effort) > spring else math.nan
+        pressure = effort[gas] if len(effort) > gas else math.nan
         stamp = stamp_ns(msg.header.stamp)
         dt = 1e-3 if self._last_stamp is None else max(1e-6, (stamp - self._last_stamp) * 1e-9)
         self._last_stamp = stamp
-        self.live.put(stamp, live.STATE, (x_c, x_s))
-        if self.pressure is None:
+        if not math.isfinite(pressure):
             self.counts['samples_without_pressure'] += 1
             return
+        if math.isfinite(force):
+            self.live.sample(stamp * 1e-9, x_c, x_s, pressure, force)
+        else:
+            self.counts['samples_without_force'] += 1
         self.samples += 1
         self._elapsed += dt
-        if self.force is None:
-            self.counts['samples_without_force'] += 1
         if self.samples % self.control_every:
             return
         dt, self._elapsed = self._elapsed, 0.0
         step = self.samples // self.control_every
-        self.setpoint.update_measurement(x_c, x_s, self.pressure, dt)
+        self.setpoint.update_measurement(x_c, x_s, pressure, dt)
         if self.setpoint.k_target is not None and (self.target is None
                                                    or step % self.target_every == 0):
             self.target = self.setpoint.target()
@@ -263,10 +255,10 @@ class StiffnessControllerNode(Node):
         stat.add('diagnosis_s', f"{verdict['seconds']:.2f}" if verdict else 'nan')
         stat.add('diagnoses', self.live.diagnoses)
         stat.add('samples_without_force', self.counts['samples_without_force'])
-        stat.add('unpaired', self.live.unpaired)
         if self.live.buffer.count == 0:
             stat.summary(diagnostics.STALE, 'no samples with pressure and spring force (no '
-                         f'driver publishing {interfaces.WRENCH.name}?): not comparing')
+                         f'driver publishing {interfaces.ACTUATOR_JOINT_STATES.name}?): not '
+                         'comparing')
         elif state == 'calibrating':
             stat.summary(diagnostics.OK, 'calibrating: taking the noise floors of the first '
                          f'{health.calibration:g} s')
