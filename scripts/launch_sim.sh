@@ -113,8 +113,9 @@ start() {  # start NAME ARGS...: a node in the background, log in $output/logs/N
   echo "launch_sim: $1 (pid $!)" >&2
 }
 
-[ "$arm" = 1 ] && start sim_arm_node
+[ "$arm" = 1 ] && start sim_arm_node && devices+=($!)
 start sim_actuator_node
+devices+=($!)
 for _ in $(seq 50); do [ -e "$port" ] && break; sleep 0.1; done
 nodes_alive launch_sim
 # The driver is a managed node: autostart (launch_parameters.yaml) configures and activates it.

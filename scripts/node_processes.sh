@@ -2,6 +2,7 @@
 # The caller sets bin (the node executables: find_executables), common and extra (arguments before
 # and after each node's own) and node_logs (the log folder), and traps EXIT with stop_nodes.
 pids=()
+devices=()  # the simulated devices among pids: stopped after the rest (stop_nodes)
 
 find_executables() {  # find_executables TOP WHO: print the folder holding bellows_ros' executables
   # As `ros2 run` finds them: a checkout's venv; the install the script itself came from
@@ -29,15 +30,27 @@ find_executables() {  # find_executables TOP WHO: print the folder holding bello
   return 2
 }
 
-stop_nodes() {  # every started node: TERM, up to 5 s to exit, then KILL
+stop_nodes() {  # every started node, the simulated devices last
   trap - EXIT INT TERM
-  # SIGTERM, not SIGINT: a non-interactive shell starts background jobs with SIGINT ignored.
-  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
+  local pid rest=()
   for pid in "${pids[@]}"; do
+    [[ " ${devices[*]} " == *" $pid "* ]] || rest+=("$pid")
+  done
+  # The driver vents at shutdown and waits for every chamber to read ambient: a simulated device
+  # stopped with it leaves it nothing to read, and it rightly says the arm may still hold air.
+  terminate "${rest[@]}"
+  terminate "${devices[@]}"
+  wait 2>/dev/null || true
+}
+
+terminate() {  # terminate PID...: TERM, up to 5 s to exit, then KILL
+  # SIGTERM, not SIGINT: a non-interactive shell starts background jobs with SIGINT ignored.
+  local pid
+  for pid in "$@"; do kill -TERM "$pid" 2>/dev/null || true; done
+  for pid in "$@"; do
     for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
     kill -KILL "$pid" 2>/dev/null || true
   done
-  wait 2>/dev/null || true
 }
 
 start_node() {  # start_node NAME ARGS...: a node in the background, log in $node_logs/NAME.log

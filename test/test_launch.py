@@ -258,6 +258,10 @@ def test_shell_launcher_from_a_pip_install(ros, tmp_path):
     board = (out / 'logs' / 'sim_actuator_node.log').read_text()
     assert re.search(r'simulated actuator board on \S+/bellows_sim_actuator\.\w+/board,', board), \
         board
+    # The graph stops with the simulated devices last: the driver's vent at shutdown read
+    # ambient on every chamber, rather than reporting that nothing answered.
+    driver = (out / 'logs' / 'driver_node.log').read_text()
+    assert 'shutdown: every chamber within' in driver, driver[-2000:]
 
 
 def test_two_namespaced_graphs_run_side_by_side(prefix, tmp_path, monkeypatch):
