@@ -155,6 +155,11 @@ def chain_chamber(segment, chain):
     return f'{segment_joint(segment)}/chain_{chain}'
 
 
+def segment_sample_names(segment):
+    """Names of segment `segment`'s entries in an arm sample: its joint, its chambers 1 and 2."""
+    return (segment_joint(segment), chain_chamber(segment, 1), chain_chamber(segment, 2))
+
+
 def arm_sample_names(segments):
     """Names of an arm sample message: the segments' joints, then their chambers (chain 1, 2)."""
     return tuple([segment_joint(i) for i in segments] +

@@ -247,18 +247,17 @@ def segment_health(names, calibration=20.0, window=5.0):
 
 class SampleCost:
     """
-    The sample thread's cost: `add(seconds, samples)` per call; `take()` the numbers.
+    The sample thread's cost: `add(seconds)` per sample; `take()` the numbers.
 
-    `take()` returns (mean µs per sample, max µs of one call) since the last `take`: the mean
-    counts every call's time, divided by the samples they buffered.
+    `take()` returns (mean µs per sample, max µs of one sample) since the last `take`.
     """
 
     def __init__(self):
         self._s, self._n, self._max = 0.0, 0, 0.0
 
-    def add(self, seconds, samples=1):
+    def add(self, seconds):
         self._s += seconds
-        self._n += samples
+        self._n += 1
         if seconds > self._max:
             self._max = seconds
 

@@ -36,9 +36,7 @@ class ArmSampleReader:
     def __init__(self, segments, p_limit):
         self.p_limit = p_limit
         self.index = interfaces.SampleIndex(
-            name for i in segments for name in (interfaces.segment_joint(i),
-                                                interfaces.chain_chamber(i, 1),
-                                                interfaces.chain_chamber(i, 2)))
+            name for i in segments for name in interfaces.segment_sample_names(i))
 
     def rows(self, msg):
         layout = self.index(msg.name)

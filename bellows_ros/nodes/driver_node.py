@@ -388,7 +388,7 @@ class DriverNode(LifecycleNode):
                                      n_segments=n_segments or config.n_segments)
         segments = range(1, config.n_segments + 1)
         self.arm_names = interfaces.arm_sample_names(segments)
-        self.chain_names = [interfaces.chain_chamber(i, j) for i in segments for j in (1, 2)]
+        self.chain_names = self.arm_names[config.n_segments:]  # the chambers, after the joints
         # The sample message's constant parts: its joints have no effort, its chambers no
         # position or rate (interfaces.py).
         self._arm_nans = array('d', [math.nan] * len(self.chain_names))

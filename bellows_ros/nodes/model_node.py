@@ -108,7 +108,7 @@ class ModelNode(Node):
         self.reported = dict.fromkeys(['rejected', 'missed'], 0)
         self._last_stamp = None      # of the last evaluated sample (Ψ̈'s time step)
         self._last_received = None   # of the last sample received, evaluated or rejected
-        self.samples = ArmSampleReader(segments, 2.0 * self.params.p_max)
+        self.reader = ArmSampleReader(segments, 2.0 * self.params.p_max)
 
         self.drive_pub = self.publisher(interfaces.DRIVING_TORQUE)
         self.external_pub = self.publisher(interfaces.EXTERNAL_TORQUE)
@@ -138,7 +138,7 @@ class ModelNode(Node):
             return  # another publisher's joints on the topic
         stamp = stamp_ns(msg.header.stamp)
         self._count_missed(stamp)
-        inputs = self.samples.rows(msg)
+        inputs = self.reader.rows(msg)
         if inputs is None:
             self.counts['rejected'] += 1
             return

@@ -123,8 +123,7 @@ class ScenarioNode(Node):
         # Best effort: the scenario must never hold up the driver's reliable writers (a reader
         # that does not acknowledge makes them block) and may miss samples when it falls behind.
         sensor = qos_profile_sensor_data
-        self.sample_index = interfaces.SampleIndex(
-            (SEGMENT, interfaces.chain_chamber(1, 1), interfaces.chain_chamber(1, 2)))
+        self.sample_index = interfaces.SampleIndex(interfaces.segment_sample_names(1))
         for topic, callback in ((interfaces.JOINT_STATES, self.on_joint_states),
                                 (interfaces.ACTUATOR_JOINT_STATES, self.on_actuator_states),
                                 (interfaces.DRIVING_TORQUE, self.on_torque)):
