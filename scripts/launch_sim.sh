@@ -15,9 +15,9 @@
 # record` writes the devices' samples (/joint_states, /actuator/joint_states, one message each)
 # and /bellows/wrench (an arm's torque sensor) to the rosbag2 directory BAG while the graph runs
 # (root namespace only; docs/workflow.md). With --actuator-only the arm's nodes (sim_arm_node,
-# model_node, arm_controller_node) are left out and the actuator path runs SCHED_FIFO as the arm's
-# does (a lighter graph whose recording keeps every sample on a busy machine; the scenario's angle
-# part then reports no samples). Every process is stopped on exit, Ctrl-C or error (trap). Works
+# model_node, arm_controller_node) are left out and the actuator path runs SCHED_FIFO where the
+# machine grants it (a lighter graph whose recording keeps every sample on a busy machine; the
+# scenario's angle part then reports no samples). Every process is stopped on exit, Ctrl-C or error (trap). Works
 # from a checkout, a pip install and a colcon install (the executables are found as `ros2 run`
 # finds them). DDS discovery stays on this host.
 set -euo pipefail

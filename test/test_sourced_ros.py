@@ -107,7 +107,7 @@ def test_colcon_build_and_ros2_launch_on_a_sourced_jazzy(tmp_path):
         launched = (tmp_path / 'launch.log').read_text()
         assert counted.returncode == 0, counted.stdout + counted.stderr[-2000:]
         assert 'no EventsExecutor' in counted.stdout  # rclpy 7.1.3: the fallback path ran
-        assert 'segments [1]' in counted.stdout, counted.stdout + launched[-3000:]
+        assert 'segments [4]' in counted.stdout, counted.stdout + launched[-3000:]
         assert 'SingleThreadedExecutor' in launched  # each node said which executor it took
     finally:
         if launch.poll() is None:

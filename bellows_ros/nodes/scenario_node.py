@@ -32,7 +32,8 @@ scenario_node: a short scripted scenario on the running graph, printed and plott
    controller.
 
 What comes back is recorded: /actuator/stiffness, /joint_states (segment_1 Ψ and pressures),
-/actuator/joint_states (air_chamber x_c), /bellows/driving_torque (segment_1 τ_drive). At the end
+/actuator/joint_states (air_chamber x_c), /bellows/driving_torque (segment_1 τ_drive); of the
+three 1 kHz topics one message in `SERIES_EVERY` is decoded (a 200 Hz series). At the end
 it prints a summary (step settling time and overshoot; the RMS tracking error of each run and their
 ratio) and writes `output_dir/scenario.csv` and `output_dir/scenario.png`, whose angle and error
 panels show both runs on the trajectory's own time axis.
@@ -44,12 +45,14 @@ SCHED_FIFO give it one too, below theirs), cpu_latency_limit (s: CPU wake-up lat
 the node runs, 0 = idle CPUs poll, negative = off; runtime/realtime.py).
 """
 import csv
+import itertools
 import math
 from pathlib import Path
 
 from rclpy.parameter import Parameter
 from rclpy.parameter_client import AsyncParameterClient
 from rclpy.qos import qos_profile_sensor_data
+from rclpy.serialization import deserialize_message
 
 from bellows_ros import interfaces
 from bellows_ros.config.actuator import load_actuator_params
@@ -71,6 +74,10 @@ GAP = 3.0
 RUNS = (('paper A feedforward', 'paper_a'), ('feedback only', 'none'))
 # s the arm holds the trajectory's first set-point, within READY_TOLERANCE rad, before a run.
 READY, READY_TOLERANCE = 1.0, 0.05
+# Of the 1 kHz samples the scenario decodes one in SERIES_EVERY: 200 Hz resolves the trajectory's
+# moves, and the rest are taken serialized and dropped, which costs the node a fraction of a
+# decoded message's CPU (docs/bench_log.md, 2026-11-29).
+SERIES_EVERY = 5
 
 PARAMETERS = (
     Spec('duration', 80.0, 'length of the scenario, s', low=1.0, high=24 * 3600.0),
@@ -87,6 +94,16 @@ PARAMETERS = (
          check=lambda path: '' if path else 'must not be empty'),
     Spec('actuator_params', '', "YAML laid over config/actuator.yaml ('' = defaults)"),
 )
+
+
+def one_in(every, message_class, callback):
+    """Return a raw-subscription callback that passes every `every`-th message, decoded."""
+    count = itertools.count()
+
+    def take(serialized):
+        if next(count) % every == 0:
+            callback(deserialize_message(serialized, message_class))
+    return take
 
 
 class ScenarioNode(Node):
@@ -122,13 +139,14 @@ class ScenarioNode(Node):
         self.subscription(interfaces.VENTED, self.on_vented)
         # Best effort: the scenario must never hold up the driver's reliable writers (a reader
         # that does not acknowledge makes them block) and may miss samples when it falls behind.
-        sensor = qos_profile_sensor_data
         self.sample_index = interfaces.SampleIndex(interfaces.segment_sample_names(1))
         for topic, callback in ((interfaces.JOINT_STATES, self.on_joint_states),
                                 (interfaces.ACTUATOR_JOINT_STATES, self.on_actuator_states),
                                 (interfaces.DRIVING_TORQUE, self.on_torque)):
-            self.create_subscription(getattr(self.msg, topic.message), topic.name, callback,
-                                     sensor)
+            message_class = getattr(self.msg, topic.message)
+            self.create_subscription(message_class, topic.name,
+                                     one_in(SERIES_EVERY, message_class, callback),
+                                     qos_profile_sensor_data, raw=True)
         # Until the runs are placed (`ready`): the arm holds the trajectory's first set-point.
         self.hold = angle_trajectory.setpoint(self.trajectory, 0.0)[0]
         self.modes = list(RUNS) if given['compare_feedforward'] else [('as configured', None)]
