@@ -32,9 +32,11 @@ import math
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 import rclpy.node
+from rclpy.serialization import serialize_message
 from rclpy.task import Future
 
 from bellows_ros import interfaces
+from bellows_ros.runtime.joint_state_cdr import JointStateReader
 from bellows_ros.runtime.messages import msg  # noqa: F401 (the ROS packages' classes)
 from bellows_ros.runtime.node import LATCHED  # noqa: F401 (the probes' QoS for latched topics)
 
@@ -103,6 +105,11 @@ def arm_sample(stamp, psi, psi_dot, pressures, segments=(1,)):
                             effort=array('d', [math.nan] * len(segments) + list(pressures)))
     sample.header.stamp.sec, sample.header.stamp.nanosec = divmod(stamp, 1_000_000_000)
     return sample
+
+
+def as_received(message):
+    """Return `message` (a JointState) as a sample subscription hands it over: read."""
+    return JointStateReader()(serialize_message(message))
 
 
 def chamber_pressures(sample):

@@ -57,7 +57,8 @@ def feed(node, stamps, psi=0.1):
     p0 = load_segment_params().p0
     for stamp in stamps:
         stamp = node.get_clock().now().nanoseconds if stamp is None else stamp
-        node.control(probe.arm_sample(stamp, [psi], [0.0], [p0 + 1e5, p0 + 1e5]))
+        node.control(probe.as_received(
+            probe.arm_sample(stamp, [psi], [0.0], [p0 + 1e5, p0 + 1e5])))
 
 
 def vent_and_resume(node, psi):

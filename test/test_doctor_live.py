@@ -98,8 +98,7 @@ def test_one_message_per_sample_goes_into_the_buffer_whole():
         values = {'air_chamber': (x_c, math.nan), 'spring': (x_s, f), 'actuator': (math.nan, p)}
         StiffnessControllerNode.on_sample(node, SimpleNamespace(
             name=list(names), position=[values[n][0] for n in names],
-            effort=[values[n][1] for n in names],
-            header=SimpleNamespace(stamp=SimpleNamespace(sec=0, nanosec=ns))))
+            effort=[values[n][1] for n in names], stamp_ns=ns))
 
     assert interfaces.actuator_sample_names() == ('air_chamber', 'spring', 'actuator')
     sample(1_000_000, 0.01, 0.0, 3.0, 1.2e5)

@@ -251,8 +251,8 @@ def test_the_drivers_configuration_imports_no_physics_model():
 
 
 # The runtime holds what runs a node on rclpy, and nothing else.
-RUNTIME_MODULES = {'__init__', 'node', 'messages', 'parameters', 'realtime', 'record',
-                   'managed_launch'}
+RUNTIME_MODULES = {'__init__', 'node', 'messages', 'joint_state_cdr', 'parameters', 'realtime',
+                   'record', 'managed_launch'}
 
 
 def test_the_runtime_holds_only_the_rclpy_node_base():

@@ -68,6 +68,7 @@ import math
 import time
 
 import numpy as np
+from rclpy.time import Time
 
 from bellows_ros import interfaces
 from bellows_ros.config.segment import load_segment_params
@@ -238,7 +239,7 @@ class ArmControllerNode(Node):
         else:  # no control_msgs wheel on PyPI (runtime/messages.py)
             self.get_logger().info('control_msgs is not installed: ~/state is not published')
         # The newest samples only: a command acts on the present (interfaces.md, "QoS").
-        self.subscription(interfaces.JOINT_STATES, self.control, newest_only=True)
+        self.sample_subscription(interfaces.JOINT_STATES, self.control, newest_only=True)
         self.subscription(interfaces.PSI_SETPOINT, self.on_setpoint)
         self.subscription(interfaces.JOINT_TRAJECTORY, self.on_trajectory)
         self.subscription(interfaces.VENTED, self.on_vented)
@@ -328,7 +329,7 @@ class ArmControllerNode(Node):
         start = time.perf_counter()
         if self.loops[0].name not in msg.name:
             return  # another publisher's joints on the topic
-        stamp = stamp_ns(msg.header.stamp)
+        stamp = msg.stamp_ns
         inputs = self.reader.rows(msg)
         if inputs is None:
             self.counts['rejected_samples'] += 1
@@ -381,13 +382,13 @@ class ArmControllerNode(Node):
             loop.largest = max(loop.largest, abs(error))
             loop.saturated += out.saturated
         command = self.msg.JointState(name=names, effort=efforts)
-        command.header.stamp = msg.header.stamp
+        command.header.stamp = Time(nanoseconds=stamp).to_msg()
         self.command_pub.publish(command)
         self.counts['commands'] += 1
         if self.state_pub is not None and (
                 self.last_state is None or stamp - self.last_state >= STATE_PERIOD * 1e9 - 1):
             self.last_state = stamp
-            self.publish_state(msg.header.stamp, t)
+            self.publish_state(command.header.stamp, t)
         self.stats.record(dt * self.control_every, 0.0, time.perf_counter() - start)
 
     def publish_state(self, stamp, now):

@@ -42,7 +42,6 @@ last `model_health.window` s with its noise floor, offset and limit, all taken f
 whose residual left its floor and by how much (no diagnosis: naming a segment's cause live would
 need a torque sensor). Both parameters are read once at start.
 """
-from array import array
 import time
 
 from bellows_ros import interfaces, live
@@ -53,7 +52,8 @@ from bellows_ros.models.derivatives import rate
 from bellows_ros.models.segment import external_torque, SegmentModel
 from bellows_ros.nodes import diagnostics
 from bellows_ros.nodes.arm_sample import ArmSampleReader
-from bellows_ros.runtime import Node, realtime, run, stamp_ns
+from bellows_ros.runtime import Node, realtime, run
+from bellows_ros.runtime.joint_state_cdr import JointStateWriter
 from bellows_ros.runtime.parameters import Spec
 
 
@@ -90,6 +90,8 @@ class ModelNode(Node):
         self.check_parameters()
         self.params = load_segment_params(params_file)
         self.names = [interfaces.segment_joint(i) for i in segments]
+        # Both torque topics: the segments' joints, effort only, sent serialized.
+        self.torque_writer = JointStateWriter(self.names, position=False, velocity=False)
         self.models = [SegmentModel(self.params) for _ in segments]
         self.previous_psi_dot = [None] * len(segments)
         self.psi_ddot = [0.0] * len(segments)
@@ -112,7 +114,7 @@ class ModelNode(Node):
 
         self.drive_pub = self.publisher(interfaces.DRIVING_TORQUE)
         self.external_pub = self.publisher(interfaces.EXTERNAL_TORQUE)
-        self.subscription(interfaces.JOINT_STATES, self.evaluate)
+        self.sample_subscription(interfaces.JOINT_STATES, self.evaluate)
         self.diagnostics = diagnostics.Updater(self)
         self.diagnostics.setHardwareID('none')  # software: no device of its own
         self.diagnostics.add('driving torque', self.diagnose_evaluation)
@@ -136,7 +138,7 @@ class ModelNode(Node):
         start = time.perf_counter()
         if self.names[0] not in msg.name:
             return  # another publisher's joints on the topic
-        stamp = stamp_ns(msg.header.stamp)
+        stamp = msg.stamp_ns
         self._count_missed(stamp)
         inputs = self.reader.rows(msg)
         if inputs is None:
@@ -146,10 +148,7 @@ class ModelNode(Node):
                  for model, (psi, psi_dot, p1, p2) in zip(self.models, inputs)]
         # The driving torque is what a controller waits for: it goes out before τ_ext is computed,
         # and the latency is taken at its publication (docs/nodes.md, "Timing").
-        # float64[] as array('d'): rclpy takes it without a per-element check.
-        out_drive = self.msg.JointState(name=list(self.names), effort=array('d', drive))
-        out_drive.header = msg.header
-        self.drive_pub.publish(out_drive)
+        self.drive_pub.publish(self.torque_writer.serialize(stamp, effort=drive))
         now = self.get_clock().now().nanoseconds  # on the node clock
         latency = now - stamp
         self.latency.append(latency)
@@ -159,7 +158,7 @@ class ModelNode(Node):
         self.counts['evaluated'] += 1
         dt = None if self._last_stamp is None else (stamp - self._last_stamp) * 1e-9
         self._last_stamp = stamp
-        external = self.publish_external(msg.header, inputs, drive, dt or 0.0)
+        external = self.publish_external(stamp, inputs, drive, dt or 0.0)
         started = time.perf_counter()
         self.health_buffer.append((stamp * 1e-9, *external))
         self.health_cost.add(time.perf_counter() - started)
@@ -178,7 +177,7 @@ class ModelNode(Node):
                 self.counts['missed'] += round(gap / interfaces.SAMPLE_PERIOD) - 1
         self._last_received = stamp
 
-    def publish_external(self, header, inputs, drive, dt):
+    def publish_external(self, stamp, inputs, drive, dt):
         """Publish τ_ext (2) per segment on /bellows/external_torque, return it; Ψ̈ from Ψ̇'s."""
         external = []
         for i, ((psi, psi_dot, _, _), tau_drive) in enumerate(zip(inputs, drive)):
@@ -186,9 +185,7 @@ class ModelNode(Node):
                                                self.psi_ddot[i])
             self.previous_psi_dot[i] = psi_dot
             external.append(float(external_torque(self.params, psi, psi_dot, psi_ddot, tau_drive)))
-        out = self.msg.JointState(name=list(self.names), effort=array('d', external))
-        out.header = header
-        self.external_pub.publish(out)
+        self.external_pub.publish(self.torque_writer.serialize(stamp, effort=external))
         return external
 
     def diagnose_evaluation(self, stat):

@@ -63,7 +63,7 @@ from bellows_ros.control.stiffness import StiffnessSetpoint
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.nodes import diagnostics
-from bellows_ros.runtime import Node, realtime, run, stamp_ns
+from bellows_ros.runtime import Node, realtime, run
 from bellows_ros.runtime.parameters import Spec
 
 
@@ -147,7 +147,7 @@ class StiffnessControllerNode(Node):
         self.stiffness_pub = self.publisher(interfaces.STIFFNESS)
         self.subscription(interfaces.STIFFNESS_SETPOINT, self.on_setpoint)
         # The actuator's own sample topic: the arm's 1 kHz samples never reach this node.
-        self.subscription(interfaces.ACTUATOR_JOINT_STATES, self.on_sample)
+        self.sample_subscription(interfaces.ACTUATOR_JOINT_STATES, self.on_sample)
         self.diagnostics = diagnostics.Updater(self)
         self.diagnostics.setHardwareID('none')  # software: the driver reports the devices
         self.diagnostics.add('control', self.diagnose_control)
@@ -189,7 +189,7 @@ class StiffnessControllerNode(Node):
         effort = msg.effort
         force = effort[spring] if len(effort) > spring else math.nan
         pressure = effort[gas] if len(effort) > gas else math.nan
-        stamp = stamp_ns(msg.header.stamp)
+        stamp = msg.stamp_ns
         dt = 1e-3 if self._last_stamp is None else max(1e-6, (stamp - self._last_stamp) * 1e-9)
         self._last_stamp = stamp
         if not math.isfinite(pressure):

@@ -15,8 +15,9 @@
 """
 How a bellows node runs on rclpy.
 
-The node base classes and `run` (runtime/node.py), the message classes (messages.py), parameter
-tables (parameters.py), real-time scheduling (realtime.py) and the recorder (record.py).
+The node base classes and `run` (runtime/node.py), the message classes (messages.py), the 1 kHz
+samples as serialized JointStates (joint_state_cdr.py), parameter tables (parameters.py),
+real-time scheduling (realtime.py) and the recorder (record.py).
 """
 from bellows_ros.runtime.node import LifecycleNode, Node, run, stamp_ns
 

@@ -57,6 +57,7 @@ from rclpy.task import Future
 
 from bellows_ros.errors import BellowsError, ParameterError
 from bellows_ros.runtime import messages
+from bellows_ros.runtime.joint_state_cdr import JointStateReader
 from bellows_ros.runtime.parameters import descriptor_message, validate
 
 try:
@@ -197,7 +198,7 @@ class _BellowsNode:
                                      self._qos(topic))
 
     def subscription(self, topic: Any, callback: Callable[[Any], None], *,
-                     newest_only: bool = False) -> Any:
+                     newest_only: bool = False, raw: bool = False) -> Any:
         """
         Create a subscription to a topic of the contract (bellows_ros/interfaces.py).
 
@@ -205,10 +206,32 @@ class _BellowsNode:
         that acts on the present, such as a controller. A reliable reader delivers in order: after
         one lost sample it gets no later one until the lost one is repaired, and every sample of
         that wait arrives too old to act on (docs/interfaces.md, "QoS").
+        `raw`: `callback` gets the serialized message (bytes), e.g. for a `JointStateReader`.
         """
         qos = qos_profile_sensor_data if newest_only else self._qos(topic)
         return self.create_subscription(messages.message_class(topic.ros_type), topic.name,
-                                        callback, qos)
+                                        callback, qos, raw=raw)
+
+    def sample_subscription(self, topic: Any, callback: Callable[[Any], None], *,
+                            newest_only: bool = False) -> Any:
+        """
+        Subscribe to a JointState sample topic serialized; `callback` gets a `JointStateSample`.
+
+        The 1 kHz readers take their samples this way: reading the bytes costs less than
+        rclpy's message object (runtime/joint_state_cdr.py). Bytes that are no JointState are
+        dropped with a warning (at most one per 10 s).
+        """
+        read = JointStateReader()
+
+        def take(serialized):
+            try:
+                sample = read(serialized)
+            except ValueError as exc:
+                self.get_logger().warn(f'{topic.name}: dropped a message that is no JointState '
+                                       f'({exc})', throttle_duration_sec=10.0)
+                return
+            callback(sample)
+        return self.subscription(topic, take, newest_only=newest_only, raw=True)
 
     @staticmethod
     def _qos(topic: Any) -> Any:
