@@ -17,9 +17,9 @@
 # (root namespace only; docs/workflow.md). With --actuator-only the arm's nodes (sim_arm_node,
 # model_node, arm_controller_node) are left out and the actuator path runs SCHED_FIFO where the
 # machine grants it (a lighter graph whose recording keeps every sample on a busy machine; the
-# scenario's angle part then reports no samples). Every process is stopped on exit, Ctrl-C or error (trap). Works
-# from a checkout, a pip install and a colcon install (the executables are found as `ros2 run`
-# finds them). DDS discovery stays on this host.
+# scenario's angle part then reports no samples). Every process is stopped on exit, Ctrl-C or
+# error (trap). Works from a checkout, a pip install and a colcon install (the executables are
+# found as `ros2 run` finds them). DDS discovery stays on this host.
 set -euo pipefail
 top=$(cd "$(dirname "$0")/.." && pwd)
 # From a checkout, set up first (idempotent: a no-op once done). An install has no setup.py.

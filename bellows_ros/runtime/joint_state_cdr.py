@@ -55,8 +55,13 @@ def _align(offset, size):
     return offset + (-(offset - _BODY) % size)
 
 
+def _pad(buffer, size):
+    """Extend `buffer` with zeros up to the alignment of a primitive of `size` bytes."""
+    buffer.extend(bytes(_align(len(buffer), size) - len(buffer)))
+
+
 def _pack_string(buffer, text):
-    buffer.extend(b'\0' * (_align(len(buffer), 4) - len(buffer)))
+    _pad(buffer, 4)
     encoded = text.encode()
     buffer.extend(_COUNT.pack(len(encoded) + 1) + encoded + b'\0')
 
@@ -73,16 +78,16 @@ class JointStateWriter:
         n = len(self.names)
         buffer = bytearray(HEADER + bytes(_STAMP.size))
         _pack_string(buffer, frame_id)
-        buffer.extend(b'\0' * (_align(len(buffer), 4) - len(buffer)))
+        _pad(buffer, 4)
         buffer.extend(_COUNT.pack(n))
         for name in self.names:
             _pack_string(buffer, name)
         self._arrays = []  # buffer offset of each array sent
         for sent in (position, velocity, effort):
-            buffer.extend(b'\0' * (_align(len(buffer), 4) - len(buffer)))
+            _pad(buffer, 4)
             buffer.extend(_COUNT.pack(n if sent else 0))
             if sent and n:
-                buffer.extend(b'\0' * (_align(len(buffer), 8) - len(buffer)))
+                _pad(buffer, 8)
                 self._arrays.append(len(buffer))
                 buffer.extend(bytes(8 * n))
             else:
@@ -153,7 +158,7 @@ class JointStateReader:
 
     @staticmethod
     def _skip_string(data, offset):
-        offset = _align(offset, 4)
+        """Offset just past the string at `offset` (aligned to 4 by the caller)."""
         (length,) = _COUNT.unpack_from(data, offset)
         end = offset + 4 + length
         if length == 0 or end > len(data) or data[end - 1] != 0:
