@@ -38,7 +38,7 @@ from launch.event_handlers import OnProcessExit
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import LifecycleNode, Node
 
-from bellows_ros.runtime.managed_launch import bring_to_active
+from bellows_ros.runtime.managed_launch import bring_to_active, own_session
 
 PACKAGE = 'bellows_ros'
 
@@ -74,7 +74,8 @@ def _nodes(context):
         # either missing it writes `/**`, which the file's node section beats).
         kind = LifecycleNode if managed else Node
         return kind(package=PACKAGE, executable=executable, name=executable, namespace='',
-                    output='screen', parameters=[params_file, overrides or {}])
+                    output='screen', parameters=[params_file, overrides or {}],
+                    prefix=own_session(), exec_name=executable)
 
     # The driver is a managed node: configured (devices opened) and activated below.
     driver = node('driver_node', driver, managed=True)

@@ -47,7 +47,7 @@ from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import LifecycleNode, Node
 import yaml
 
-from bellows_ros.runtime.managed_launch import bring_to_active
+from bellows_ros.runtime.managed_launch import bring_to_active, own_session
 
 PACKAGE = 'bellows_ros'
 
@@ -100,7 +100,8 @@ def _nodes(context):
         # either missing it writes `/**`, which the file's node section beats).
         kind = LifecycleNode if managed else Node
         return kind(package=PACKAGE, executable=executable, name=executable, namespace=namespace,
-                    output='screen', parameters=[params_file, overrides or {}], **kwargs)
+                    output='screen', parameters=[params_file, overrides or {}],
+                    prefix=own_session(), exec_name=executable, **kwargs)
 
     # The driver is a managed node: brought to active below (bring_to_active).
     driver = node('driver_node', {'arm.channel': channel, 'actuator.port': port}, managed=True)

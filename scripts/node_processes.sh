@@ -2,6 +2,7 @@
 # The caller sets bin (the node executables: find_executables), common and extra (arguments before
 # and after each node's own) and node_logs (the log folder), and traps EXIT with stop_nodes.
 pids=()
+session=$(command -v setsid || true)  # util-linux; without it the nodes share this session
 devices=()  # the simulated devices among pids: stopped after the rest (stop_nodes)
 
 find_executables() {  # find_executables TOP WHO: print the folder holding bellows_ros' executables
@@ -55,7 +56,12 @@ terminate() {  # terminate PID...: TERM, up to 5 s to exit, then KILL
 
 start_node() {  # start_node NAME ARGS...: a node in the background, log in $node_logs/NAME.log
   local name=$1; shift
-  "$bin/$name" "${common[@]}" "$@" "${extra[@]}" >"$node_logs/$name.log" 2>&1 &
+  # Each node in a session of its own (setsid: no fork here, as a background job of this shell is
+  # no group leader, so $! is the node). Linux's scheduler autogroups split the CPU between
+  # sessions first: the graph in one session got one share against a recorder's and a client's
+  # terminals, fell behind the bus and was vented (docs/nodes.md, "Timing"). The nodes still stop
+  # by pid (stop_nodes).
+  $session "$bin/$name" "${common[@]}" "$@" "${extra[@]}" >"$node_logs/$name.log" 2>&1 &
   pids+=($!)
 }
 

@@ -151,6 +151,12 @@ def _read_until(process, patterns, guard=GUARD):
     return found, lines
 
 
+def _session(pid):
+    """Return the session id of process `pid` (/proc/<pid>/stat, field 6)."""
+    with open(f'/proc/{pid}/stat') as stream:
+        return int(stream.read().rsplit(')', 1)[1].split()[3])
+
+
 def _stop(process):
     if process.poll() is None:
         process.send_signal(signal.SIGINT)  # as Ctrl-C: launch stops every node
@@ -182,10 +188,16 @@ def test_sim_launch_arguments_override_the_parameter_file(prefix, tmp_path):
     try:
         found, lines = _read_until(process, [ACTUATOR_LINE, ARM_LINE, DRIVER_LINE])
         pty_existed = port.exists()
+        started = [int(pid) for pid in
+                   re.findall(r'process started with pid \[(\d+)\]', ''.join(lines))]
+        sessions = {pid: _session(pid) for pid in started}
     finally:
         _stop(process)
     log = ''.join(lines)
     assert len(found) == 3, log[-3000:]
+    # Each node leads a session of its own (managed_launch.own_session): a scheduler autogroup
+    # of its own, not one share for the whole graph.
+    assert len(started) == 6 and all(sessions[pid] == pid for pid in started), sessions
     actuator, arm = found[ACTUATOR_LINE], found[ARM_LINE]
     assert actuator.group(1) == str(port)
     assert actuator.group(2).strip() == 'wall_bulging, air_leak'
@@ -343,3 +355,34 @@ def test_two_namespaced_graphs_run_side_by_side(prefix, tmp_path, monkeypatch):
     for namespace in ('/arm_a', '/arm_b'):
         assert actuator_names[namespace] and set(actuator_names[namespace]) <= actuator, logs
     assert names['/'] == [] and actuator_names['/'] == []
+
+
+def test_shell_launchers_start_each_node_in_a_session_of_its_own(tmp_path):
+    """
+    scripts/node_processes.sh's start_node: the node leads a session (setsid), $! is the node.
+
+    A session is a scheduler autogroup of its own (docs/nodes.md, "Timing"); stop_nodes still
+    stops the node by its pid.
+    """
+    fake = tmp_path / 'bin' / 'fake_node'
+    fake.parent.mkdir()
+    fake.write_text('#!/bin/sh\nexec sleep 30\n')
+    fake.chmod(0o755)
+    script = f"""
+        source {ROOT / 'scripts' / 'node_processes.sh'}
+        bin={fake.parent}; common=(); extra=(); node_logs={tmp_path}
+        start_node fake_node
+        node=$!
+        for _ in $(seq 50); do  # setsid runs in the child, a moment after the fork
+          [ "$(awk '{{print $6}}' /proc/$node/stat)" = "$node" ] && break; sleep 0.1
+        done
+        echo "$node $(awk '{{print $6}}' /proc/$node/stat) $(awk '{{print $6}}' /proc/$$/stat)"
+        stop_nodes
+        kill -0 "$node" 2>/dev/null && echo alive || echo stopped
+    """
+    run = subprocess.run(['bash', '-c', script], capture_output=True, text=True, timeout=60)
+    assert run.returncode == 0, run.stderr
+    ids, state = run.stdout.split('\n')[:2]
+    node, session, launcher_session = ids.split()
+    assert session == node != launcher_session, run.stdout
+    assert state == 'stopped'

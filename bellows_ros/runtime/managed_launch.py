@@ -13,18 +13,34 @@
 # limitations under the License.
 
 """
-Launch actions that bring a managed node to `active`, for the launch files (launch_ros needed).
+What the launch files share (launch_ros needed): managed nodes to `active`, nodes' sessions.
 
-The pattern of ros2/demos' lifecycle launch: emit `configure` for the node, and `activate` when
-it reaches `inactive`. A configure that fails (a device absent) returns the node to
+Each node gets a session of its own (`own_session`). A managed node is brought to `active` as
+ros2/demos' lifecycle launch does (`bring_to_active`): emit `configure` for the node, and
+`activate` when it reaches `inactive`. A configure that fails (a device absent) returns the node to
 `unconfigured`: the launch then stops with an error instead of running a graph without its
 driver (the nodes' own output says why).
 """
+import shutil
+
 from launch.actions import EmitEvent, OpaqueFunction, RegisterEventHandler
 from launch.events import matches_action
 from launch_ros.event_handlers import OnStateTransition
 from launch_ros.events.lifecycle import ChangeState
 from lifecycle_msgs.msg import Transition
+
+
+def own_session():
+    """
+    Return the `prefix` that starts a node in a session of its own ('setsid'), or None.
+
+    Linux's scheduler autogroups split the CPU between sessions before threads: a whole graph in
+    the launch's session got one share against a recorder's and a client's terminals, fell
+    behind the bus and was vented (docs/nodes.md, "Timing"). launch starts a process in its own
+    process group's session, as no group leader, so setsid execs the node in place (no fork:
+    launch still signals the node itself). None where util-linux' setsid is absent.
+    """
+    return shutil.which('setsid')
 
 
 def bring_to_active(node):
