@@ -22,20 +22,29 @@ model_node (segments 1-4), stiffness_controller_node, arm_controller_node (the c
 segments) and scenario_node, running its scenario (stiffness step, angle sweep) with a duration
 far longer than the window (it is stopped before it ends; it writes nothing).
 
-The floor (`graph.floor.*`) is, for each of those nodes, the least an rclpy node with the same
-topics costs: a minimal node (FLOORS) with the same name, the same subscriptions and
-publications (same message types, same QoS: bellows_ros/interfaces.py), publishing at the same
-rates pre-built messages, with the same scheduling (the config's `realtime_priority` and
-`cpu_latency_limit`), spun the same way (runtime.run: EventsExecutor in bounded slices), each a
-process of its own, in a graph of floor nodes that reproduces the whole graph's topic traffic:
-- the devices and the driver, whose inputs are not DDS, keep their loop shape: the simulated
-  devices' floors a 1 kHz PeriodicLoop thread with an empty body (what the devices tick their
-  plants and their bus or serial link on; no plant, no CAN, no pty), the driver's floor one
-  1 kHz thread per device group (the driver publishes from its two device reader threads)
-  publishing that group's pre-built sample message each tick: on joint_states the 4 segments'
-  angles, rates and chamber pressures (`arm_sample_names`), on actuator/joint_states the
-  actuator's compressions, spring force and chamber pressure (`actuator_sample_names`);
-- a node that publishes on each input sample publishes a pre-built message per input: the
+The floor (`graph.floor.*`) is, for each of those nodes, the least a node with the same traffic
+costs: a minimal rclpy node (FLOORS) with the same name, the same subscriptions and publications
+(same message types, same QoS: bellows_ros/interfaces.py), the same device links, the same
+rates, with the same scheduling (the config's `realtime_priority` and `cpu_latency_limit`), spun
+the same way (runtime.run: EventsExecutor in bounded slices), each a process of its own, in a
+graph of floor nodes that reproduces the whole graph's traffic. It takes its messages serialized
+(`raw=True`), publishes messages serialized once and writes frames laid out once: decoding,
+encoding and everything a node computes are the node's own work, above the floor.
+- the simulated devices: their links' traffic from a 1 kHz PeriodicLoop thread, with the same
+  libraries: the simulated arm sends a frame per segment each tick and its status every 100 ms
+  on the simulated CAN bus (python-can udp_multicast on loopback, its own frames dropped in the
+  kernel as the node's are) and reads the host's frames; the simulated actuator writes a
+  telemetry frame each tick to a pty of its own (linked at the driver's port) and reads what the
+  host wrote. No plant, no codec;
+- the driver: its arm reader reads the CAN frames as they come and publishes the arm sample
+  message once per instant (a frame per segment); its transmit thread sends the set-point and
+  heartbeat frames every 10 ms (their DBC cycle time); its actuator reader reads the pty
+  (pyserial) and publishes the actuator sample message per telemetry frame's bytes, with a
+  heartbeat every `heartbeat_period` (config/hardware.yaml) and a motor command frame per motor
+  command. On joint_states the 4
+  segments' angles, rates and chamber pressures (`arm_sample_names`), on actuator/joint_states
+  the actuator's compressions, spring force and chamber pressure (`actuator_sample_names`);
+- a node that publishes on each input sample publishes a serialized message per input: the
   model's floor both torques per arm sample, the arm controller's floor a pressure command
   every `control_every` arm samples (and ~/state every 20 ms of samples), the stiffness
   controller's floor a motor command every `control_every` actuator samples and the stiffness
@@ -47,8 +56,9 @@ process of its own, in a graph of floor nodes that reproduces the whole graph's 
   groups and the driving torque; the stiffness, the vented state and /diagnostics);
 - every floor node but the scenario's publishes one pre-built /diagnostics array a second, as
   each node's diagnostics.Updater does.
-What a node costs above its floor is its own work (models, plants, devices, checks); the floor
-is what rclpy, Fast DDS and the Python callbacks cost for its traffic on this machine now.
+What a node costs above its floor is its own work (models, plants, codecs, checks); the floor
+is what rclpy, Fast DDS, the device links and the Python callbacks cost for its traffic on this
+machine now.
 Each graph is measured over a 20 s window once it has settled 3 s (`--quick`, a smoke run: 3 s
 after 1 s).
 
@@ -70,6 +80,7 @@ Figures (CPU: utime + stime from /proc/<pid>/stat over the window, a fraction of
 Nothing here asserts a time. A node that exits is an error (BellowsError with its log line).
 """
 from array import array
+import errno
 import math
 import os
 from pathlib import Path
@@ -79,13 +90,21 @@ import statistics
 import sys
 import threading
 import time
+import tty
 
+import can
 from rclpy.qos import qos_profile_sensor_data
+from rclpy.serialization import serialize_message
+import serial
 
 from bellows_ros import interfaces, params
 from bellows_ros.bench import Result
 from bellows_ros.bench.graph import CAN_GROUPS, DOMAINS, GraphRun, node_environment
+from bellows_ros.config.hardware import actuator_board_config
 from bellows_ros.errors import BellowsError
+from bellows_ros.hardware import can_protocol, serial_protocol
+from bellows_ros.hardware.arm_bus import open_can
+from bellows_ros.hardware.can_echo_filter import drop_own_frames
 from bellows_ros.hardware.loop_timing import PeriodicLoop
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime
@@ -166,12 +185,16 @@ def _overrides(name, port, group, output):
             for arg in ('-p', f'{name}:{key}:={value}')]
 
 
-def _floor_arguments(name):
+def _floor_arguments(name, port, group):
     """Return a floor node's parameters: its node's scheduling and traffic, from the config."""
     config = params.read_file(CONFIG, name)
     given = {'realtime_priority': config.get('realtime_priority', 0),
              'cpu_latency_limit': float(config.get('cpu_latency_limit', -1.0))}
-    if name in ('driver_node', 'model_node'):
+    if name in ('sim_arm_node', 'driver_node'):
+        given['can_channel'] = group
+    if name in ('sim_actuator_node', 'driver_node'):
+        given['port'] = port
+    if name in ('sim_arm_node', 'driver_node', 'model_node'):
         given['segments'] = list(range(1, SEGMENTS + 1))
     if name == 'arm_controller_node':
         given['segments'] = list(config['segments'])
@@ -211,7 +234,7 @@ def _run_graph(kind, window, settle):
         def command(name):
             if kind == 'floor':
                 return [sys.executable, '-c', FLOOR_MAIN, name, '--ros-args',
-                        *_floor_arguments(name)]
+                        *_floor_arguments(name, port, group)]
             return [str(binary / name), '--ros-args', '--params-file', str(CONFIG),
                     *_overrides(name, port, group, output)]
 
@@ -227,8 +250,7 @@ def _run_graph(kind, window, settle):
         # the scenario once samples flow, as launch_sim.sh starts it 3 s after the others.
         graph.start('sim_arm_node', command('sim_arm_node'), env)
         graph.start('sim_actuator_node', command('sim_actuator_node'), env)
-        if kind == 'whole':
-            wait(f'pty at {port}', lambda: os.path.exists(port))
+        wait(f'pty at {port}', lambda: os.path.exists(port))
         for name in ('model_node', 'stiffness_controller_node', 'arm_controller_node',
                      'driver_node'):
             graph.start(name, command(name), env)
@@ -335,8 +357,10 @@ def _scheduling(pid):
 
 # --- the floor nodes ------------------------------------------------------------------------
 FLOOR_PARAMETERS = (
-    Spec('segments', [1], 'arm segments of its messages (driver, model) or commands (arm '
-         'controller)'),
+    Spec('can_channel', '', "the simulated CAN bus's group (the simulated arm, the driver)"),
+    Spec('port', '', "the simulated actuator's pty (the simulated actuator, the driver)"),
+    Spec('segments', [1], 'arm segments of its frames (simulated arm), messages (driver, '
+         'model) or commands (arm controller)'),
     Spec('control_every', 5, 'samples per command (the controllers)', low=1, high=100),
     Spec('publish_every', 2, 'commands per stiffness message (the stiffness controller)',
          low=1, high=100),
@@ -352,6 +376,18 @@ def _joint_state(names, **fields):
                              **{key: array('d', values) for key, values in fields.items()})
     message.header.stamp.sec = 1
     return message
+
+
+def _serialized(names, **fields):
+    """Return a JointState serialized once: the node publishes its samples serialized."""
+    return serialize_message(_joint_state(names, **fields))
+
+
+def _frame(db, name):
+    """Return a CAN frame of the DBC's message `name`, its bytes laid out once."""
+    message = db.get_message_by_name(name)
+    return can.Message(arbitration_id=message.frame_id, is_extended_id=False,
+                       data=bytes(message.length))
 
 
 class _FloorNode(Node):
@@ -374,69 +410,171 @@ class _FloorNode(Node):
             self.create_timer(diagnostics.PERIOD,
                               lambda: self.diagnostics_pub.publish(self.diagnostics))
         self._stop = threading.Event()
-        self._threads = []
+        self._threads, self._buses = [], []
 
-    def loop(self, body, name):
-        """Run `body()` every sample period on a thread of its own (PeriodicLoop)."""
+    def loop(self, body, name, period=interfaces.SAMPLE_PERIOD):
+        """Run `body()` every `period` s on a thread of its own (PeriodicLoop)."""
         def ticks():
-            for _ in PeriodicLoop(interfaces.SAMPLE_PERIOD).ticks(self._stop):
+            for _ in PeriodicLoop(period).ticks(self._stop):
                 body()
-        thread = threading.Thread(target=ticks, name=name, daemon=True)
+        self.thread(ticks, name)
+
+    def thread(self, target, name):
+        """Run `target()` on a thread of its own until the node closes (it checks `_stop`)."""
+        thread = threading.Thread(target=target, name=name, daemon=True)
         thread.start()
         self._threads.append(thread)
+
+    def bus(self, drop):
+        """Open the simulated CAN bus as the node does, its own frames (`drop`) kept out."""
+        bus = open_can('udp_multicast', self.given['can_channel'])
+        drop_own_frames(bus, drop)
+        self._buses.append(bus)
+        return bus
 
     def close(self):
         self._stop.set()
         for thread in self._threads:
             thread.join(timeout=1.0)
+        for bus in self._buses:
+            bus.shutdown()
 
 
 class SimArmFloor(_FloorNode):
-    """sim_arm_node's floor: its 1 kHz loop, empty (no plant, no CAN); /diagnostics."""
+    """sim_arm_node's floor: its CAN traffic at 1 kHz, pre-built frames (no plant, no codec)."""
 
     def __init__(self, **kwargs):
         super().__init__('sim_arm_node', **kwargs)
-        self.loop(lambda: None, 'sim-arm-floor')
+        db = can_protocol.load_dbc(None)
+        samples = [_frame(db, f'ARM_SEG{s}_SAMPLE') for s in self.segments]
+        status = _frame(db, 'ARM_STATUS')
+        status_every = round(db.get_message_by_name('ARM_STATUS').cycle_time * 1e-3
+                             / interfaces.SAMPLE_PERIOD)
+        bus = self.bus(drop={frame.arbitration_id for frame in samples + [status]})
+        ticks = [0]
+
+        def tick():
+            for _ in range(64):  # the host's frames, bounded per tick as the simulated arm's
+                if bus.recv(timeout=0) is None:
+                    break
+            for frame in samples:
+                bus.send(frame, timeout=0.01)
+            if ticks[0] % status_every == 0:
+                bus.send(status, timeout=0.01)
+            ticks[0] += 1
+        self.loop(tick, 'sim-arm-floor')
 
 
 class SimActuatorFloor(_FloorNode):
-    """sim_actuator_node's floor: its 1 kHz loop, empty (no plant, no pty); /diagnostics."""
+    """sim_actuator_node's floor: a pty, a pre-built telemetry frame written each 1 ms tick."""
 
     def __init__(self, **kwargs):
         super().__init__('sim_actuator_node', **kwargs)
-        self.loop(lambda: None, 'sim-actuator-floor')
+        port = self.given['port']
+        master, slave = os.openpty()
+        tty.setraw(slave)
+        os.set_blocking(master, False)
+        link = f'{port}.{os.getpid()}.floor'
+        os.symlink(f'/proc/{os.getpid()}/fd/{slave}', link)
+        os.replace(link, port)
+        self.fds = (master, slave)
+        telemetry = serial_protocol.encode(serial_protocol.Telemetry(
+            seq=1, t_us=1000, encoder_counts=100, pressure_pa=200000, spring_um=10000,
+            force_mn=20000, status=0))
+
+        def tick():
+            try:
+                os.read(master, 4096)  # the host's motor commands and heartbeats
+            except OSError as error:
+                if error.errno not in (errno.EAGAIN, errno.EIO):
+                    raise
+            try:
+                os.write(master, telemetry)
+            except OSError as error:  # a driver that does not read yet: the pty is full
+                if error.errno not in (errno.EAGAIN, errno.EIO):
+                    raise
+        self.loop(tick, 'sim-actuator-floor')
+
+    def close(self):
+        super().close()
+        for fd in self.fds:
+            os.close(fd)
 
 
 class DriverFloor(_FloorNode):
-    """driver_node's floor: each device group's sample messages at 1 kHz from a thread."""
+    """driver_node's floor: its devices' traffic in, a serialized message per sample out."""
 
     def __init__(self, **kwargs):
         super().__init__('driver_node', **kwargs)
         arm_pub = self.publisher(interfaces.JOINT_STATES)
         actuator_pub = self.publisher(interfaces.ACTUATOR_JOINT_STATES)
         self.publisher(interfaces.VENTED).publish(msg.Bool(data=True))  # latched, on change
-        for topic in (interfaces.PRESSURE_COMMAND, interfaces.MOTOR_COMMAND, interfaces.ESTOP):
-            self.subscription(topic, _ignore)
+        self.subscription(interfaces.ESTOP, _ignore)
+        self.subscription(interfaces.PRESSURE_COMMAND, _ignore, raw=True)
         # The driver's messages, field for field: the joints' state and the chambers' pressure,
         # NaN where an entry has no value (interfaces.py).
         n, nan = len(self.segments), math.nan
-        arm = _joint_state(interfaces.arm_sample_names(self.segments),
-                           position=[0.1] * n + [nan] * 2 * n,
-                           velocity=[0.0] * n + [nan] * 2 * n,
-                           effort=[nan] * n + [2e5] * 2 * n)
-        actuator = _joint_state(interfaces.actuator_sample_names(),
-                                position=[0.01, 0.01, nan], effort=[nan, 20.0, 2e5])
+        arm = _serialized(interfaces.arm_sample_names(self.segments),
+                          position=[0.1] * n + [nan] * 2 * n, velocity=[0.0] * n + [nan] * 2 * n,
+                          effort=[nan] * n + [2e5] * 2 * n)
+        actuator = _serialized(interfaces.actuator_sample_names(),
+                               position=[0.01, 0.01, nan], effort=[nan, 20.0, 2e5])
         lock = threading.Lock()  # both device threads publish, as the driver's readers do
 
-        def arm_sample():
-            with lock:
-                arm_pub.publish(arm)
+        db = can_protocol.load_dbc(None)
+        setpoints = [_frame(db, m.name) for m in db.messages
+                     if m.name.startswith('ARM_SETPOINT_')]
+        host = setpoints + [_frame(db, 'ARM_HOST_HEARTBEAT')]
+        bus = self.bus(drop={frame.arbitration_id for frame in host})
+        sample_ids = {db.get_message_by_name(f'ARM_SEG{s}_SAMPLE').frame_id
+                      for s in self.segments}
+        frames = [0]
 
-        def actuator_sample():
-            with lock:
-                actuator_pub.publish(actuator)
-        self.loop(arm_sample, 'arm-floor')
-        self.loop(actuator_sample, 'actuator-floor')
+        def arm_reader():
+            while not self._stop.is_set():
+                frame = bus.recv(timeout=0.05)
+                if frame is None or frame.arbitration_id not in sample_ids:
+                    continue
+                frames[0] += 1
+                if frames[0] % n == 0:
+                    with lock:
+                        arm_pub.publish(arm)
+
+        def arm_tx():
+            for frame in host:
+                bus.send(frame, timeout=0.01)
+        self.thread(arm_reader, 'arm-reader-floor')
+        self.loop(arm_tx, 'arm-tx-floor',
+                  db.get_message_by_name('ARM_HOST_HEARTBEAT').cycle_time * 1e-3)
+
+        board = actuator_board_config()
+        port = serial.Serial(self.given['port'], board.baud, timeout=0.02, write_timeout=0.05)
+        self.serial = port
+        telemetry_size = len(serial_protocol.encode(serial_protocol.Telemetry(
+            seq=1, t_us=1000, encoder_counts=100, pressure_pa=200000, spring_um=10000,
+            force_mn=20000, status=0)))
+        heartbeat = serial_protocol.encode(serial_protocol.Heartbeat(seq=1))
+        motor = serial_protocol.encode(serial_protocol.MotorCommand(seq=1, duty_q15=1000))
+        received = [0]
+
+        def actuator_reader():
+            while not self._stop.is_set():
+                received[0] += len(port.read(max(1, port.in_waiting)))
+                while received[0] >= telemetry_size:
+                    received[0] -= telemetry_size
+                    with lock:
+                        actuator_pub.publish(actuator)
+
+        def actuator_heartbeat():
+            while not self._stop.wait(board.heartbeat_period):
+                port.write(heartbeat)
+        self.subscription(interfaces.MOTOR_COMMAND, lambda _: port.write(motor))
+        self.thread(actuator_reader, 'actuator-reader-floor')
+        self.thread(actuator_heartbeat, 'actuator-heartbeat-floor')
+
+    def close(self):
+        super().close()
+        self.serial.close()
 
 
 class ModelFloor(_FloorNode):
@@ -447,13 +585,13 @@ class ModelFloor(_FloorNode):
         joints = [interfaces.segment_joint(s) for s in self.segments]
         drive_pub = self.publisher(interfaces.DRIVING_TORQUE)
         external_pub = self.publisher(interfaces.EXTERNAL_TORQUE)
-        drive = _joint_state(joints, effort=[0.5] * len(joints))
-        external = _joint_state(joints, effort=[0.0] * len(joints))
+        drive = _serialized(joints, effort=[0.5] * len(joints))
+        external = _serialized(joints, effort=[0.0] * len(joints))
 
         def on_sample(_):
             drive_pub.publish(drive)
             external_pub.publish(external)
-        self.subscription(interfaces.JOINT_STATES, on_sample)
+        self.subscription(interfaces.JOINT_STATES, on_sample, raw=True)
 
 
 class StiffnessControllerFloor(_FloorNode):
@@ -475,7 +613,7 @@ class StiffnessControllerFloor(_FloorNode):
             if (samples[0] // every) % publish_every == 0:
                 stiffness_pub.publish(stiffness)
         self.subscription(interfaces.STIFFNESS_SETPOINT, _ignore)
-        self.subscription(interfaces.ACTUATOR_JOINT_STATES, on_sample)
+        self.subscription(interfaces.ACTUATOR_JOINT_STATES, on_sample, raw=True)
 
 
 class ArmControllerFloor(_FloorNode):
@@ -488,7 +626,7 @@ class ArmControllerFloor(_FloorNode):
         super().__init__('arm_controller_node', **kwargs)
         chains = [interfaces.chain_chamber(s, c) for s in self.segments for c in (1, 2)]
         command_pub = self.publisher(interfaces.PRESSURE_COMMAND)
-        command = _joint_state(chains, effort=[2e5] * len(chains))
+        command = _serialized(chains, effort=[2e5] * len(chains))
         # control_msgs has no wheel on PyPI: the node publishes ~/state only where it imports.
         state_pub, state = None, None
         if msg.JointTrajectoryControllerState is not None:
@@ -505,7 +643,7 @@ class ArmControllerFloor(_FloorNode):
             if state_pub is not None and samples[0] % self.STATE_EVERY == 0:
                 state_pub.publish(state)
         # As the node: best effort, newest only (a command acts on the present).
-        self.subscription(interfaces.JOINT_STATES, on_sample, newest_only=True)
+        self.subscription(interfaces.JOINT_STATES, on_sample, newest_only=True, raw=True)
         for topic in (interfaces.PSI_SETPOINT, interfaces.JOINT_TRAJECTORY, interfaces.VENTED):
             self.subscription(topic, _ignore)
 
@@ -534,7 +672,7 @@ class ScenarioFloor(_FloorNode):
         for topic in (interfaces.JOINT_STATES, interfaces.ACTUATOR_JOINT_STATES,
                       interfaces.DRIVING_TORQUE):
             self.create_subscription(msg.JointState, topic.name, _ignore,
-                                     qos_profile_sensor_data)
+                                     qos_profile_sensor_data, raw=True)
         self.create_timer(0.02, command)
 
 
