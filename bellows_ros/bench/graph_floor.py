@@ -41,9 +41,9 @@ encoding and everything a node computes are the node's own work, above the floor
   heartbeat frames every 10 ms (their DBC cycle time); its actuator reader reads the pty
   (pyserial) and publishes the actuator sample message per telemetry frame's bytes, with a
   heartbeat every `heartbeat_period` (config/hardware.yaml) and a motor command frame per motor
-  command. On joint_states the 4
-  segments' angles, rates and chamber pressures (`arm_sample_names`), on actuator/joint_states
-  the actuator's compressions, spring force and chamber pressure (`actuator_sample_names`);
+  command. On joint_states the 4 segments' angles, rates and chamber pressures
+  (`arm_sample_names`), on actuator/joint_states the actuator's compressions, spring force and
+  chamber pressure (`actuator_sample_names`);
 - a node that publishes on each input sample publishes a serialized message per input: the
   model's floor both torques per arm sample, the arm controller's floor a pressure command
   every `control_every` arm samples (and ~/state every 20 ms of samples), the stiffness
@@ -383,6 +383,13 @@ def _serialized(names, **fields):
     return serialize_message(_joint_state(names, **fields))
 
 
+def _telemetry():
+    """Return a TELEMETRY frame of the actuator board, encoded once."""
+    return serial_protocol.encode(serial_protocol.Telemetry(
+        seq=1, t_us=1000, encoder_counts=100, pressure_pa=200000, spring_um=10000,
+        force_mn=20000, status=0))
+
+
 def _frame(db, name):
     """Return a CAN frame of the DBC's message `name`, its bytes laid out once."""
     message = db.get_message_by_name(name)
@@ -474,13 +481,12 @@ class SimActuatorFloor(_FloorNode):
         master, slave = os.openpty()
         tty.setraw(slave)
         os.set_blocking(master, False)
+        self.port, self.target = port, f'/proc/{os.getpid()}/fd/{slave}'
         link = f'{port}.{os.getpid()}.floor'
-        os.symlink(f'/proc/{os.getpid()}/fd/{slave}', link)
+        os.symlink(self.target, link)
         os.replace(link, port)
         self.fds = (master, slave)
-        telemetry = serial_protocol.encode(serial_protocol.Telemetry(
-            seq=1, t_us=1000, encoder_counts=100, pressure_pa=200000, spring_um=10000,
-            force_mn=20000, status=0))
+        telemetry = _telemetry()
 
         def tick():
             try:
@@ -499,6 +505,9 @@ class SimActuatorFloor(_FloorNode):
         super().close()
         for fd in self.fds:
             os.close(fd)
+        # The link this node made, and only that one.
+        if os.path.islink(self.port) and os.readlink(self.port) == self.target:
+            os.unlink(self.port)
 
 
 class DriverFloor(_FloorNode):
@@ -550,9 +559,7 @@ class DriverFloor(_FloorNode):
         board = actuator_board_config()
         port = serial.Serial(self.given['port'], board.baud, timeout=0.02, write_timeout=0.05)
         self.serial = port
-        telemetry_size = len(serial_protocol.encode(serial_protocol.Telemetry(
-            seq=1, t_us=1000, encoder_counts=100, pressure_pa=200000, spring_um=10000,
-            force_mn=20000, status=0)))
+        telemetry_size = len(_telemetry())
         heartbeat = serial_protocol.encode(serial_protocol.Heartbeat(seq=1))
         motor = serial_protocol.encode(serial_protocol.MotorCommand(seq=1, duty_q15=1000))
         received = [0]
