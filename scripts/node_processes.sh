@@ -56,11 +56,9 @@ terminate() {  # terminate PID...: TERM, up to 5 s to exit, then KILL
 
 start_node() {  # start_node NAME ARGS...: a node in the background, log in $node_logs/NAME.log
   local name=$1; shift
-  # Each node in a session of its own (setsid: no fork here, as a background job of this shell is
-  # no group leader, so $! is the node). Linux's scheduler autogroups split the CPU between
-  # sessions first: the graph in one session got one share against a recorder's and a client's
-  # terminals, fell behind the bus and was vented (docs/nodes.md, "Timing"). The nodes still stop
-  # by pid (stop_nodes).
+  # Each node in a session of its own: a scheduler autogroup of its own (docs/nodes.md, "Timing").
+  # A background job of this shell is no group leader, so setsid execs in place and $! is the
+  # node; stop_nodes still stops it by pid.
   $session "$bin/$name" "${common[@]}" "$@" "${extra[@]}" >"$node_logs/$name.log" 2>&1 &
   pids+=($!)
 }

@@ -17,9 +17,9 @@ What the launch files share (launch_ros needed): managed nodes to `active`, node
 
 Each node gets a session of its own (`own_session`). A managed node is brought to `active` as
 ros2/demos' lifecycle launch does (`bring_to_active`): emit `configure` for the node, and
-`activate` when it reaches `inactive`. A configure that fails (a device absent) returns the node to
-`unconfigured`: the launch then stops with an error instead of running a graph without its
-driver (the nodes' own output says why).
+`activate` when it reaches `inactive`. A configure that fails (a device absent) returns the
+node to `unconfigured`: the launch then stops with an error instead of running a graph without
+its driver (the nodes' own output says why).
 """
 import shutil
 
@@ -34,11 +34,10 @@ def own_session():
     """
     Return the `prefix` that starts a node in a session of its own ('setsid'), or None.
 
-    Linux's scheduler autogroups split the CPU between sessions before threads: a whole graph in
-    the launch's session got one share against a recorder's and a client's terminals, fell
-    behind the bus and was vented (docs/nodes.md, "Timing"). launch starts a process in its own
-    process group's session, as no group leader, so setsid execs the node in place (no fork:
-    launch still signals the node itself). None where util-linux' setsid is absent.
+    A session of its own is a scheduler autogroup of its own (docs/nodes.md, "Timing"). A process
+    launch starts stays in launch's process group, no group leader, so setsid makes the session
+    and execs the node in place: no fork, and launch still signals the node itself. None where
+    util-linux' setsid is absent.
     """
     return shutil.which('setsid')
 
