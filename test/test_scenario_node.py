@@ -42,7 +42,7 @@ def scenario(monkeypatch, tmp_path):
 def angle(node, t, psi):
     """Hand `node` a sample of segment_1 at angle `psi` rad, taken `t` s after the start."""
     stamp = node.start_ns + round(t * 1e9)
-    node.on_joint_states(probe.arm_sample(stamp, [psi], [0.0], [2e5, 2e5]))
+    node.on_joint_states(probe.as_received(probe.arm_sample(stamp, [psi], [0.0], [2e5, 2e5])))
 
 
 def controller_source(node, source):

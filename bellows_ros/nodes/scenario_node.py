@@ -33,7 +33,7 @@ scenario_node: a short scripted scenario on the running graph, printed and plott
 
 What comes back is recorded: /actuator/stiffness, /joint_states (segment_1 Ψ and pressures),
 /actuator/joint_states (air_chamber x_c), /bellows/driving_torque (segment_1 τ_drive); of the
-three 1 kHz topics one message in `SERIES_EVERY` is decoded (a 200 Hz series). At the end
+three 1 kHz topics one sample in `SERIES_EVERY` is kept (a 200 Hz series). At the end
 it prints a summary (step settling time and overshoot; the RMS tracking error of each run and their
 ratio) and writes `output_dir/scenario.csv` and `output_dir/scenario.png`, whose angle and error
 panels show both runs on the trajectory's own time axis.
@@ -51,8 +51,6 @@ from pathlib import Path
 
 from rclpy.parameter import Parameter
 from rclpy.parameter_client import AsyncParameterClient
-from rclpy.qos import qos_profile_sensor_data
-from rclpy.serialization import deserialize_message
 
 from bellows_ros import interfaces
 from bellows_ros.config.actuator import load_actuator_params
@@ -60,7 +58,7 @@ from bellows_ros.control import angle_trajectory
 from bellows_ros.errors import BellowsError
 from bellows_ros.models.stiffness_map import stiffness_range
 from bellows_ros.outputs import atomic_file
-from bellows_ros.runtime import Node, realtime, run, stamp_ns
+from bellows_ros.runtime import Node, realtime, run
 from bellows_ros.runtime.parameters import Spec
 
 
@@ -74,9 +72,9 @@ GAP = 3.0
 RUNS = (('paper A feedforward', 'paper_a'), ('feedback only', 'none'))
 # s the arm holds the trajectory's first set-point, within READY_TOLERANCE rad, before a run.
 READY, READY_TOLERANCE = 1.0, 0.05
-# Of the 1 kHz samples the scenario decodes one in SERIES_EVERY: 200 Hz resolves the trajectory's
-# moves, and the rest are taken serialized and dropped, which costs the node a fraction of a
-# decoded message's CPU (docs/bench_log.md, 2026-11-29).
+# Of the 1 kHz samples the scenario keeps one in SERIES_EVERY: 200 Hz resolves the trajectory's
+# moves. It reads every sample's bytes as the 1 kHz nodes do (runtime/joint_state_cdr.py): 2.6 us
+# a sample, against 1.8 us a sample for rclpy decoding one in five (docs/bench_log.md, 2026-11-29).
 SERIES_EVERY = 5
 
 PARAMETERS = (
@@ -96,13 +94,13 @@ PARAMETERS = (
 )
 
 
-def one_in(every, message_class, callback):
-    """Return a raw-subscription callback that passes every `every`-th message, decoded."""
+def one_in(every, callback):
+    """Return a callback that passes on every `every`-th of its calls."""
     count = itertools.count()
 
-    def take(serialized):
+    def take(sample):
         if next(count) % every == 0:
-            callback(deserialize_message(serialized, message_class))
+            callback(sample)
     return take
 
 
@@ -143,10 +141,7 @@ class ScenarioNode(Node):
         for topic, callback in ((interfaces.JOINT_STATES, self.on_joint_states),
                                 (interfaces.ACTUATOR_JOINT_STATES, self.on_actuator_states),
                                 (interfaces.DRIVING_TORQUE, self.on_torque)):
-            message_class = getattr(self.msg, topic.message)
-            self.create_subscription(message_class, topic.name,
-                                     one_in(SERIES_EVERY, message_class, callback),
-                                     qos_profile_sensor_data, raw=True)
+            self.sample_subscription(topic, one_in(SERIES_EVERY, callback), newest_only=True)
         # Until the runs are placed (`ready`): the arm holds the trajectory's first set-point.
         self.hold = angle_trajectory.setpoint(self.trajectory, 0.0)[0]
         self.modes = list(RUNS) if given['compare_feedforward'] else [('as configured', None)]
@@ -164,8 +159,8 @@ class ScenarioNode(Node):
         self.create_timer(0.02, self.command)
 
     def elapsed(self, stamp=None):
-        """Seconds since the start, now or at a message's header `stamp`."""
-        ns = self.get_clock().now().nanoseconds if stamp is None else stamp_ns(stamp)
+        """Seconds since the start, now or at a sample's `stamp` (ns)."""
+        ns = self.get_clock().now().nanoseconds if stamp is None else stamp
         return (ns - self.start_ns) * 1e-9
 
     def _add(self, name, value, stamp=None):
@@ -185,14 +180,14 @@ class ScenarioNode(Node):
                 self.following = any(kv.key == 'source' and kv.value == 'topic'
                                      for kv in status.values)
 
-    def on_joint_states(self, msg):
-        layout = self.sample_index(msg.name)
+    def on_joint_states(self, sample):
+        layout = self.sample_index(sample.name)
         if layout is not None:
             segment, chain_1, chain_2 = layout
-            psi = msg.position[segment]
-            self._add('psi', psi, msg.header.stamp)
-            self._add('p1', msg.effort[chain_1], msg.header.stamp)
-            self._add('p2', msg.effort[chain_2], msg.header.stamp)
+            psi = sample.position[segment]
+            self._add('psi', psi, sample.stamp_ns)
+            self._add('p1', sample.effort[chain_1], sample.stamp_ns)
+            self._add('p2', sample.effort[chain_2], sample.stamp_ns)
             if self.runs:
                 return
             if abs(psi - self.hold) > READY_TOLERANCE:
@@ -217,13 +212,13 @@ class ScenarioNode(Node):
             self.switches.append((self.runs[-1][2] + span - GAP / 2, None))
             self.configured = self.controller.get_parameters(['feedforward'])
 
-    def on_actuator_states(self, msg):
-        if AIR_CHAMBER in msg.name:
-            self._add('x_c', msg.position[msg.name.index(AIR_CHAMBER)], msg.header.stamp)
+    def on_actuator_states(self, sample):
+        if AIR_CHAMBER in sample.name:
+            self._add('x_c', sample.position[sample.name.index(AIR_CHAMBER)], sample.stamp_ns)
 
-    def on_torque(self, msg):
-        if SEGMENT in msg.name:
-            self._add('tau_drive', msg.effort[msg.name.index(SEGMENT)], msg.header.stamp)
+    def on_torque(self, sample):
+        if SEGMENT in sample.name:
+            self._add('tau_drive', sample.effort[sample.name.index(SEGMENT)], sample.stamp_ns)
 
     def stiffness_setpoint(self, t):
         return self.k_low if t < self.step_time else self.k_high
