@@ -90,7 +90,6 @@ import statistics
 import sys
 import threading
 import time
-import tty
 
 import can
 from rclpy.qos import qos_profile_sensor_data
@@ -106,6 +105,7 @@ from bellows_ros.hardware import can_protocol, serial_protocol
 from bellows_ros.hardware.arm_bus import open_can
 from bellows_ros.hardware.can_echo_filter import drop_own_frames
 from bellows_ros.hardware.loop_timing import PeriodicLoop
+from bellows_ros.hardware.sim_actuator_board import check_free, link_pty, owns_link
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime
 from bellows_ros.runtime.messages import msg
@@ -477,14 +477,9 @@ class SimActuatorFloor(_FloorNode):
 
     def __init__(self, **kwargs):
         super().__init__('sim_actuator_node', **kwargs)
-        port = self.given['port']
-        master, slave = os.openpty()
-        tty.setraw(slave)
-        os.set_blocking(master, False)
-        self.port, self.target = port, f'/proc/{os.getpid()}/fd/{slave}'
-        link = f'{port}.{os.getpid()}.floor'
-        os.symlink(self.target, link)
-        os.replace(link, port)
+        self.port = self.given['port']
+        check_free(self.port)  # as the simulated board: only where nothing exists
+        master, slave, self.target = link_pty(self.port)
         self.fds = (master, slave)
         telemetry = _telemetry()
 
@@ -505,8 +500,7 @@ class SimActuatorFloor(_FloorNode):
         super().close()
         for fd in self.fds:
             os.close(fd)
-        # The link this node made, and only that one.
-        if os.path.islink(self.port) and os.readlink(self.port) == self.target:
+        if owns_link(self.port, self.target):  # the link this node made, and only that one
             os.unlink(self.port)
 
 

@@ -42,6 +42,9 @@ API
 - ``.faults`` (`Faults`, settable at run time); ``.duty`` (duty applied now); ``.counters()``;
   ``.sent`` (with record=True: {sequence index: Telemetry} of every frame put on the wire,
   uncorrupted); ``.stats`` (LoopStats).
+- ``check_free(port)`` (ParameterError unless nothing, or a dead board's link, is there),
+  ``link_pty(port) -> (master, slave, target)``, ``owns_link(port, target)``: the pty and link
+  handling, also for the bench's floor of this node (bench/graph_floor.py).
 
 Board behaviour (docs/protocols.md): 1 kHz telemetry; a motor command holds until the next one; the
 motor stops at an end-stop switch and after `BOARD_HEARTBEAT_TIMEOUT` without a command or
@@ -121,7 +124,7 @@ def port_serial(port):
     return int.from_bytes(digest[:8], 'little')
 
 
-def _check_free(port):
+def check_free(port):
     """
     Raise ParameterError unless `port` names nothing yet, in an existing directory.
 
@@ -137,6 +140,33 @@ def _check_free(port):
                              'link only where nothing exists (choose a free path)')
     if not os.path.isdir(os.path.dirname(os.path.abspath(port))):
         raise ParameterError(f'port {port}: no such directory')
+
+
+def link_pty(port):
+    """
+    Open a raw, non-blocking pty and point the link `port` at its slave in one atomic rename.
+
+    Returns (master fd, slave fd, the link's target). The caller has made sure that `port` is free
+    (`check_free`) or the link it made itself (`owns_link`).
+    """
+    master, slave = os.openpty()
+    tty.setraw(slave)  # no echo or line editing: the driver sees the bytes the board sends
+    os.set_blocking(master, False)
+    # The slave as this process holds it: gone with the process, never another program's tty.
+    target = f'/proc/{os.getpid()}/fd/{slave}'
+    # A fresh name beside the port (symlink() never replaces), then one atomic rename.
+    tmp_link = f'{port}.{os.getpid()}.{uuid.uuid4().hex[:8]}.new'
+    os.symlink(target, tmp_link)
+    os.replace(tmp_link, port)
+    return master, slave, target
+
+
+def owns_link(port, target):
+    """Tell whether `port` is still the link to `target` that `link_pty` made."""
+    try:
+        return os.readlink(port) == target
+    except OSError:  # gone, or not a link any more
+        return False
 
 
 class SimActuatorBoard:
@@ -156,7 +186,7 @@ class SimActuatorBoard:
             self._tmpdir = tempfile.mkdtemp(prefix='sim_actuator_')
             link_path = os.path.join(self._tmpdir, 'actuator_board')
         self.port = str(link_path)
-        _check_free(self.port)
+        check_free(self.port)
         self.serial = port_serial(self.port) if serial is None else int(serial)
         self._identity_due = 0.0  # time.monotonic() when the next IDENTITY goes out
         self._tty = None  # where the link this board made points; None while it has none
@@ -180,10 +210,7 @@ class SimActuatorBoard:
     # constructor refuses a path that is taken), repoints it only while it is still its own, and
     # removes it only then. A port named by mistake (a real device node, a file) is never deleted.
     def _owns_link(self):
-        try:
-            return self._tty is not None and os.readlink(self.port) == self._tty
-        except OSError:  # gone, or not a link any more
-            return False
+        return self._tty is not None and owns_link(self.port, self._tty)
 
     def replug(self):
         """Open a fresh pty and point the symlink at it atomically."""
@@ -191,16 +218,8 @@ class SimActuatorBoard:
             raise ParameterError(f'{self.port}: replaced by something this simulated board did '
                                  'not make; left as it is')
         if self._tty is None:
-            _check_free(self.port)
-        master, slave = os.openpty()
-        tty.setraw(slave)  # no echo or line editing: the driver sees the bytes the board sends
-        os.set_blocking(master, False)
-        # The slave as this process holds it: gone with the process, never another program's tty.
-        name = f'/proc/{os.getpid()}/fd/{slave}'
-        # A fresh name beside the port (symlink() never replaces), then one atomic rename.
-        tmp_link = f'{self.port}.{os.getpid()}.{uuid.uuid4().hex[:8]}.new'
-        os.symlink(name, tmp_link)
-        os.replace(tmp_link, self.port)
+            check_free(self.port)
+        master, slave, name = link_pty(self.port)
         self._tty = name
         with self._fd_lock:
             self._master, self._slave = master, slave
