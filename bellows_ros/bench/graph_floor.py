@@ -566,10 +566,16 @@ class DriverFloor(_FloorNode):
                     with lock:
                         actuator_pub.publish(actuator)
 
+        def send(frame):
+            try:
+                port.write(frame)
+            except (serial.SerialException, OSError):
+                pass  # as the driver's board: a write that times out is counted, not fatal
+
         def actuator_heartbeat():
             while not self._stop.wait(board.heartbeat_period):
-                port.write(heartbeat)
-        self.subscription(interfaces.MOTOR_COMMAND, lambda _: port.write(motor))
+                send(heartbeat)
+        self.subscription(interfaces.MOTOR_COMMAND, lambda _: send(motor))
         self.thread(actuator_reader, 'actuator-reader-floor')
         self.thread(actuator_heartbeat, 'actuator-heartbeat-floor')
 
