@@ -53,6 +53,7 @@ setup(
         # the lint tests: flake8 with ament_flake8's plugins, pydocstyle as ament_pep257 runs it
         'flake8>=6', 'flake8-builtins', 'flake8-comprehensions', 'flake8-import-order',
         'flake8-quotes', 'pydocstyle>=6',
+        'coverage>=7.10',  # scripts/coverage.sh: `patch = subprocess` follows the xdist workers
     ]},
     zip_safe=True,
     maintainer='bellows_ros maintainers',
