@@ -45,7 +45,7 @@ setup(
         'cobs>=1.2',
         'rosbags>=0.10',
         'mcap>=1.1',  # bellows reindex reads a killed recording record by record
-        'threadpoolctl>=3',  # one BLAS thread for the fits (bellows_ros/blas.py)
+        'threadpoolctl>=3',  # one BLAS thread for the fits (bellows_ros/identify/blas.py)
     ],
     extras_require={'test': [
         'pytest>=7', 'hypothesis>=6', 'pytest-timeout>=2',

@@ -15,7 +15,7 @@
 """
 bellows_ros: pneumatic bellows models, identification, model doctor, drivers and ROS 2 nodes.
 
-Layers (each imports only from the ones above it in this list):
-models -> identify, doctor -> hardware -> control -> nodes (+ runtime) -> cli.
+The sub-packages and their layers are drawn in the README; test/test_import_layers.py defines
+them and holds every import to them.
 """
 __version__ = '0.1.0'

@@ -34,7 +34,7 @@ Message conventions:
   (`SampleIndex`): another publisher may share a topic, and may name fewer or more entries.
   Recordings from before (the chambers on `bellows/chambers` and `actuator/chambers`, the
   actuator's force on `bellows/wrench`, and before that the actuator on `joint_states`) are
-  still read (`bellows_ros.bag`);
+  still read (`bellows_ros.io.bag`);
 - `bellows/wrench`: an arm's force/torque sensor, `header.frame_id` `segment_<i>`: the measured
   external torque tau_ext is `wrench.torque.z` (z along the segment's bending axis, positive in
   the direction of positive Psi).

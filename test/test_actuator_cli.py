@@ -23,7 +23,7 @@ import pytest
 from bellows_ros.cli import main
 from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.models.actuator import evaluate_array
-from bellows_ros.models.actuator_experiments import actuator_record, volume_test_series
+from bellows_ros.papers.actuator_experiments import actuator_record, volume_test_series
 
 PLANT = load_actuator_plant_params()
 

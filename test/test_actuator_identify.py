@@ -21,8 +21,8 @@ import pytest
 from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.identify.actuator import calibrate_stiffness, fit_actuator, GasLost
 from bellows_ros.models.actuator import stiffness, without_bulging
-from bellows_ros.models.actuator_experiments import volume_test_series
 from bellows_ros.models.actuator_geometry import e_v, P_ATM
+from bellows_ros.papers.actuator_experiments import volume_test_series
 
 PLANT = load_actuator_plant_params()
 

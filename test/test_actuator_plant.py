@@ -19,10 +19,10 @@ import pytest
 from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.actuator import evaluate, gas_amount
-from bellows_ros.models.actuator_experiments import actuator_record
 from bellows_ros.models.actuator_geometry import P_ATM
 from bellows_ros.models.actuator_plant import (ACTUATOR_EFFECTS, ActuatorPlant, effect_parameters,
                                                model_params, STRENGTHS)
+from bellows_ros.papers.actuator_experiments import actuator_record
 
 PLANT = load_actuator_plant_params()
 

@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""The fits run one BLAS thread (bellows_ros/blas.py): NumPy's and SciPy's, in every command."""
+"""The fits run one BLAS thread (identify/blas.py): NumPy's and SciPy's, in every command."""
 import json
 from multiprocessing import get_context
 import os
@@ -23,7 +23,7 @@ import textwrap
 from threadpoolctl import threadpool_info, threadpool_limits
 
 from bellows_ros import cli
-from bellows_ros.blas import one_blas_thread
+from bellows_ros.identify.blas import one_blas_thread
 
 
 def blas_threads():
@@ -35,7 +35,7 @@ FRESH = textwrap.dedent("""\
     import json
     import numpy
     from threadpoolctl import threadpool_info
-    from bellows_ros.blas import one_blas_thread
+    from bellows_ros.identify.blas import one_blas_thread
 
     def blas():
         return {i['filepath']: i['num_threads'] for i in threadpool_info()

@@ -31,9 +31,9 @@ import pytest
 from rosbags.rosbag2 import StoragePlugin
 import yaml
 
-from bellows_ros import data, params
 from bellows_ros.cli import main as bellows
 from bellows_ros.errors import DataError, ParameterError
+from bellows_ros.io import data, params
 
 
 def actuator_rows(n=20, p_scale=1.0):

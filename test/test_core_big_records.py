@@ -34,10 +34,10 @@ import textwrap
 import numpy as np
 import pytest
 
-from bellows_ros import data
 from bellows_ros.cli import main
 from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
-from bellows_ros.models import actuator_experiments
+from bellows_ros.io import data
+from bellows_ros.papers import actuator_experiments
 
 P0 = 101325.0
 ACTUATOR, ACTUATOR_PLANT = load_actuator_params(), load_actuator_plant_params()
@@ -282,7 +282,7 @@ def test_diagnose_actuator_on_block_means_as_on_the_whole_record(tmp_path, monke
 
 FIT_PEAK = textwrap.dedent("""
     import sys
-    from bellows_ros import data
+    from bellows_ros.io import data
     from bellows_ros.cli import main
     data.FIT_ROWS = int(sys.argv[1])
     status = main(sys.argv[2:] + ['--quiet'])
@@ -332,8 +332,8 @@ def test_identify_and_diagnose_peak_memory_does_not_grow_with_the_record(tmp_pat
 def test_identify_segment_on_many_chunks_gives_the_same_file(tmp_path, monkeypatch, capsys):
     """Up to data.FIT_ROWS rows, however many chunks: the very same parameter file."""
     from bellows_ros.config.segment import load_segment_params, load_segment_plant_params
-    from bellows_ros.models.segment_experiments import quasi_static_record
     from bellows_ros.models.segment_plant import FULL_MODEL
+    from bellows_ros.papers.segment_experiments import quasi_static_record
     record = quasi_static_record(load_segment_params(), load_segment_plant_params(), FULL_MODEL,
                                  None, seed=4, duration=8.0, dt=1e-2)
     source = write_csv(tmp_path / 'in.csv', record, SEGMENT_COLUMNS)
@@ -357,7 +357,7 @@ def test_identify_segment_on_block_means_predicts_as_well(tmp_path, monkeypatch,
     a loaded 2-core machine).
     """
     from bellows_ros.config.segment import load_segment_params, load_segment_plant_params
-    from bellows_ros.models.segment_experiments import quasi_static_record
+    from bellows_ros.papers.segment_experiments import quasi_static_record
     record = quasi_static_record(load_segment_params(), load_segment_plant_params(), {},
                                  seed=4, duration=60.0, dt=1e-2)
     source = str(tmp_path / 'in.csv')

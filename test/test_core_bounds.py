@@ -36,12 +36,12 @@ import numpy as np
 import pytest
 from tables import write_csv
 
-from bellows_ros import data, params
 from bellows_ros.cli import main
 from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.config.ranges import RANGES
 from bellows_ros.errors import BellowsError, DataError, ParameterError
-from bellows_ros.models.actuator_experiments import actuator_record
+from bellows_ros.io import data, params
+from bellows_ros.papers.actuator_experiments import actuator_record
 
 
 @pytest.fixture(scope='module')
@@ -340,7 +340,7 @@ def test_a_bag_metadata_beyond_the_yaml_limits_is_one_line(tmp_path, capsys):
 def test_a_bag_over_the_message_limit_is_refused_before_reading(tmp_path, monkeypatch):
     from test_core_one_writer import write_bag
 
-    from bellows_ros import bag as bag_reader
+    from bellows_ros.io import bag as bag_reader
     monkeypatch.setattr(bag_reader, 'MAX_BAG_MESSAGES', 100)
     for layout, n in (('sample', 150), ('split', 50)):  # split: 3 topics, each counted
         path = write_bag(tmp_path / layout, n=n, layout=layout)
@@ -373,7 +373,7 @@ def test_a_chunk_inflates_no_further_than_it_declares(compression):
     import lz4.frame
     from rosbags.rosbag2 import storage_mcap
 
-    from bellows_ros import bag  # noqa: F401 (bounds rosbags' decompressors)
+    from bellows_ros.io import bag  # noqa: F401 (bounds rosbags' decompressors)
     compress = {'zstd': storage_mcap.zstd.compress, 'lz4': lz4.frame.compress}[compression]
     bomb = compress(bytes(64 * 2**20))
     assert len(bomb) < 2**20
@@ -386,7 +386,7 @@ def test_a_chunk_inflates_no_further_than_it_declares(compression):
 def test_a_bag_with_a_chunk_over_the_limit_is_refused(tmp_path, monkeypatch, capsys):
     from test_core_one_writer import write_bag
 
-    from bellows_ros import bag as bag_reader
+    from bellows_ros.io import bag as bag_reader
     path = write_bag(tmp_path / 'bag', n=200)
     monkeypatch.setattr(bag_reader, 'MAX_CHUNK_BYTES', 1000)
     status, err = run(['export', 'actuator', str(path), '--output', str(tmp_path / 'o.csv')],

@@ -17,11 +17,11 @@ import dataclasses
 
 import pytest
 
-from bellows_ros import params as param_files
 from bellows_ros.config.actuator import load_actuator
 from bellows_ros.config.hardware import actuator_board_config, arm_bus_config, vent_pressure
 from bellows_ros.config.segment import load_segment
 from bellows_ros.errors import ParameterError
+from bellows_ros.io import params as param_files
 from bellows_ros.models.actuator import ActuatorParams
 from bellows_ros.models.segment import SegmentParams
 

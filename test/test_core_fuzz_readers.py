@@ -39,10 +39,10 @@ from rosbags.rosbag2 import StoragePlugin
 from test_core_bad_input import actuator_rows, write_actuator_bag
 import yaml
 
-from bellows_ros import data, params
 from bellows_ros.config.actuator import load_actuator_params
 from bellows_ros.config.segment import load_segment_params
 from bellows_ros.errors import BellowsError, DataError, ParameterError
+from bellows_ros.io import data, params
 
 FUZZ = settings(max_examples=100, deadline=None,
                 suppress_health_check=[HealthCheck.function_scoped_fixture,

@@ -26,11 +26,11 @@ import numpy as np
 import pytest
 from rosbags.rosbag2.enums import StoragePlugin
 
-from bellows_ros.bag import _hold
 from bellows_ros.cli import main
-from bellows_ros.data import read_table
 from bellows_ros.errors import DataError
-from bellows_ros.table import check_held, MAX_HELD_STEPS, Table
+from bellows_ros.io.bag import _hold
+from bellows_ros.io.data import read_table
+from bellows_ros.io.table import check_held, MAX_HELD_STEPS, Table
 
 RATE = 200.0   # Hz
 PERIOD = 4.0   # s: one spring cycle, the stiffness command's default window

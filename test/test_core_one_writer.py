@@ -124,7 +124,7 @@ def test_reindex_leaves_a_bag_being_written_as_it_is(tmp_path, capsys):
 
 
 def test_a_released_bag_reads_and_the_lock_file_goes_with_its_holder(tmp_path, capsys):
-    from bellows_ros.bag_lock import hold
+    from bellows_ros.io.bag_lock import hold
     bag = write_bag(tmp_path / 'bag')
     with hold(bag):
         assert (bag / LOCK).read_text().startswith(f'pid {os.getpid()}, bellows record')
@@ -135,7 +135,7 @@ def test_a_released_bag_reads_and_the_lock_file_goes_with_its_holder(tmp_path, c
 
 
 def test_a_second_writer_is_refused(tmp_path):
-    from bellows_ros.bag_lock import BagBeingWritten, hold
+    from bellows_ros.io.bag_lock import BagBeingWritten, hold
     bag = write_bag(tmp_path / 'bag')
     with Holder(bag):
         with pytest.raises(BagBeingWritten, match='being written'):
@@ -189,5 +189,5 @@ def test_a_killed_bag_points_to_reindex(tmp_path, capsys):
 
 
 def test_the_lock_protocol_is_one_name():
-    from bellows_ros import bag_lock
+    from bellows_ros.io import bag_lock
     assert bag_lock.LOCK_NAME == LOCK

@@ -14,7 +14,7 @@
 """
 Nothing lost: outputs are written whole or not at all, never over an input, checked before work.
 
-The rules are in bellows_ros/outputs.py; these tests drive them through the `bellows` command as a
+The rules are in io/outputs.py; these tests drive them through the `bellows` command as a
 user would (in a subprocess where a signal or a read-only file system is part of the case).
 """
 import csv
@@ -32,8 +32,8 @@ import pytest
 from bellows_ros.cli import main
 from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.errors import BellowsError
-from bellows_ros.models.actuator_experiments import actuator_record
-from bellows_ros.outputs import atomic_file, MANIFEST, report_directory
+from bellows_ros.io.outputs import atomic_file, MANIFEST, report_directory
+from bellows_ros.papers.actuator_experiments import actuator_record
 
 BELLOWS = [str(Path(sys.executable).parent / 'bellows')]
 

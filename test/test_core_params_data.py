@@ -16,9 +16,9 @@
 import numpy as np
 import pytest
 
-from bellows_ros import data, params
 from bellows_ros.cli import main as bellows
 from bellows_ros.errors import DataError, ParameterError
+from bellows_ros.io import data, params
 
 
 def write(path, text):

@@ -26,7 +26,6 @@ import numpy as np
 import pytest
 from tables import write_csv
 
-from bellows_ros import params as param_files
 from bellows_ros.cli import main
 from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.config.hardware import actuator_board_config, arm_bus_config
@@ -34,8 +33,9 @@ from bellows_ros.config.ranges import check_ranges, range_of, RANGES
 from bellows_ros.config.segment import load_segment
 from bellows_ros.errors import ParameterError
 from bellows_ros.identify.actuator import fit_actuator
-from bellows_ros.models.actuator_experiments import actuator_record
-from bellows_ros.models.segment_experiments import dynamic_record
+from bellows_ros.io import params as param_files
+from bellows_ros.papers.actuator_experiments import actuator_record
+from bellows_ros.papers.segment_experiments import dynamic_record
 
 PARAMS, PLANT = load_actuator_params(), load_actuator_plant_params()
 

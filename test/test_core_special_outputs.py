@@ -36,12 +36,12 @@ import numpy as np
 import pytest
 from tables import write_csv
 
-from bellows_ros import outputs
 from bellows_ros.cli import main
 from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.errors import BellowsError
-from bellows_ros.models.actuator_experiments import actuator_record
-from bellows_ros.outputs import atomic_file, check_report_directory, report_directory
+from bellows_ros.io import outputs
+from bellows_ros.io.outputs import atomic_file, check_report_directory, report_directory
+from bellows_ros.papers.actuator_experiments import actuator_record
 
 BELLOWS = [sys.executable, '-c', 'import sys; from bellows_ros.cli import main; sys.exit(main())']
 
@@ -106,7 +106,7 @@ def test_an_output_that_is_no_regular_file_is_refused_and_kept(
 def test_the_fig10_plot_refuses_a_fifo(tmp_path):
     fifo = tmp_path / 'plot.png'
     os.mkfifo(fifo)
-    result = subprocess.run([sys.executable, '-m', 'bellows_ros.demos.fig10', '--plot',
+    result = subprocess.run([sys.executable, '-m', 'bellows_ros.papers.fig10', '--plot',
                              str(fifo)], capture_output=True, text=True, timeout=120,
                             env={**os.environ, 'MPLBACKEND': 'Agg'})
     assert result.returncode == 2, result.stderr

@@ -175,7 +175,7 @@ def config_file(kind):
 
 def node_cell(kind, node, name):
     """Return what a node table's sim/hw column must say: the file's value for the node, '—'."""
-    from bellows_ros.params import read_file
+    from bellows_ros.io.params import read_file
     from bellows_ros.runtime.parameters import value_text
     given = read_file(config_file(kind), node)
     return value_text(given[name]) if name in given else '—'
@@ -183,7 +183,7 @@ def node_cell(kind, node, name):
 
 def common_cell(kind, name):
     """Return the common table's sim/hw column: '/**'s value, then each node section's."""
-    from bellows_ros.params import read_sections
+    from bellows_ros.io.params import read_sections
     from bellows_ros.runtime.parameters import value_text
     sections = read_sections(config_file(kind))
     parts = [f"{value_text(sections['/**'][name])} (every node)"] if name in sections['/**'] \

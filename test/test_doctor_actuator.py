@@ -30,10 +30,10 @@ import pytest
 from bellows_ros.cli import main
 from bellows_ros.config.actuator import (load_actuator, load_actuator_params,
                                          load_actuator_plant_params)
-from bellows_ros.data import read_csv
 from bellows_ros.doctor import diagnosis as engine
 from bellows_ros.errors import DataError
-from bellows_ros.models.actuator_experiments import actuator_record
+from bellows_ros.io.data import read_csv
+from bellows_ros.papers.actuator_experiments import actuator_record
 
 PLANT = load_actuator_plant_params()
 

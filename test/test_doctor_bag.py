@@ -27,7 +27,7 @@ import pytest
 
 from bellows_ros.cli import main
 from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
-from bellows_ros.models.actuator_experiments import actuator_record
+from bellows_ros.papers.actuator_experiments import actuator_record
 
 PLANT = load_actuator_plant_params()
 

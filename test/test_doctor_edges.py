@@ -32,7 +32,7 @@ from bellows_ros.bench.devices import within_carried
 from bellows_ros.cli import main
 from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
 from bellows_ros.doctor import actuator_causes, diagnosis, scoring
-from bellows_ros.models.actuator_experiments import actuator_record
+from bellows_ros.papers.actuator_experiments import actuator_record
 
 PLANT = load_actuator_plant_params()
 

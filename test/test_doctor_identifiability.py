@@ -28,7 +28,7 @@ import pytest
 
 from bellows_ros.config.actuator import load_actuator
 from bellows_ros.doctor.diagnosis import diagnose
-from bellows_ros.models.actuator_experiments import actuator_record
+from bellows_ros.papers.actuator_experiments import actuator_record
 
 
 def near_atmospheric_record(effects, seed=3):

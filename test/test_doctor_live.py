@@ -26,9 +26,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from bellows_ros import interfaces, live
+from bellows_ros import interfaces
 from bellows_ros.config.actuator import load_actuator
-from bellows_ros.doctor import actuator_causes
+from bellows_ros.doctor import actuator_causes, live
 from bellows_ros.models.actuator_plant import ActuatorPlant
 
 CONFIG = load_actuator()

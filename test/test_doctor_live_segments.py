@@ -31,8 +31,8 @@ import math
 import numpy as np
 import pytest
 
-from bellows_ros import live
 from bellows_ros.config.segment import load_segment
+from bellows_ros.doctor import live
 from bellows_ros.doctor.scoring import noise_floor, noise_floor_local
 from bellows_ros.models.derivatives import rate
 from bellows_ros.models.segment import external_torque, SegmentModel

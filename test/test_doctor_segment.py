@@ -28,7 +28,7 @@ import pytest
 
 from bellows_ros.cli import main
 from bellows_ros.config.segment import load_segment_params, load_segment_plant_params
-from bellows_ros.models.segment_experiments import quasi_static_record
+from bellows_ros.papers.segment_experiments import quasi_static_record
 
 PLANT = load_segment_plant_params()
 

@@ -36,9 +36,11 @@ from node_processes import free_domain, launch_arm, node_env, override, SIM_CONF
 import probe
 import pytest
 
-from bellows_ros import interfaces, params
+from bellows_ros import interfaces
+
 from bellows_ros.config.hardware import arm_bus_config
 from bellows_ros.control import angle_trajectory
+from bellows_ros.io import params
 from bellows_ros.runtime.messages import msg
 
 pytestmark = pytest.mark.realtime  # runs alone, after the others (scripts/test.sh)

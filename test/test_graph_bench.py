@@ -33,10 +33,10 @@ import time
 from node_processes import session_processes
 import pytest
 
-from bellows_ros import params
 from bellows_ros.bench import graph, graph_actuator, graph_floor, Result
 from bellows_ros.cli import main
 from bellows_ros.cli.bench import chosen_modules, format_table
+from bellows_ros.io import params
 from bellows_ros.runtime import realtime
 
 pytestmark = pytest.mark.realtime  # runs alone, after the others (scripts/test.sh)

@@ -40,7 +40,9 @@ import probe
 import pytest
 from rclpy.serialization import deserialize_message
 
-from bellows_ros import interfaces, params
+from bellows_ros import interfaces
+
+from bellows_ros.io import params
 from bellows_ros.runtime import realtime, stamp_ns
 from bellows_ros.runtime.messages import msg
 

@@ -22,8 +22,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 import pytest
 
-from bellows_ros import params
 from bellows_ros.hardware import can_protocol as cp
+from bellows_ros.io import params
 
 ROOT = Path(__file__).resolve().parent.parent
 DB = cp.load_dbc()

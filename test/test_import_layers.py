@@ -15,12 +15,14 @@
 """
 The package's import graph (from the source, with ast): no cycles, every import goes down.
 
-The shape: a base (errors, files, the interface contract), the models, the configuration that
-builds their parameters; then two stacks side by side on them, which never import each other:
-offline, for records (identify, doctor), and online, for a robot (hardware -> control ->
-runtime and nodes); and on top the tools that use both (cli, bench, demos). The models read no
-file: they import nothing of the package but other models and the errors; the config layer
-reads config/*.yaml and builds their parameter objects.
+The shape: a base (errors, the interface contract, io: files in and out), the models, the
+configuration that builds their parameters and the papers' experiments on the simulated devices;
+then two stacks side by side on them: offline, for records (identify, doctor), and online, for a
+robot (hardware -> control -> runtime and nodes). The online stack reaches the offline one only
+through the doctor live (`doctor.live`, for the nodes). On top, the tools that use both (cli,
+bench). The models read no file: they import nothing of the package but other models and the
+errors; the config layer reads config/*.yaml and builds their parameter objects. The README
+draws this picture; this module is its one definition.
 
 Every import counts, also one inside a function: a deferred import still ties the two modules
 together, it only hides the cycle until run time.
@@ -32,18 +34,17 @@ PACKAGE = Path(__file__).resolve().parents[1] / 'bellows_ros'
 
 # Rank of each top-level part of the package; a module may import only its own rank or lower.
 LAYERS = {
-    'errors': 0, 'outputs': 0, 'interfaces': 0, 'params': 0, 'table': 0, 'data': 0, 'bag': 0,
-    'bag_lock': 0, 'blas': 0,
+    'errors': 0, 'interfaces': 0, 'io': 0,
     'models': 1,
-    'config': 2,
+    'config': 2, 'papers': 2,
     'identify': 3, 'doctor': 3,                               # offline stack
     'hardware': 3, 'control': 4, 'nodes': 5, 'runtime': 5,   # online stack
-    'live': 4,                                # the bridge: the doctor live, for the nodes
-    'bag_repair': 5,
-    'bench': 6, 'demos': 6, 'cli': 6,
+    'bench': 6, 'cli': 6,
 }
 STACKS = {'offline': {'identify', 'doctor'},
           'online': {'hardware', 'control', 'nodes', 'runtime'}}
+# The one way from the online stack to the offline one: the doctor live, for the nodes.
+BRIDGE = 'bellows_ros.doctor.live'
 
 
 def _modules():
@@ -129,7 +130,7 @@ def test_the_graph_sees_the_package():
     graph = import_graph()
     assert 'bellows_ros.models.segment' in graph['bellows_ros.identify.segment']
     assert 'bellows_ros.runtime' in graph['bellows_ros.nodes.model_node']
-    assert 'bellows_ros.bag' in graph['bellows_ros.data']  # a deferred import counts
+    assert 'bellows_ros.io.bag' in graph['bellows_ros.io.data']  # a deferred import counts
 
 
 def test_the_cycle_finder_finds_a_cycle():
@@ -152,21 +153,21 @@ def test_the_two_stacks_do_not_import_each_other():
     def stack(module):
         return stack_of.get(module.split('.')[1]) if module.count('.') else None
     across = sorted(f'{source} -> {target}' for source, targets in import_graph().items()
-                    for target in targets
+                    for target in targets - {BRIDGE}
                     if stack(source) and stack(target) and stack(source) != stack(target))
     assert across == []
 
 
 def test_the_online_stack_reaches_the_offline_one_only_through_the_live_doctor():
-    """The nodes reach the doctor through `bellows_ros.live` alone: controller and model node."""
+    """The nodes reach the doctor through `BRIDGE` alone: the stiffness controller, model node."""
     graph = import_graph()
     offline = {m for m in graph if m.count('.') and m.split('.')[1] in STACKS['offline']}
     online = [m for m in graph if m.count('.') and m.split('.')[1] in STACKS['online']]
-    without_bridge = {m: t - {'bellows_ros.live'} for m, t in graph.items()}
+    without_bridge = {m: t - {BRIDGE} for m, t in graph.items()}
     assert [m for m in online if reachable(without_bridge, m) & offline] == []
-    users = sorted(m for m in online if 'bellows_ros.live' in graph[m])
+    users = sorted(m for m in online if BRIDGE in graph[m])
     assert users == ['bellows_ros.nodes.model_node', 'bellows_ros.nodes.stiffness_controller_node']
-    assert reachable(graph, 'bellows_ros.live') & offline    # the rule is not vacuous
+    assert reachable(graph, BRIDGE) & offline    # the rule is not vacuous
 
 
 def test_layers_import_only_downward():
@@ -213,9 +214,9 @@ def test_the_models_call_no_file_function():
 def test_the_file_rules_see_a_violation():
     """The two rules above are not vacuous: the config layer breaks both, as it should."""
     graph = import_graph()
-    assert 'bellows_ros.params' in graph['bellows_ros.config.segment']
+    assert 'bellows_ros.io.params' in graph['bellows_ros.config.segment']
     assert not all(t.startswith(MODEL_IMPORTS) for t in graph['bellows_ros.config.segment'])
-    source = (PACKAGE / 'params.py').read_text()
+    source = (PACKAGE / 'io' / 'params.py').read_text()
     assert any(isinstance(n, ast.Call)
                and (getattr(n.func, 'id', None) or getattr(n.func, 'attr', None)) in FILE_CALLS
                for n in ast.walk(ast.parse(source)))
@@ -306,3 +307,27 @@ def test_the_file_commands_run_without_importing_rclpy(tmp_path):
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == 'rclpy modules: []', result.stdout
     assert result.stderr.count('error:') == 3, result.stderr
+
+
+def test_every_package_states_what_it_holds():
+    """Each sub-package says what it holds (docstring) and what is public (`__all__`, REP-2004)."""
+    problems = []
+    for init in sorted(PACKAGE.glob('*/__init__.py')):
+        tree = ast.parse(init.read_text(), str(init))
+        if not ast.get_docstring(tree):
+            problems.append(f'{init.parent.name}: no docstring')
+        listed = [node.value for node in ast.walk(tree) if isinstance(node, ast.Assign)
+                  and any(getattr(t, 'id', None) == '__all__' for t in node.targets)]
+        if not listed:
+            problems.append(f'{init.parent.name}: no __all__')
+            continue
+        names = ast.literal_eval(listed[0])
+        defined = {getattr(n, 'name', None) for n in tree.body} | {
+            t.id for n in tree.body if isinstance(n, ast.Assign) for t in n.targets
+            if isinstance(t, ast.Name)} | {
+            (a.asname or a.name) for n in tree.body if isinstance(n, ast.ImportFrom)
+            for a in n.names}
+        problems += [f'{init.parent.name}: {name} is neither a module nor defined there'
+                     for name in names
+                     if name not in defined and not (init.parent / f'{name}.py').exists()]
+    assert problems == []

@@ -16,7 +16,7 @@
 The message classes the nodes use (runtime/messages.py) and the type store the bags are read with.
 
 The nodes publish the ROS packages' own classes; the recorder writes their CDR bytes as they came
-and bellows_ros.bag reads them back with rosbags' Jazzy type store (plus the definitions rosbags
+and bellows_ros.io.bag reads them back with rosbags' Jazzy type store (plus the definitions rosbags
 lacks, bag.EXTRA_DEFINITIONS). So the classes must import, the store must hold the same fields
 and decode rclpy's bytes to the same values, and a definition the store adds must be the
 installed package's, to the RIHS01 hash a publisher of that type advertises.
@@ -29,7 +29,7 @@ from pathlib import Path
 import pytest
 from rclpy.serialization import deserialize_message, serialize_message
 
-from bellows_ros.bag import EXTRA_DEFINITIONS, TYPESTORE
+from bellows_ros.io.bag import EXTRA_DEFINITIONS, TYPESTORE
 from bellows_ros.runtime import messages
 from bellows_ros.runtime.messages import message_class, msg, srv, USED_SERVICES, USED_TYPES
 
@@ -60,7 +60,7 @@ def importable_types():
 
 
 def test_the_type_store_has_the_fields_of_every_class():
-    """bellows_ros.bag decodes with the same fields, in the same order, as the nodes publish."""
+    """bellows_ros.io.bag decodes with the same fields, in the same order, as the nodes publish."""
     for ros_name in USED_TYPES.values():
         assert ros_name in TYPESTORE.fielddefs, ros_name  # also the optional ones: bags hold them
     for ros_name in importable_types():
@@ -119,7 +119,7 @@ def test_defaults_and_constants():
 
 
 def test_rclpy_bytes_decode_with_the_type_store():
-    """What the recorder writes (rclpy's CDR, as it came) is what bellows_ros.bag reads."""
+    """What the recorder writes (rclpy's CDR, as it came) is what bellows_ros.io.bag reads."""
     state = msg.JointState(name=['segment_1', 'air_chamber'], position=[0.25, -0.003],
                            velocity=[1.5, 0.0], effort=[2.5e5, 1.1e5])
     state.header.stamp.sec, state.header.stamp.nanosec = 12, 345_678_901

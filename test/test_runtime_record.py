@@ -34,8 +34,8 @@ from rosbags.rosbag2 import Reader, Writer
 from rosbags.typesys import get_typestore, Stores
 
 from bellows_ros import interfaces
-from bellows_ros.data import read_table
 from bellows_ros.errors import DataError
+from bellows_ros.io.data import read_table
 from bellows_ros.runtime.messages import msg
 
 pytestmark = pytest.mark.realtime  # runs alone, after the others (scripts/test.sh)

@@ -29,9 +29,9 @@ from bellows_ros.config.segment import (load_segment_identify_params, load_segme
 from bellows_ros.identify.segment import (fig10_torques, fit_segment, least_squares, predict,
                                           prediction_errors)
 from bellows_ros.models.ogden import free_strain
-from bellows_ros.models.segment_experiments import (dynamic_record, fig10_record,
-                                                    quasi_static_record)
 from bellows_ros.models.segment_plant import FULL_MODEL, NO_NOISE
+from bellows_ros.papers.segment_experiments import (dynamic_record, fig10_record,
+                                                    quasi_static_record)
 
 PLANT = load_segment_plant_params()
 CUTOFF = load_segment_identify_params().input_cutoff  # Hz, segment.identify.input_cutoff

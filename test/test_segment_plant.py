@@ -21,9 +21,9 @@ import pytest
 from bellows_ros.config.segment import load_segment_params, load_segment_plant_params
 from bellows_ros.errors import ParameterError
 from bellows_ros.models.segment import SegmentModel
-from bellows_ros.models.segment_experiments import fig10_record, quasi_static_record, run_plant
 from bellows_ros.models.segment_plant import (FULL_MODEL, NO_NOISE, plant_physics, SEGMENT_EFFECTS,
                                               SegmentPlant, STRENGTHS)
+from bellows_ros.papers.segment_experiments import fig10_record, quasi_static_record, run_plant
 
 PLANT = load_segment_plant_params()
 

@@ -48,9 +48,9 @@ from test_doctor_bag import write_actuator_bag
 
 from bellows_ros.cli import main
 from bellows_ros.config.actuator import load_actuator, load_actuator_params
-from bellows_ros.data import read_table, write_csv
 from bellows_ros.hardware.sample_delivery import DeviceClock
 from bellows_ros.identify.measured_stiffness import measured_stiffness
+from bellows_ros.io.data import read_table, write_csv
 from bellows_ros.models.actuator import stiffness
 from bellows_ros.models.actuator_plant import ActuatorPlant
 from bellows_ros.models.stiffness_map import compression_for_stiffness
@@ -282,7 +282,7 @@ def test_a_record_with_a_gap_is_split_where_the_doctors_refusal_says(tmp_path, c
 
 def read_table_from(record):
     """Return `record` (name -> array) as a Table, for write_csv."""
-    from bellows_ros.table import Table
+    from bellows_ros.io.table import Table
     names = list(record)
     return Table('record', names, record)
 

@@ -25,6 +25,9 @@ import time
 
 import numpy as np
 
+# The helpers every bench uses; the benches are the package's other modules (`bellows bench`).
+__all__ = ['Result', 'per_call', 'timing', 'median', 'quantile', 'log_uniform']
+
 
 @dataclass
 class Result:

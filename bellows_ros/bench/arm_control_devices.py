@@ -44,8 +44,8 @@ from bellows_ros.bench.devices import draw_segment  # noqa: F401 (this bench's d
 from bellows_ros.config.segment import load_segment
 from bellows_ros.control import angle_trajectory, closed_loop
 from bellows_ros.identify.segment import fit_segment
-from bellows_ros.models.segment_experiments import dynamic_record, quasi_static_record
 from bellows_ros.models.segment_plant import FULL_MODEL
+from bellows_ros.papers.segment_experiments import dynamic_record, quasi_static_record
 
 MODES = (('feedback_only', 'none'), ('previous_model', 'previous'), ('paper_a_model', 'paper_a'))
 DEVICES, QUICK_DEVICES = 10, 2

@@ -244,7 +244,7 @@ def actuator_device_record(device, effects=None, noise=None):
     `actuator_experiments.actuator_record`. The plant runs at 1 kHz; a slower sensor reads every
     k-th step (no averaging: what a slower board samples).
     """
-    from bellows_ros.models.actuator_experiments import actuator_record
+    from bellows_ros.papers.actuator_experiments import actuator_record
     record = actuator_record(device.params, device.plant,
                              device.effects if effects is None else effects, noise,
                              seed=device.seed, duration=device.duration, dt=SIM_DT,

@@ -28,9 +28,9 @@ import numpy as np
 
 from bellows_ros.bench import Result
 from bellows_ros.config.actuator import load_actuator
-from bellows_ros.data import read_table
 from bellows_ros.doctor.diagnosis import diagnose
-from bellows_ros.models.actuator_experiments import actuator_record
+from bellows_ros.io.data import read_table
+from bellows_ros.papers.actuator_experiments import actuator_record
 
 EFFECTS = {'air_leak': {'conductance': 3e-12}, 'sensor_lag': {'time_constant': 0.05}}
 

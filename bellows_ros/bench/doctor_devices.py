@@ -48,7 +48,7 @@ import time
 import numpy as np
 
 from bellows_ros.bench import devices, Result
-from bellows_ros.blas import one_blas_thread
+from bellows_ros.identify.blas import one_blas_thread
 
 CAUSES = tuple(devices.EFFECT_RANGES)
 # Kinds of device: {kind: (its causes, buckling onset)}; None is the null device. The order fixes
@@ -211,7 +211,7 @@ def run_devices(count, causes=CAUSES, progress=True, workers=1, null=True, kinds
     jobs = [(index, kind) for index in range(max((n for _, n in kinds), default=0))
             for kind, n in kinds if index < n]
     rows = []
-    # Workers side by side, each on one BLAS thread (bellows_ros/blas.py): at OpenBLAS's default
+    # Workers side by side, each on one BLAS thread (identify/blas.py): at OpenBLAS's default
     # threads they take the cores from one another.
     with get_context('spawn').Pool(workers, initializer=one_blas_thread) as pool:
         for (index, kind), row in zip(jobs, pool.imap(_diagnose_drawn, jobs)):

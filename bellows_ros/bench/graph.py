@@ -80,11 +80,11 @@ import tempfile
 import threading
 import time
 
-from bellows_ros import params
 from bellows_ros.bench import Result, timing
 from bellows_ros.config.segment import load_segment_params
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.loop_timing import LoopStats, PeriodicLoop
+from bellows_ros.io import params
 from bellows_ros.models.segment import SegmentModel
 from bellows_ros.runtime import realtime
 from bellows_ros.runtime.messages import msg

@@ -35,9 +35,9 @@ import statistics
 import sys
 import time
 
-from bellows_ros import params
 from bellows_ros.bench import Result
 from bellows_ros.bench.graph import CAN_GROUPS, DOMAINS, GraphRun, node_environment
+from bellows_ros.io import params
 from bellows_ros.runtime.messages import msg
 
 CONFIG = params.default_file('nodes_sim')

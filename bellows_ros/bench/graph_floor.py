@@ -96,7 +96,8 @@ from rclpy.qos import qos_profile_sensor_data
 from rclpy.serialization import serialize_message
 import serial
 
-from bellows_ros import interfaces, params
+from bellows_ros import interfaces
+
 from bellows_ros.bench import Result
 from bellows_ros.bench.graph import CAN_GROUPS, DOMAINS, GraphRun, node_environment
 from bellows_ros.config.hardware import actuator_board_config
@@ -106,6 +107,7 @@ from bellows_ros.hardware.arm_bus import open_can
 from bellows_ros.hardware.can_echo_filter import drop_own_frames
 from bellows_ros.hardware.loop_timing import PeriodicLoop
 from bellows_ros.hardware.sim_actuator_board import check_free, link_pty, owns_link
+from bellows_ros.io import params
 from bellows_ros.nodes import diagnostics
 from bellows_ros.runtime import Node, realtime
 from bellows_ros.runtime.messages import msg

@@ -37,17 +37,17 @@ import math
 
 import numpy as np
 
-from bellows_ros import params as parameters
 from bellows_ros.bench import devices, Result
 from bellows_ros.config.actuator import load_actuator
 from bellows_ros.control.pd import PDController, PDGains
 from bellows_ros.control.stiffness import StiffnessSetpoint
 from bellows_ros.errors import BellowsError, ParameterError
 from bellows_ros.identify.actuator import fit_actuator
+from bellows_ros.io import params as parameters
 from bellows_ros.models.actuator import stiffness
-from bellows_ros.models.actuator_experiments import actuator_record
 from bellows_ros.models.actuator_plant import ActuatorPlant
 from bellows_ros.models.stiffness_map import stiffness_range
+from bellows_ros.papers.actuator_experiments import actuator_record
 
 DEVICES, QUICK_DEVICES = 10, 2
 SEED = 41

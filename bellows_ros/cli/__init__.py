@@ -17,7 +17,7 @@ The `bellows` command (docs/interfaces.md): one entry point, one module per subc
 
 Each subcommand module has `add_arguments(parser)` and `run(args) -> int`. A `BellowsError` (a user
 mistake: bad file, bad parameter, absent device) becomes one line on stderr and exit status 2.
-SIGTERM and SIGHUP unwind like Ctrl-C (outputs.signals_as_exceptions), so no temporary file is
+SIGTERM and SIGHUP unwind like Ctrl-C (io.outputs.signals_as_exceptions), so no temporary file is
 left behind; the exit status is then 128 + the signal's number, as the shell reports a signal.
 """
 import argparse
@@ -25,9 +25,11 @@ import importlib
 import signal
 import sys
 
-from bellows_ros.blas import one_blas_thread
 from bellows_ros.errors import BellowsError
-from bellows_ros.outputs import Signalled, signals_as_exceptions
+from bellows_ros.identify.blas import one_blas_thread
+from bellows_ros.io.outputs import Signalled, signals_as_exceptions
+
+__all__ = ['main', 'build_parser', 'SUBCOMMANDS']
 
 SUBCOMMANDS = {
     'simulate': 'run the model or the plant over an input file',

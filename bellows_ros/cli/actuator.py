@@ -17,12 +17,12 @@ import sys
 
 import numpy as np
 
-from bellows_ros import params as param_files
 from bellows_ros.config.actuator import load_actuator, params_to_flat
-from bellows_ros.data import check_moves, check_range, CsvOutput, read_chunks, read_record
 from bellows_ros.errors import BellowsError, DataError, ParameterError
 from bellows_ros.identify.actuator import (fit_actuator, GasLost, LaggedCorrelation, LEAK_HINT,
                                            parameter_count, STRUCTURE_LAG, volume_error)
+from bellows_ros.io import params as param_files
+from bellows_ros.io.data import check_moves, check_range, CsvOutput, read_chunks, read_record
 from bellows_ros.models.actuator import evaluate_array
 from bellows_ros.models.actuator_plant import ActuatorPlant, effect_parameters
 

@@ -37,7 +37,7 @@ def add_arguments(parser):
 
 def run(args):
     from bellows_ros.doctor.report import summary_line
-    from bellows_ros.outputs import check_report_directory
+    from bellows_ros.io.outputs import check_report_directory
     check_report_directory(args.report, inputs=(args.data, args.params))  # before any work
     started = time.perf_counter()
     params = load_params(args.system, args.params)
@@ -61,7 +61,7 @@ def read_for_doctor(path, system, model):
     """
     import numpy as np
 
-    from bellows_ros.data import read_record
+    from bellows_ros.io.data import read_record
     from bellows_ros.doctor.checks import RawChecks
     from bellows_ros.doctor.diagnosis import raw_noise
     check = RawChecks(system)
@@ -90,16 +90,16 @@ def write_report(d, report):
     """
     Write every output file of the diagnosis `d` as the report directory `report`.
 
-    The report is built in a new directory beside it and swapped in whole (outputs.py): a reader
+    The report is built in a new directory beside it and swapped in whole (io/outputs.py): a reader
     never finds a new report.json beside an old report's plots.
     """
     import matplotlib.pyplot as plt
 
-    from bellows_ros import params as param_files
+    from bellows_ros.io import params as param_files
     from bellows_ros.doctor.plots import figures
     from bellows_ros.doctor.report import (details_dict, extended_header, EXTENDED_FILE,
                                            markdown, report_dict)
-    from bellows_ros.outputs import report_directory
+    from bellows_ros.io.outputs import report_directory
     with report_directory(report) as directory:
         (directory / 'report.json').write_text(json.dumps(report_dict(d), indent=2) + '\n')
         (directory / 'details.json').write_text(json.dumps(details_dict(d), indent=2,

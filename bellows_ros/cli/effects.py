@@ -13,8 +13,8 @@
 # limitations under the License.
 
 """Parsing of `--effect NAME[:k=v,...]` arguments."""
-from bellows_ros.data import NUMBER
 from bellows_ros.errors import ParameterError
+from bellows_ros.io.data import NUMBER
 
 
 def parse_effect(text):

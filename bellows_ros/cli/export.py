@@ -47,9 +47,9 @@ def add_arguments(parser):
 def run(args):
     import sys
 
-    from bellows_ros.data import read_table, write_csv
+    from bellows_ros.io.data import read_table, write_csv
     from bellows_ros.errors import ParameterError
-    from bellows_ros.outputs import check_output
+    from bellows_ros.io.outputs import check_output
     start = -math.inf if args.start is None else args.start
     end = math.inf if args.end is None else args.end
     if not start < end:

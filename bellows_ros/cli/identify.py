@@ -17,7 +17,7 @@ import argparse
 import importlib
 
 from bellows_ros.errors import BellowsError
-from bellows_ros.outputs import check_output
+from bellows_ros.io.outputs import check_output
 
 
 def add_arguments(parser):

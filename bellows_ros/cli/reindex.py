@@ -20,7 +20,7 @@ def add_arguments(parser):
 
 
 def run(args):
-    from bellows_ros.bag_repair import DAMAGED_SUFFIX, repair
+    from bellows_ros.io.bag_repair import DAMAGED_SUFFIX, repair
     result = repair(args.bag)
     total = sum(result.counts.values())
     if not result.repaired:

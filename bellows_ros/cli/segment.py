@@ -25,10 +25,10 @@ output columns are the plant's true values.
 
 import numpy as np
 
-from bellows_ros import data
 from bellows_ros.config.segment import load_segment
 from bellows_ros.errors import DataError
 from bellows_ros.identify.segment import fit_segment, MIN_RATE_PER_CUTOFF
+from bellows_ros.io import data
 from bellows_ros.models.derivatives import rates
 from bellows_ros.models.segment import OUTPUTS, SegmentModel, simulate_model
 from bellows_ros.models.segment_plant import check_effects, SegmentPlant
@@ -162,7 +162,7 @@ def identify(args):
               f'held-out RMSE {fit.heldout["model"][0]:.4g} N·m (previous model '
               f'{fit.heldout["previous"][0]:.4g} N·m) on the last {fit.heldout_rows} rows; '
               f'{_filter_summary(fit, config.identify.input_cutoff)}')
-    from bellows_ros.params import write_file
+    from bellows_ros.io.params import write_file
     # The whole file (the plant and identification settings as given): one file to read back.
     write_file(args.output, config._replace(model=fit.params).flat(), header=header,
                check=load_segment)

@@ -21,7 +21,7 @@
 import importlib
 
 from bellows_ros.cli.effects import parse_effects
-from bellows_ros.outputs import check_output
+from bellows_ros.io.outputs import check_output
 
 
 def add_arguments(parser):

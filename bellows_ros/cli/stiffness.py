@@ -36,7 +36,7 @@ def run(args):
     import math
 
     from bellows_ros.config.actuator import load_actuator_params
-    from bellows_ros.data import read_table
+    from bellows_ros.io.data import read_table
     from bellows_ros.errors import BellowsError
     from bellows_ros.identify.measured_stiffness import measured_stiffness
     params = load_actuator_params(args.params)

@@ -26,5 +26,7 @@ the doctor, the drivers, the nodes and the CLI get their parameters from here:
   it builds no physics object.
 
 A user's file (`--params`, the output of `bellows identify`) is laid over the defaults by
-`bellows_ros.params.load`, which refuses names the defaults do not have.
+`bellows_ros.io.params.load`, which refuses names the defaults do not have. `config.ranges` holds
+the documented ranges of the devices' parameters (the drawn devices of the benches and tests).
 """
+__all__ = ['segment', 'actuator', 'hardware', 'ranges']

@@ -24,10 +24,10 @@ use are refused here, naming the parameter, before any object is built.
 import dataclasses
 from typing import NamedTuple
 
-from bellows_ros import params as param_files
 from bellows_ros.config import ranges
 from bellows_ros.config.hardware import load_drive
 from bellows_ros.errors import ParameterError
+from bellows_ros.io import params as param_files
 from bellows_ros.models.actuator import ActuatorParams, Buckling, NO_BUCKLING
 from bellows_ros.models.actuator_geometry import Bellows
 from bellows_ros.models.actuator_plant import ActuatorPlantParams, Sensors

@@ -25,10 +25,10 @@ config/segment.yaml).
 """
 import dataclasses
 
-from bellows_ros import params as param_files
 from bellows_ros.config import ranges
 from bellows_ros.errors import ParameterError
 from bellows_ros.interfaces import COMMAND_WATCHDOG
+from bellows_ros.io import params as param_files
 from bellows_ros.models.actuator_drive import Drive
 
 HARDWARE_SOURCE = 'config/hardware.yaml'

@@ -15,7 +15,7 @@
 """
 The physical range of every number in config/segment.yaml, actuator.yaml and hardware.yaml.
 
-`load(name, path)` reads a file as `bellows_ros.params.load` does and refuses a value outside its
+`load(name, path)` reads a file as `io.params.load` does and refuses a value outside its
 range, in one line naming the file, the parameter and the range: a unit mistake (a length in mm,
 a pressure in bar) or a typo is never computed with. Every range also bounds what the value can
 make the package do: no count, grid or loop derived from a parameter can grow without limit
@@ -31,9 +31,9 @@ the objects are built (`config.segment`, `config.actuator`, `config.hardware`, t
 """
 from typing import NamedTuple
 
-from bellows_ros import params as param_files
-from bellows_ros.data import MAX_ANGLE  # a half turn: no segment bends further
 from bellows_ros.errors import ParameterError
+from bellows_ros.io import params as param_files
+from bellows_ros.io.data import MAX_ANGLE  # a half turn: no segment bends further
 from bellows_ros.models.limits import (AMBIENT_RANGE, MAX_CONVOLUTIONS, MAX_LENGTH,
                                        MAX_PROFILE_SAMPLES)
 

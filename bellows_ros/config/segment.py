@@ -23,9 +23,9 @@ The one file keeps its layout; its `segment.` section splits into the driving-to
 from dataclasses import dataclass, fields
 from typing import NamedTuple
 
-from bellows_ros import params as param_files
 from bellows_ros.config import ranges
 from bellows_ros.errors import ParameterError
+from bellows_ros.io import params as param_files
 from bellows_ros.models.segment import check_params, SegmentParams, UNDOTTED
 from bellows_ros.models.segment_plant import (check_plant_params, PLANT_DOTTED,
                                               SegmentPlantParams)

@@ -27,11 +27,11 @@ import dataclasses
 
 import numpy as np
 
-from bellows_ros import params as parameters
 from bellows_ros.config.segment import load_segment
 from bellows_ros.control import angle_trajectory
 from bellows_ros.control.angle_tracking import AngleTracker, TrackingGains
 from bellows_ros.hardware import can_protocol
+from bellows_ros.io import params as parameters
 from bellows_ros.models.segment_plant import FULL_MODEL, SegmentPlant
 
 TrackingRun = namedtuple('TrackingRun',

@@ -24,11 +24,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bellows_ros.data import check_range
 from bellows_ros.doctor.scoring import block_masks
 from bellows_ros.errors import DataError
+from bellows_ros.io.data import check_range
+from bellows_ros.io.table import check_increasing, COLUMNS, Table
 from bellows_ros.models.actuator_geometry import P_ATM
-from bellows_ros.table import check_increasing, COLUMNS, Table
 
 MIN_SAMPLES = 200
 MIN_DURATION = 5.0        # s

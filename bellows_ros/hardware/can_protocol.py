@@ -42,7 +42,7 @@ import re
 
 import cantools
 
-from bellows_ros import params
+from bellows_ros.io import params
 
 ARM_HEARTBEAT_TIMEOUT = 0.1  # s without ARM_HOST_HEARTBEAT before the arm vents every chamber
 

@@ -424,7 +424,7 @@ def calibrate_fig10(params, plant, before=FIG10_BEFORE, after=FIG10_AFTER, free=
     paper A refitted its previous model on the same data. `plant`: the simulated segment's
     SegmentPlantParams (valves, dynamics). Returns the calibrated SegmentParams.
     """
-    from bellows_ros.models.segment_experiments import fig10_record, quasi_static_record
+    from bellows_ros.papers.segment_experiments import fig10_record, quasi_static_record
     from bellows_ros.models.segment_plant import FULL_MODEL, NO_NOISE
 
     record, i_before, i_after = fig10_record(params, plant, FULL_MODEL, NO_NOISE)
@@ -453,7 +453,7 @@ def fig10_torques(params, plant, effects=None, noise=None, seed=None):
     prev_before, prev_after).
     """
     from bellows_ros.models.segment import simulate_model
-    from bellows_ros.models.segment_experiments import fig10_record
+    from bellows_ros.papers.segment_experiments import fig10_record
     from bellows_ros.models.segment_plant import FULL_MODEL, NO_NOISE
 
     record, i_before, i_after = fig10_record(params, plant,

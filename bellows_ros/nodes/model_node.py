@@ -44,8 +44,10 @@ need a torque sensor). Both parameters are read once at start.
 """
 import time
 
-from bellows_ros import interfaces, live
+from bellows_ros import interfaces
+
 from bellows_ros.config.segment import load_segment_params
+from bellows_ros.doctor import live
 from bellows_ros.hardware.can_protocol import dbc_segments
 from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.models.derivatives import rate
@@ -64,7 +66,7 @@ PARAMETERS = (
          'defaults)'),
     Spec('latency_budget', 0.002, 'a torque published later than this after its sample is '
          'counted late, s', low=1e-4, high=1.0, read_only=False),
-    # Model health (bellows_ros.live): read once at start (the limits hold for this window).
+    # Model health (bellows_ros.doctor.live): read once at start (the limits hold for this window).
     Spec('model_health.calibration', 20.0, 'first seconds of samples taken as healthy: noise '
          'floors, offsets and limits of the external torque estimates, s', low=5.0, high=3600.0),
     Spec('model_health.window', 5.0, 'rolling window of the external torque RMS, s', low=0.5,

@@ -56,8 +56,8 @@ from bellows_ros import interfaces
 from bellows_ros.config.actuator import load_actuator_params
 from bellows_ros.control import angle_trajectory
 from bellows_ros.errors import BellowsError
+from bellows_ros.io.outputs import atomic_file
 from bellows_ros.models.stiffness_map import stiffness_range
-from bellows_ros.outputs import atomic_file
 from bellows_ros.runtime import Node, realtime, run
 from bellows_ros.runtime.parameters import Spec
 

@@ -31,7 +31,7 @@ the rising branch (`models.stiffness_map`), logs it and its range at start, refu
 outside the range (error, previous target kept) and warns when a leak pushes the held set-point
 out of it; /diagnostics carries branch, range and warning.
 
-The doctor live (docs/doctor.md, `bellows_ros.live`): every sample (x_c, x_s, the pressure, the
+The doctor live (docs/doctor.md, `doctor.live`): every sample (x_c, x_s, the pressure, the
 spring force) goes into a ring buffer; once a second the residuals of the model at its identified
 gas amount (measured pressure and force minus (17), (7)-(12)) are compared with their noise floors,
 taken from the first `model_health.calibration` seconds, and reported as `model_health` on
@@ -56,10 +56,12 @@ import dataclasses
 import math
 import time
 
-from bellows_ros import interfaces, live
+from bellows_ros import interfaces
+
 from bellows_ros.config.actuator import load_actuator
 from bellows_ros.control.pd import PDController, PDGains
 from bellows_ros.control.stiffness import StiffnessSetpoint
+from bellows_ros.doctor import live
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.loop_timing import LoopStats
 from bellows_ros.nodes import diagnostics
@@ -90,7 +92,7 @@ PARAMETERS = (
          read_only=False),
     Spec('initial_stiffness', 0.0, 'stiffness held from the start, N/m (0 = hold still until '
          'the first set-point)', low=0.0, high=1e6),
-    # The doctor live (bellows_ros.live): read once at start.
+    # The doctor live (bellows_ros.doctor.live): read once at start.
     Spec('model_health.calibration', 20.0, 'first seconds of samples taken as healthy: noise '
          'floors and limits of the model residuals, s', low=5.0, high=3600.0),
     Spec('model_health.window', 5.0, 'rolling window of the residual RMS, s', low=0.5,

@@ -27,7 +27,7 @@ A recording survives being stopped:
   Ctrl-C, `ros2 launch` and the terminal both signalling) are ignored until it is closed;
 - every `FLUSH_PERIOD` the pending MCAP chunk is closed and handed to the kernel, so after a
   SIGKILL or a crash the file holds every message up to the last flush, and `bellows reindex`
-  (bellows_ros/bag_repair.py) rebuilds what readers need from it.
+  (bellows_ros/io/bag_repair.py) rebuilds what readers need from it.
 """
 import contextlib
 import os
@@ -45,10 +45,10 @@ from rosbags.rosbag2 import Writer, WriterError
 from rosbags.rosbag2.enums import StoragePlugin
 
 from bellows_ros import interfaces
-from bellows_ros.bag import TYPESTORE
-from bellows_ros.bag_lock import hold
 from bellows_ros.errors import BellowsError
-from bellows_ros.outputs import check_output
+from bellows_ros.io.bag import TYPESTORE
+from bellows_ros.io.bag_lock import hold
+from bellows_ros.io.outputs import check_output
 from bellows_ros.runtime import messages
 from bellows_ros.runtime.node import executor, LATCHED
 

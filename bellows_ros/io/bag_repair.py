@@ -42,10 +42,10 @@ from rosbags.rosbag2 import Reader, Writer
 from rosbags.rosbag2.enums import StoragePlugin
 import yaml
 
-from bellows_ros.bag import TYPESTORE
-from bellows_ros.bag_lock import check_not_written, hold
 from bellows_ros.errors import BellowsError
-from bellows_ros.outputs import write_text
+from bellows_ros.io.bag import TYPESTORE
+from bellows_ros.io.bag_lock import check_not_written, hold
+from bellows_ros.io.outputs import write_text
 
 DAMAGED_SUFFIX = '.damaged'
 

@@ -69,8 +69,8 @@ import numpy as np
 # node's start, not its 1 Hz update), `diagnose_window` in the worker process. The model node,
 # which needs neither, starts without them.
 from bellows_ros.doctor.scoring import guarded_floor, noise_floor_local
+from bellows_ros.io.table import COLUMNS as TABLE_COLUMNS
 from bellows_ros.models.actuator import evaluate_array
-from bellows_ros.table import COLUMNS as TABLE_COLUMNS
 
 COLUMNS = TABLE_COLUMNS['actuator'][0]   # t, x_c, x_s, p, f
 OUTPUTS = ('p', 'f')
@@ -308,8 +308,8 @@ def diagnose_window(config, rows, floors, causes=LIVE_CAUSES):
 
 def _serve(connection):
     """Serve in the worker process: say it is ready, answer (job, function, args) until None."""
-    from bellows_ros.blas import one_blas_thread
-    with one_blas_thread():    # faster fits (bellows_ros/blas.py), and the node keeps its core
+    from bellows_ros.identify.blas import one_blas_thread
+    with one_blas_thread():    # faster fits (identify/blas.py), and the node keeps its core
         connection.send(READY)
         while True:
             try:

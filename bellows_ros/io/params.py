@@ -36,7 +36,7 @@ import sys
 import yaml
 
 from bellows_ros.errors import ParameterError
-from bellows_ros.outputs import atomic_file
+from bellows_ros.io.outputs import atomic_file
 
 WILDCARD = '/**'
 
@@ -51,7 +51,7 @@ def config_dir():
     candidates = []
     if os.environ.get('BELLOWS_CONFIG_DIR'):
         candidates.append(Path(os.environ['BELLOWS_CONFIG_DIR']))
-    candidates.append(Path(__file__).resolve().parent.parent / 'config')
+    candidates.append(Path(__file__).resolve().parents[2] / 'config')  # bellows_ros/io/ -> top
     candidates.append(Path(sys.prefix) / 'share' / 'bellows_ros' / 'config')
     try:
         from ament_index_python.packages import get_package_share_directory

@@ -13,7 +13,7 @@
 # limitations under the License.
 
 """
-Paper A's Fig. 10 hysteresis on the simulated segment: `python -m bellows_ros.demos.fig10`.
+Paper A's Fig. 10 hysteresis on the simulated segment: `python -m bellows_ros.papers.fig10`.
 
 Chain 1 is pressurised to 4 bar abs at Ψ = 74.5° (chain 2 vented); an external force then moves the
 segment down to -30° and back to the same (p, Ψ). Prints |τ_ext| before and after, with the paper-A
@@ -26,10 +26,10 @@ import numpy as np
 
 from bellows_ros.config.segment import load_segment
 from bellows_ros.errors import BellowsError
+from bellows_ros.io.outputs import atomic_file, check_output
 from bellows_ros.models.segment import simulate_model
-from bellows_ros.models.segment_experiments import fig10_record
 from bellows_ros.models.segment_plant import FULL_MODEL, NO_NOISE
-from bellows_ros.outputs import atomic_file, check_output
+from bellows_ros.papers.segment_experiments import fig10_record
 
 
 def main(argv=None):

@@ -19,8 +19,8 @@ CSV with a header row, SI units, one row per sample. Every problem is reported a
 naming the file, the line (header = line 1) and the column. Extra columns are carried along
 untouched so that `bellows simulate` can write "the input plus outputs".
 
-A directory is read as a rosbag2 recording (see `bellows_ros.bag`). Both readers return a
-`bellows_ros.table.Table`; this module imports the bag reader, never the other way round.
+A directory is read as a rosbag2 recording (see `bellows_ros.io.bag`). Both readers return a
+`bellows_ros.io.table.Table`; this module imports the bag reader, never the other way round.
 """
 import csv
 from dataclasses import dataclass, field
@@ -34,8 +34,8 @@ import numpy as np
 from tqdm import tqdm
 
 from bellows_ros.errors import DataError
-from bellows_ros.outputs import atomic_file
-from bellows_ros.table import check_held, check_increasing, COLUMNS, Table
+from bellows_ros.io.outputs import atomic_file
+from bellows_ros.io.table import check_held, check_increasing, COLUMNS, Table
 
 BOM = b'\xef\xbb\xbf'  # the UTF-8 byte-order mark spreadsheets write
 # A number as a CSV reader should take it: ASCII decimal, optional sign, fraction and exponent,
@@ -543,7 +543,7 @@ def read_table(path, system, required=None, span=None):
     (`bellows export --start/--end`); DataError if none is left.
     """
     if Path(path).is_dir():
-        from bellows_ros.bag import read_bag_table
+        from bellows_ros.io.bag import read_bag_table
         table = _span(read_bag_table(path, system), span)
         check_held(table)
         check_units(table, system)

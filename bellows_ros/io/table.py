@@ -15,7 +15,7 @@
 """
 The in-memory data table both file readers return, and the checks made on any table.
 
-The readers: CSV (`bellows_ros.data`) and rosbag2 (`bellows_ros.bag`); also the columns of
+The readers: CSV (`bellows_ros.io.data`) and rosbag2 (`bellows_ros.io.bag`); also the columns of
 each system's files.
 
 It imports neither reader, so the readers depend on it and not on each other

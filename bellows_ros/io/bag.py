@@ -50,10 +50,10 @@ from rosbags.typesys import get_types_from_msg, get_typestore, Stores
 import yaml
 
 from bellows_ros import interfaces
-from bellows_ros.bag_lock import check_not_written
 from bellows_ros.errors import DataError
-from bellows_ros.params import load_bounded, MAX_YAML_BYTES
-from bellows_ros.table import check_increasing, COLUMNS, Table
+from bellows_ros.io.bag_lock import check_not_written
+from bellows_ros.io.params import load_bounded, MAX_YAML_BYTES
+from bellows_ros.io.table import check_increasing, COLUMNS, Table
 
 SEGMENT = interfaces.segment_joint(1)
 SPRING = interfaces.ACTUATOR_JOINTS[1]
