@@ -126,13 +126,18 @@ def recorded_count(stdout):
     raise AssertionError(stdout)
 
 
+# 'SIGINT held': Ctrl-C every 10 ms until the recorder has ended, into its closing and its
+# interpreter's exit (where Python restores the default handlers: a recorder killed there, exit
+# status -2, was seen once in CI with two SIGINTs).
 @pytest.mark.parametrize('signals', [[signal.SIGINT], [signal.SIGTERM],
-                                     [signal.SIGINT, signal.SIGINT]],
-                         ids=['SIGINT', 'SIGTERM', 'SIGINT twice'])
+                                     [signal.SIGINT, signal.SIGINT], [signal.SIGINT] * 300],
+                         ids=['SIGINT', 'SIGTERM', 'SIGINT twice', 'SIGINT held'])
 def test_a_stopped_recording_opens_with_every_message_received(recording, signals):
     recorder, publisher, bag = recording
     time.sleep(3.0)
     for signum in signals:
+        if recorder.poll() is not None:
+            break
         recorder.send_signal(signum)
         time.sleep(0.01)
     out, err = recorder.communicate(timeout=30)

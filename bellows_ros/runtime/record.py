@@ -68,8 +68,11 @@ class _Stop:
 
     No exception is raised into the writer: a chunk half written when a signal arrived would
     corrupt the bag. Further signals change nothing; the bag is closed whole. Once a signal has
-    asked, the handlers stay: rclpy's objects are finalised after `record` returns, and a second
-    Ctrl-C raised as KeyboardInterrupt inside one of those C++ calls aborts the process.
+    asked, the process ignores these signals to its end: rclpy's objects are finalised after
+    `record` returns, and a second Ctrl-C raised as KeyboardInterrupt inside one of those C++
+    calls aborts the process; and at exit Python puts its own handlers back to the default, so a
+    second Ctrl-C during the interpreter's shutdown killed a recorder whose bag was already
+    closed (exit status -2). An ignored signal stays ignored (CPython's _PySignal_Fini).
     """
 
     def __init__(self):
@@ -85,10 +88,9 @@ class _Stop:
         self.requested = True
 
     def __exit__(self, *exc):
-        if self.requested:
-            return False  # the process was asked to end: it ends without a second signal's abort
         for signum, handler in self.previous.items():
-            signal.signal(signum, handler)
+            # Asked to end, the process ends without a second signal's abort or kill.
+            signal.signal(signum, signal.SIG_IGN if self.requested else handler)
         return False
 
 
