@@ -26,6 +26,8 @@ import subprocess
 
 import pytest
 
+from bellows_ros.nodes.device_topics import KINDS
+
 ROOT = Path(__file__).resolve().parent.parent
 EQUATIONS = ROOT / 'docs' / 'equations.md'
 
@@ -244,17 +246,21 @@ def coded_statuses(source):
     """
     Return the concerns a node module reports, from its source (ast).
 
-    The first argument of `self.diagnostics.add('name', ...)`, the `name=` of a TimeStampStatus
-    it builds, and `<...>` for a DiagnosticTaskGroup (whose names are known only at run time).
+    The first argument of `self.diagnostics.add('name', ...)` (`<device>` for `topics.name`: one
+    per kind of device, device_topics.KINDS), the `name=` of a TimeStampStatus it builds, and
+    `<...>` for a DiagnosticTaskGroup (whose names are known only at run time).
     """
     names = set()
     for node in ast.walk(ast.parse(source)):
         if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute):
             func = node.func
             if (func.attr == 'add' and isinstance(func.value, ast.Attribute)
-                    and func.value.attr == 'diagnostics' and node.args
-                    and isinstance(node.args[0], ast.Constant)):
-                names.add(node.args[0].value)
+                    and func.value.attr == 'diagnostics' and node.args):
+                first = node.args[0]
+                if isinstance(first, ast.Constant):
+                    names.add(first.value)
+                elif isinstance(first, ast.Attribute) and first.attr == 'name':
+                    names.add('<device>')
             elif func.attr == 'TimeStampStatus':
                 names.update(k.value.value for k in node.keywords if k.arg == 'name')
         elif isinstance(node, ast.ClassDef) and any(
@@ -269,6 +275,8 @@ def test_the_diagnostics_table_is_the_code():
     coded = {}
     for module in NODE_MODULES:
         names = coded_statuses((ROOT / 'bellows_ros' / 'nodes' / f'{module}.py').read_text())
+        if '<device>' in names:
+            names = names - {'<device>'} | {kind.name for kind in KINDS}
         if names:
             coded[module] = names
     documented = {node: {'<...>' if '<' in name else name for name in names}
@@ -282,6 +290,7 @@ def test_the_diagnostics_check_sees_a_status():
               "x = d.TimeStampStatus(now, name='latency')\n"
               'class G(d.DiagnosticTaskGroup):\n    pass\n')
     assert coded_statuses(source) == {'plant', 'latency', '<...>'}
+    assert coded_statuses('self.diagnostics.add(topics.name, f)') == {'<device>'}
 
 
 # Dated measurements live in docs/bench_log.md only. In the reference documents (README.md and

@@ -78,4 +78,4 @@ def test_the_composed_arm_graph_runs_the_three_nodes(tmp_path, monkeypatch):
         probe.shutdown()
         stop_all([graph, sim])
     text = (tmp_path / 'arm_graph.log').read_text()
-    assert 'shutdown: every chamber within' in text, text[-2000:]
+    assert 'shutdown: every device at rest' in text, text[-2000:]

@@ -60,7 +60,8 @@ pytestmark = [pytest.mark.slow, pytest.mark.realtime]
 AMBIENT = 101325.0
 COMMAND = 4.0e5
 VENTED = AMBIENT + 0.05 * (COMMAND - AMBIENT)  # a chamber below this is vented
-VENT_LINE = re.compile(r'shutdown: every chamber within \S+ Pa of ambient after ([0-9.]+) s')
+VENT_LINE = re.compile(r'shutdown: every device at rest \(chambers within \S+ Pa of ambient\) '
+                       r'after ([0-9.]+) s')
 
 # An rclpy LifecycleNode with nothing of ours: the reference state machine.
 REFERENCE = textwrap.dedent("""

@@ -24,6 +24,7 @@ import math
 import signal
 import subprocess
 import sys
+import threading
 import time
 
 import numpy as np
@@ -74,7 +75,8 @@ def rig(request):
             return sim, None
         board = ActuatorBoard(dataclasses.replace(CONFIG, port=sim.port, **config), on_sample)
         made.append(board)
-        assert wait_for(lambda: board.latest() is not None), \
+        board.start()
+        assert wait_for(lambda: board.read() is not None), \
             'no telemetry from the simulated board'
         return sim, board
 
@@ -92,7 +94,7 @@ def test_ten_seconds_with_one_percent_corruption_delivers_only_true_values(rig):
     assert wait_for(lambda: sim.stats.count >= 10000, timeout=60.0)
     sim.stop()
     time.sleep(0.2)  # let the driver read what is still in the pty
-    counts = board.counters()
+    counts = board.health()
     first, last = received[0].index, received[-1].index
     span = last - first + 1
     wrong = 0
@@ -107,7 +109,7 @@ def test_ten_seconds_with_one_percent_corruption_delivers_only_true_values(rig):
     assert len(received) / span >= 0.98
     assert counts['dropped'] == span - len(received)     # every missing frame shows as a gap
     assert counts['crc_errors'] + counts['framing_errors'] > 0
-    corrupted = sim.counters()['corrupted']
+    corrupted = sim.health()['corrupted']
     assert counts['crc_errors'] + counts['framing_errors'] >= 0.5 * corrupted
 
 
@@ -116,12 +118,12 @@ def test_port_vanishing_and_coming_back_reconnects_and_says_so(rig, caplog):
     sim, board = rig()
     sim.unplug()
     assert wait_for(lambda: not board.connected)
-    assert wait_for(lambda: board.stale and board.latest() is None)
-    assert board.send_duty(0.5) == 0.0   # never drive blind
+    assert wait_for(lambda: board.stale and board.read() is None)
+    assert board.write(0.5) == 0.0   # never drive blind
     sim.replug()
-    assert wait_for(lambda: board.counters()['reconnects'] == 1 and board.latest() is not None)
+    assert wait_for(lambda: board.health()['reconnects'] == 1 and board.read() is not None)
     assert board.connected
-    assert board.counters()['disconnects'] == 1
+    assert board.health()['disconnects'] == 1
     messages = [r.getMessage() for r in caplog.records]
     assert any('lost' in m for m in messages)
     assert any('reconnected' in m for m in messages)
@@ -131,34 +133,89 @@ def test_watchdog_stops_the_motor_when_commands_stop(rig):
     sim, board = rig()
     end = time.monotonic() + 0.3
     while time.monotonic() < end:
-        board.send_duty(0.3)
+        board.write(0.3)
         time.sleep(0.01)
     assert sim.duty == pytest.approx(0.3, abs=1e-4)
-    assert board.counters()['watchdog_stops'] == 0
+    assert board.health()['watchdog_stops'] == 0
     assert wait_for(lambda: sim.duty == 0.0)   # nobody commands any more
-    assert board.counters()['watchdog_stops'] == 1
+    assert board.health()['watchdog_stops'] == 1
 
 
 def test_duty_is_clamped_and_invalid_duty_stops(rig):
     sim, board = rig()
-    assert board.send_duty(1.0) == CONFIG.duty_max
+    assert board.write(1.0) == CONFIG.duty_max
     assert wait_for(lambda: sim.duty == pytest.approx(CONFIG.duty_max, abs=1e-4))
-    assert board.send_duty(-3.0) == -CONFIG.duty_max
-    assert board.send_duty(float('nan')) == 0.0
+    assert board.write(-3.0) == -CONFIG.duty_max
+    assert board.write(float('nan')) == 0.0
     assert wait_for(lambda: sim.duty == 0.0)
-    counts = board.counters()
+    counts = board.health()
     assert counts['duty_clamps'] == 2 and counts['duty_invalid'] == 1
+
+
+class BlockingPort:
+    """The board's serial port, with motor frames held in write() until `release` is set."""
+
+    GUARD = 10.0  # s; a hang guard, not a timing assertion
+
+    def __init__(self, port):
+        self.port, self.duties = port, []
+        self.entered, self.release = threading.Event(), threading.Event()
+        self._decoder = sp.FrameDecoder()
+
+    def write(self, data):
+        for message in self._decoder.feed(data):
+            if isinstance(message, sp.MotorCommand):
+                self.duties.append(sp.q15_to_duty(message.duty_q15))
+                self.entered.set()
+                self.release.wait(self.GUARD)  # a board that does not read: the write blocks
+        return self.port.write(data)
+
+    def __getattr__(self, name):
+        return getattr(self.port, name)
+
+
+def test_write_returns_while_a_send_blocks_and_only_the_newest_duty_follows(rig):
+    _, board = rig()
+    port = board._serial = BlockingPort(board._serial)
+    try:
+        board.write(0.1)
+        assert port.entered.wait(port.GUARD)  # the command thread is inside the blocked write
+        board.write(0.2)  # returns although the send still blocks (else the test hangs)
+        board.write(0.3)  # replaces 0.2, never sent
+        port.release.set()
+        assert wait_for(lambda: len(port.duties) >= 2)
+        assert port.duties[:2] == pytest.approx([0.1, 0.3], abs=1e-4)
+    finally:
+        port.release.set()
+
+
+def test_no_duty_goes_out_after_a_vent(rig):
+    _, board = rig()
+    port = board._serial = BlockingPort(board._serial)
+    try:
+        board.write(0.1)
+        assert port.entered.wait(port.GUARD)
+        board.write(0.2)          # waiting behind the blocked send
+        venting = threading.Thread(target=board.vent)
+        venting.start()           # its stop frame waits for the port, as the duty does
+        assert wait_for(lambda: board.latched)
+        port.release.set()
+        venting.join(port.GUARD)
+        time.sleep(0.05)          # time for a late duty to show, were one still queued
+        assert port.duties == pytest.approx([0.1, 0.0], abs=1e-4)
+    finally:
+        port.release.set()
 
 
 def test_motor_stops_at_the_end_stop_and_may_only_back_away(rig):
     sim, board = rig(plant=Plant(x_c=CONFIG.x_c_max - 0.0005))  # 0.5 mm from the high stop
-    assert board.send_duty(0.5) == 0.5
-    assert wait_for(lambda: board.counters()['end_stop_stops'] >= 1)
+    assert board.write(0.5) == 0.5
+    assert wait_for(lambda: board.health()['end_stop_stops'] >= 1)
     assert wait_for(lambda: sim.duty == 0.0)
     # The reported position is quantised to one encoder count.
-    assert board.latest().x_c >= CONFIG.x_c_max - CONFIG.metres_per_count
-    assert board.send_duty(0.5) == 0.0            # further into the stop: refused
-    assert board.send_duty(-0.5) == -0.5          # away from it: allowed
+    assert board.read().x_c >= CONFIG.x_c_max - CONFIG.metres_per_count
+    assert board.write(0.5) == 0.0            # further into the stop: refused
+    assert board.write(-0.5) == -0.5          # away from it: allowed
 
 
 def test_board_stops_on_its_own_when_heartbeats_stop(rig):
@@ -168,7 +225,7 @@ def test_board_stops_on_its_own_when_heartbeats_stop(rig):
         port.write(sp.encode(sp.MotorCommand(1, sp.duty_to_q15(0.5))))
         assert wait_for(lambda: sim.duty == pytest.approx(0.5, abs=1e-4))
         assert wait_for(lambda: sim.duty == 0.0)   # no heartbeat follows
-        assert sim.counters()['heartbeat_stops'] == 1
+        assert sim.health()['heartbeat_stops'] == 1
         decoder = sp.FrameDecoder()
         port.reset_input_buffer()
         frames = []
@@ -183,11 +240,11 @@ def test_silent_board_goes_stale_and_comes_back(rig):
     sim, board = rig()
     sim.faults.silent = True
     assert wait_for(lambda: board.stale)
-    assert board.latest() is None
-    assert board.send_duty(0.2) == 0.0
-    assert board.counters()['stale_stops'] >= 1
+    assert board.read() is None
+    assert board.write(0.2) == 0.0
+    assert board.health()['stale_stops'] >= 1
     sim.faults.silent = False
-    assert wait_for(lambda: board.latest() is not None)
+    assert wait_for(lambda: board.read() is not None)
 
 
 def test_stuck_sensor_repeats_its_value_while_the_rest_moves(rig):
@@ -221,18 +278,18 @@ def test_a_failing_callback_is_counted_and_reading_goes_on(rig):
     def broken(sample):
         raise RuntimeError('bug in the consumer')
     sim, board = rig(on_sample=broken)
-    before = board.counters()['samples']
-    assert wait_for(lambda: board.counters()['samples'] > before + 50)
-    assert board.counters()['callback_errors'] > 50
-    assert board.latest() is not None
+    before = board.health()['samples']
+    assert wait_for(lambda: board.health()['samples'] > before + 50)
+    assert board.health()['callback_errors'] > 50
+    assert board.read() is not None
 
 
 def test_dropped_frames_show_as_sequence_gaps_not_as_errors(rig):
     sim, board = rig(faults=Faults(drop_rate=0.05, seed=1))
-    assert wait_for(lambda: board.counters()['samples'] >= 1000, timeout=60.0)
-    counts = board.counters()
-    assert counts['dropped'] >= 0.5 * sim.counters()['dropped'] > 0
-    assert counts['dropped'] <= sim.counters()['dropped'] + sim.counters()['tx_overflow']
+    assert wait_for(lambda: board.health()['samples'] >= 1000, timeout=60.0)
+    counts = board.health()
+    assert counts['dropped'] >= 0.5 * sim.health()['dropped'] > 0
+    assert counts['dropped'] <= sim.health()['dropped'] + sim.health()['tx_overflow']
     assert counts['crc_errors'] == counts['framing_errors'] == 0
 
 
@@ -255,16 +312,16 @@ def test_a_host_that_stops_reading_gets_every_sample_when_it_reads_again(rig):
     with serial.Serial(sim.port, timeout=0.01) as link:
         decoder = sp.FrameDecoder()
         first = _read_telemetry(link, decoder, bool)[0].seq
-        assert wait_for(lambda: sim.counters()['sent'] + len(sim._tx) > first + 2000)
+        assert wait_for(lambda: sim.health()['sent'] + len(sim._tx) > first + 2000)
         frames = _read_telemetry(link, decoder, lambda f: f and f[-1].seq > first + 2100)
     seqs = [f.seq for f in frames]
     assert seqs == list(range(seqs[0], seqs[0] + len(seqs))), 'samples lost'
-    assert sim.counters()['tx_overflow'] == 0
+    assert sim.health()['tx_overflow'] == 0
 
 
 def test_a_board_no_host_has_spoken_to_keeps_no_backlog(rig):
     sim, _ = rig(driver=False)
-    assert wait_for(lambda: sim.counters()['tx_overflow'] > 0), \
+    assert wait_for(lambda: sim.health()['tx_overflow'] > 0), \
         'the frames nobody reads pile up on the board'
     assert len(sim._tx) <= 1
 

@@ -99,7 +99,8 @@ def rig(request):
         arm = ArmBus(dataclasses.replace(CONFIG, interface='virtual', channel=channel),
                      on_sample=on_sample)
         made.append(arm)
-        assert wait_for(lambda: arm.latest() is not None), 'no samples from the simulated arm'
+        arm.start()
+        assert wait_for(lambda: arm.read() is not None), 'no samples from the simulated arm'
         return sim, arm
 
     make.channel = channel
@@ -131,6 +132,7 @@ def test_a_stalled_arm_takes_every_sample_it_missed(rig):
     received = []
     arm = ArmBus(dataclasses.replace(CONFIG, interface='virtual', channel=channel),
                  on_sample=received.append)
+    arm.start()
     sim.start()
     try:
         assert wait_for(lambda: len(plant.dts) > 1000, timeout=60.0)
@@ -154,20 +156,20 @@ def test_corrupt_and_replayed_frames_never_reach_the_user(rig):
     assert wait_for(lambda: sim.stats.count - ticks_before >= 3000, timeout=60.0)
     sim.stop()
     sent = sim.stats.count - ticks_before   # instants the arm sent while we counted
-    counts = arm.counters()
+    counts = arm.health()
     assert check_stream(received) == 0
     # One lost frame of four loses the instant: ~2 % of instants at 0.5 % corrupted frames.
     assert len(received) / sent >= 0.9
     assert counts['crc_errors'] > 0 and counts['replayed'] > 0
-    assert counts['crc_errors'] + counts['malformed'] >= 0.5 * sim.counters()['corrupted']
+    assert counts['crc_errors'] + counts['malformed'] >= 0.5 * sim.health()['corrupted']
 
 
 def test_pressure_setpoints_are_clamped_and_counted(rig):
     sim, arm = rig()
     command = [8e5, 5e4, float('nan'), 3e5, 2e5, 2e5, 2e5, 7.5e5][:2 * N]
-    sent = arm.send_pressures(command)
+    sent = arm.write(command)
     assert sent[:4] == [CONFIG.pressure_max, CONFIG.pressure_min, CONFIG.pressure_min, 3e5]
-    counts = arm.counters()
+    counts = arm.health()
     assert counts['clamped_setpoints'] == 2 and counts['invalid_setpoints'] == 1
     # What the valves apply, through the DBC's 200 Pa resolution:
     assert wait_for(lambda: sim.setpoints[0] == CONFIG.pressure_max)
@@ -175,19 +177,19 @@ def test_pressure_setpoints_are_clamped_and_counted(rig):
     assert sim.setpoints[1] == pytest.approx(CONFIG.pressure_min, abs=100)
     assert sim.setpoints[3] == 3e5
     with pytest.raises(ValueError):
-        arm.send_pressures([2e5] * 3)
+        arm.write([2e5] * 3)
 
 
 def test_watchdog_vents_when_commands_stop(rig):
     sim, arm = rig()
     end = time.monotonic() + 0.3
     while time.monotonic() < end:
-        arm.send_pressures([3e5] * (2 * N))
+        arm.write([3e5] * (2 * N))
         time.sleep(0.01)
     assert wait_for(lambda: sim.setpoints == (3e5,) * (2 * N))
-    assert arm.counters()['watchdog_vents'] == 0
+    assert arm.health()['watchdog_vents'] == 0
     assert wait_for(lambda: max(sim.setpoints) < 1.02e5)
-    assert arm.counters()['watchdog_vents'] == 1
+    assert arm.health()['watchdog_vents'] == 1
 
 
 def test_arm_vents_on_its_own_when_the_host_heartbeat_stops(rig):
@@ -205,7 +207,7 @@ def test_arm_vents_on_its_own_when_the_host_heartbeat_stops(rig):
                                   ['S1_P1', 'S1_P2', 'S2_P1', 'S2_P2'], 3e5), 1)))
         assert wait_for(lambda: sim.setpoints[:4] == (3e5,) * 4)
         assert wait_for(lambda: max(sim.setpoints) < 1.02e5)   # no heartbeat follows: vented
-        assert sim.counters()['heartbeat_vents'] == 1
+        assert sim.health()['heartbeat_vents'] == 1
         checker, reported = cp.FrameChecker(db), None
         end = time.monotonic() + 5.0
         while reported != 1 and time.monotonic() < end:  # earlier status frames may still say 0
@@ -223,9 +225,9 @@ def test_silent_arm_goes_stale_and_comes_back(rig):
     sim, arm = rig()
     sim.faults.silent = True
     assert wait_for(lambda: arm.stale)
-    assert arm.latest() is None
+    assert arm.read() is None
     sim.faults.silent = False
-    assert wait_for(lambda: arm.latest() is not None)
+    assert wait_for(lambda: arm.read() is not None)
 
 
 CHILD = r"""
@@ -242,7 +244,7 @@ while sim.stats.count < instants and time.monotonic() < end:
     time.sleep(0.05)
 setpoints = sim.setpoints
 sim.close()
-print(json.dumps({'setpoints': setpoints, 'counters': sim.counters(),
+print(json.dumps({'setpoints': setpoints, 'counters': sim.health(),
                   'ticks': sim.stats.count, 'misses': sim.stats.misses}), flush=True)
 """
 
@@ -253,13 +255,14 @@ def test_four_segments_at_1khz_between_two_processes_over_udp_multicast():
     config = dataclasses.replace(CONFIG, interface='udp_multicast', channel=group)
     received = []
     arm = ArmBus(config, bus=open_bus(config, port=port), on_sample=received.append)
+    arm.start()
     child = subprocess.Popen([sys.executable, '-c', CHILD, group, str(port), '3000',
                               os.path.dirname(__file__)],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         deadline = time.monotonic() + 90.0
         while child.poll() is None and time.monotonic() < deadline:
-            arm.send_pressures([2e5] * (2 * N))
+            arm.write([2e5] * (2 * N))
             time.sleep(0.005)
         out, err = child.communicate(timeout=10)
     finally:
@@ -273,7 +276,7 @@ def test_four_segments_at_1khz_between_two_processes_over_udp_multicast():
     assert len(received) > 1000, f'only {len(received)} samples arrived'
     assert check_stream(received) == 0
     # The driver listened before the child started and until it ended: every instant counts.
-    assert len(received) / report['ticks'] >= 0.98, (len(received), report, arm.counters())
+    assert len(received) / report['ticks'] >= 0.98, (len(received), report, arm.health())
     assert report['setpoints'] == [2e5] * (2 * N)   # the other direction worked too
     assert report['counters']['rx_accepted'] > 0
 
@@ -346,6 +349,7 @@ def test_a_reader_that_falls_behind_knows_when_its_frames_arrived():
     sim = SimArmBus(open_can('udp_multicast', group, port=port), Pattern(), N)
     arm = ArmBus(dataclasses.replace(CONFIG, interface='udp_multicast', channel=group),
                  bus=open_can('udp_multicast', group, port=port), on_sample=on_sample)
+    arm.start()
     sim.start()
     try:
         assert wait_for(lambda: len(read) > 600, timeout=60.0), f'{len(read)} samples'

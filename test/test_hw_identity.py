@@ -118,16 +118,17 @@ def test_a_restarted_board_takes_over_its_own_stale_link_and_the_driver_reconnec
     closing(child)
     board = ActuatorBoard(dataclasses.replace(CONFIG, port=str(port)))
     closing(board)
-    assert wait_for(lambda: board.latest() is not None)
+    board.start()
+    assert wait_for(lambda: board.read() is not None)
     first = getattr(board, 'serial', None)
     kill(child)
     assert wait_for(lambda: not board.connected)
     sim = SimActuatorBoard(plant, config=CONFIG, link_path=port)   # was: "a link exists there"
     closing(sim)
     sim.start()
-    assert wait_for(lambda: board.counters()['reconnects'] == 1 and board.latest() is not None)
+    assert wait_for(lambda: board.health()['reconnects'] == 1 and board.read() is not None)
     assert board.serial == first == sim.serial
-    assert board.counters()['identity_refusals'] == 0
+    assert board.health()['identity_refusals'] == 0
 
 
 def test_a_live_boards_link_is_not_taken_over(tmp_path, closing):
@@ -156,10 +157,11 @@ def test_the_driver_refuses_a_tty_that_does_not_name_itself_and_writes_nothing_t
     os.symlink(os.ttyname(slave), port)
     board = ActuatorBoard(dataclasses.replace(CONFIG, port=str(port), reconnect_interval=0.05))
     closing(board)
+    board.start()
     os.write(master, b'some other program\x00\x01\x02\x00' * 10)
-    assert wait_for(lambda: board.counters().get('identity_refusals', 0) >= 2, timeout=30.0)
-    assert not board.connected and board.latest() is None
-    assert board.send_duty(0.5) == 0.0
+    assert wait_for(lambda: board.health().get('identity_refusals', 0) >= 2, timeout=30.0)
+    assert not board.connected and board.read() is None
+    assert board.write(0.5) == 0.0
     time.sleep(0.1)
     try:
         written = os.read(master, 4096)
@@ -179,7 +181,8 @@ def test_the_driver_refuses_another_board_on_its_port(tmp_path, closing, caplog)
     first.start()
     board = ActuatorBoard(dataclasses.replace(CONFIG, port=str(port), reconnect_interval=0.05))
     closing(board)
-    assert wait_for(lambda: board.latest() is not None)
+    board.start()
+    assert wait_for(lambda: board.read() is not None)
     first.close()
     other = SimActuatorBoard(plant, config=CONFIG, link_path=port, serial=first.serial + 1)
     closing(other)
@@ -187,9 +190,9 @@ def test_the_driver_refuses_another_board_on_its_port(tmp_path, closing, caplog)
     # On a loaded machine the first refusal may be a late IDENTITY; the serial is named once read.
     assert wait_for(lambda: any('another board' in r.getMessage() for r in caplog.records),
                     timeout=30.0), [r.getMessage() for r in caplog.records]
-    assert board.counters()['identity_refusals'] >= 1
-    assert not board.connected and board.counters()['reconnects'] == 0
-    assert other.counters()['motor_commands'] == other.counters()['heartbeats'] == 0
+    assert board.health()['identity_refusals'] >= 1
+    assert not board.connected and board.health()['reconnects'] == 0
+    assert other.health()['motor_commands'] == other.health()['heartbeats'] == 0
 
 
 def test_identity_frames_round_trip_and_leave_the_telemetry_sequence_alone():

@@ -90,8 +90,10 @@ def prefix(ros, tmp_path_factory):
     assert len(scripts) >= 6, scripts
     for name, module in scripts:
         exe = lib / name
+        # As setuptools writes a console script: the guard keeps a spawned child (the stiffness
+        # controller's live doctor) from starting the node again.
         exe.write_text(f'#!{sys.executable}\nimport sys\nfrom {module} import main\n'
-                       'sys.exit(main())\n')
+                       "if __name__ == '__main__':\n    sys.exit(main())\n")
         exe.chmod(0o755)
     return top
 
@@ -273,7 +275,7 @@ def test_shell_launcher_from_a_pip_install(ros, tmp_path):
     # The graph stops with the simulated devices last: the driver's vent at shutdown read
     # ambient on every chamber, rather than reporting that nothing answered.
     driver = (out / 'logs' / 'driver_node.log').read_text()
-    assert 'shutdown: every chamber within' in driver, driver[-2000:]
+    assert 'shutdown: every device at rest' in driver, driver[-2000:]
 
 
 def test_two_namespaced_graphs_run_side_by_side(prefix, tmp_path, monkeypatch):

@@ -313,11 +313,11 @@ def test_the_arms_clock_follows_an_oscillator_off_by_half_a_percent():
     """
     The arm's time is its sample count times 1 ms: its oscillator's error is drift on the host.
 
-    On timed arrivals (`driver_node.ARM_CLOCK[True]`) samples from an arm whose clock is 0.5 %
+    On timed arrivals (`device_topics.ARM_CLOCK[True]`) samples from an arm whose clock is 0.5 %
     slow or fast keep ages under a millisecond over 5 minutes: with 100 ppm they grew past
     `max_sample_age` within a minute, and the arm controller took no sample.
     """
-    from bellows_ros.nodes.driver_node import ARM_CLOCK
+    from bellows_ros.nodes.device_topics import ARM_CLOCK
     ms = 1_000_000
     for error in (0.005, -0.005):
         clock = DeviceClock(**ARM_CLOCK[True])
@@ -336,7 +336,7 @@ def test_the_untimed_arms_clock_takes_a_new_base_after_an_outage():
     sample would look 256 ms old, and the arm would stay vented. After `settle` it is taken; a
     reader stalled for 1.5 s meanwhile (read times late, then a burst) keeps its base.
     """
-    from bellows_ros.nodes.driver_node import ARM_CLOCK
+    from bellows_ros.nodes.device_topics import ARM_CLOCK
     untimed = ARM_CLOCK[False]
     ms = 1_000_000
     clock = DeviceClock(**untimed)
@@ -370,13 +370,13 @@ def test_a_receive_timestamp_on_another_clock_is_no_arrival_time():
 
 def test_device_clock_on_timed_arrivals_follows_a_time_base_that_moved():
     """
-    The arm's clock (`driver_node.ARM_CLOCK[True]`): arrivals timed by the bus, not the reader.
+    The arm's clock (`device_topics.ARM_CLOCK[True]`): arrivals timed by the bus, not the reader.
 
     An outage the arm's 8-bit frame counter could not count leaves its time base behind by the
     outage: the clock takes the new base after `settle`. A simulated arm that paused and sent its
     backlog at once keeps its base: those samples are as old as they are.
     """
-    from bellows_ros.nodes.driver_node import ARM_CLOCK
+    from bellows_ros.nodes.device_topics import ARM_CLOCK
     timed = ARM_CLOCK[True]
     ms, settle = 1_000_000, int(timed['settle'] * 1e9)
     clock = DeviceClock(**timed)

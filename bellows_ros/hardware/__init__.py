@@ -15,11 +15,13 @@
 """
 The devices behind the driver: the arm on CAN, the actuator board on serial, and their simulations.
 
-Each device has a driver (`arm_bus`, `actuator_board`), a protocol (`can_protocol` with
-config/arm.dbc, `serial_protocol`) and a simulated twin at protocol level (`sim_arm_bus`,
-`sim_actuator_board`). The other modules are their internals.
+Every device implements one contract, `device.Device` (start, read a sample, write a command,
+vent, health, close): the drivers (`arm_bus`, `actuator_board`) and their simulated twins at
+protocol level (`sim_arm_bus`, `sim_actuator_board`). Each link has a protocol (`can_protocol`
+with config/arm.dbc, `serial_protocol`). The other modules are their internals.
 """
 __all__ = [
+    'device',             # the device contract every device implements
     'arm_bus',             # the soft arm on CAN (python-can, cantools)
     'actuator_board',      # the actuator board on serial (pyserial)
     'can_protocol',        # the arm's CAN frames (config/arm.dbc)

@@ -17,19 +17,24 @@ Driver for the actuator board (DC motor + encoder, system pressure, spring posit
 
 Talks the serial protocol of `serial_protocol` over pyserial. One reader thread parses telemetry
 and reconnects when the port vanishes; one heartbeat thread sends heartbeats and runs the command
-watchdog.
+watchdog; one command thread sends the newest motor duty (a write to the port can block for its
+write timeout: `write` never does).
 
 API
 ---
 - ``config``: ``bellows_ros.config.hardware.actuator_board_config(params_path=None) ->
   ActuatorBoardConfig`` (config/hardware.yaml, ``hardware.actuator_board.*``).
-- ``ActuatorBoard(config, on_sample=None)``; ``on_sample(sample: ActuatorSample)`` is called from
-  the reader thread for every good telemetry frame (keep it short).
-- ``.latest() -> ActuatorSample | None``: newest good sample, None when there is none or it is
+- ``ActuatorBoard(config, on_sample=None)``, a `device.Device`; ``.start()`` starts the threads;
+  ``on_sample(sample: ActuatorSample)`` is called from the reader thread for every good telemetry
+  frame (keep it short).
+- ``.read() -> ActuatorSample | None``: newest good sample, None when there is none or it is
   stale.
-- ``.send_duty(duty: float) -> float``: duty -1..1 (positive compresses the air chamber); returns
-  the duty actually sent after the safety limits.
-- ``.connected``, ``.stale`` (bool); ``.counters() -> dict[str, int]``; ``.close()``.
+- ``.write(duty: float) -> float | None``: duty -1..1 (positive compresses the air chamber);
+  returns the duty that goes out after the safety limits (None: refused, the board is latched).
+  Only the newest duty not yet sent is sent.
+- ``.vent()`` (stops the motor and latches: the board's safe state), ``.release()``, ``.vented``,
+  ``.at_rest(tolerance)``; ``.connected``, ``.stale`` (bool); ``.health() -> dict[str, int]``;
+  ``.close()``.
 
 Identity: after it opens the port the driver sends nothing and delivers nothing until the board
 has named itself (IDENTITY, `serial_protocol`); the first board it hears is the one it keeps
@@ -51,6 +56,7 @@ import time
 import serial
 
 from bellows_ros.hardware import serial_protocol as sp
+from bellows_ros.hardware.device import Device
 from bellows_ros.hardware.safety import into_end_stop, limit_duty, Watchdog
 from bellows_ros.hardware.sample_delivery import deliver, fresh
 
@@ -79,7 +85,9 @@ class ActuatorSample:
     status: int
 
 
-class ActuatorBoard:
+class ActuatorBoard(Device):
+    name = 'actuator'
+
     def __init__(self, config, on_sample=None):
         self.config = config
         self._on_sample = on_sample
@@ -100,7 +108,10 @@ class ActuatorBoard:
         self._identified = False    # the open port has named itself as that board
         self._opened_at = None      # time.monotonic() the port was opened
         self._refusal_reported = None   # why a port was last refused, as logged in this outage
-        self.latched = False    # stopped on request (stop()): duties refused until release()
+        self.latched = False    # stopped on request (vent()): duties refused until release()
+        self._pending = None    # the newest duty (limited) the command thread has not sent yet
+        self._pending_ready = threading.Condition()
+        self._opened = False
         self._counts = dict.fromkeys(
             ['samples', 'callback_errors', 'dropped', 'duplicates', 'sequence_resets',
              'reconnects', 'disconnects', 'tx_errors', 'duty_clamps', 'duty_invalid',
@@ -110,8 +121,18 @@ class ActuatorBoard:
                                         daemon=True)
         self._heart = threading.Thread(target=self._heartbeat_loop, name='actuator-heartbeat',
                                        daemon=True)
-        self._reader.start()
-        self._heart.start()
+        self._sender = threading.Thread(target=self._command_loop, name='actuator-commands',
+                                        daemon=True)
+
+    @property
+    def link(self):
+        return self.config.port
+
+    def start(self):
+        if not self._opened:
+            self._opened = True
+            for thread in (self._reader, self._heart, self._sender):
+                thread.start()
 
     # -- state for the next layer ---------------------------------------------------------------
     @property
@@ -119,14 +140,18 @@ class ActuatorBoard:
         """The port is open and the board on it has named itself as this driver's board."""
         return self._serial is not None and self._identified
 
-    @property
-    def stale(self):
-        return self.latest() is None
-
-    def latest(self):
+    def read(self):
         return fresh(self._latest, self.config.stale_timeout)
 
-    def counters(self):
+    @property
+    def vented(self):
+        """The motor is held stopped: latched, or no duty since the watchdog (or ever)."""
+        return self.latched or self._watchdog_tripped
+
+    def at_rest(self, tolerance):
+        return self._duty == 0.0  # the gas is sealed: a still lead screw is the safe state
+
+    def health(self):
         d = self._decoder
         out = dict(self._counts)
         out.update(crc_errors=d.crc_errors, framing_errors=d.framing_errors,
@@ -134,7 +159,7 @@ class ActuatorBoard:
         return out
 
     # -- commands -------------------------------------------------------------------------------
-    def stop(self):
+    def vent(self):
         """
         Stop the motor now and refuse duties until `release()` (the stop that latches).
 
@@ -143,23 +168,37 @@ class ActuatorBoard:
         stuck port), the board stops by itself once heartbeats and commands stop reaching it.
         """
         self.latched = True
+        with self._pending_ready:
+            self._pending = None
         self._command(0.0)
 
     def release(self):
         """Accept motor duties again."""
         self.latched = False
 
-    def send_duty(self, duty):
-        """Limit and send a motor duty; kicks the command watchdog."""
+    def write(self, duty):
+        """Limit a motor duty and hand it to the command thread; kicks the command watchdog."""
         if self.latched:
             self._counts['refused_while_stopped'] += 1
-            return 0.0
+            return None
         self._watchdog.kick(time.monotonic())
         self._watchdog_tripped = False
-        return self._command(duty)
+        limited = self._limit(duty)
+        with self._pending_ready:
+            self._pending = limited
+            self._pending_ready.notify()
+        return limited
 
     def _command(self, duty):
-        sample = self.latest()
+        """Limit and send a duty now, from the calling thread: the stops."""
+        limited = self._limit(duty)
+        q15 = sp.duty_to_q15(limited)
+        self._send(lambda seq: sp.MotorCommand(seq, q15))
+        return limited
+
+    def _limit(self, duty):
+        """Return `duty` after the safety limits, counting what they did; it is now the duty."""
+        sample = self.read()
         if sample is None:
             limited, reason = 0.0, ('stale' if duty != 0 else None)
         else:
@@ -169,8 +208,6 @@ class ActuatorBoard:
                    'end_stop': 'end_stop_stops'}[reason]
             self._counts[key] += 1
         self._duty = limited
-        q15 = sp.duty_to_q15(limited)
-        self._send(lambda seq: sp.MotorCommand(seq, q15))
         return limited
 
     def _at_stops(self, sample):
@@ -178,10 +215,13 @@ class ActuatorBoard:
         return (bool(sample.status & sp.END_STOP_LOW) or sample.x_c <= self.config.x_c_min,
                 bool(sample.status & sp.END_STOP_HIGH) or sample.x_c >= self.config.x_c_max)
 
-    def _send(self, make):
-        """Send `make(seq)`; the sequence number is taken under the lock shared by both threads."""
+    def _send(self, make, unless_latched=False):
+        """Send `make(seq)`; the sequence number is taken under the lock the threads share."""
         with self._io_lock:
             if self._serial is None or not self._identified:  # not a byte to an unknown device
+                return
+            if unless_latched and self.latched:  # a vent came after this duty was taken
+                self._counts['refused_while_stopped'] += 1
                 return
             self._tx_seq = (self._tx_seq + 1) & 0xFFFF
             try:
@@ -190,6 +230,17 @@ class ActuatorBoard:
                 self._counts['tx_errors'] += 1  # the reader notices a vanished port and reconnects
 
     # -- threads --------------------------------------------------------------------------------
+    def _command_loop(self):
+        while True:
+            with self._pending_ready:
+                while self._pending is None and not self._stop.is_set():
+                    self._pending_ready.wait()
+                if self._stop.is_set():
+                    return
+                duty, self._pending = self._pending, None
+            q15 = sp.duty_to_q15(duty)
+            self._send(lambda seq: sp.MotorCommand(seq, q15), unless_latched=True)
+
     def _heartbeat_loop(self):
         while not self._stop.wait(self.config.heartbeat_period):
             self._send(sp.Heartbeat)
@@ -334,11 +385,17 @@ class ActuatorBoard:
         """Stop the motor, stop the threads, close the port."""
         if self._stop.is_set():
             return
+        with self._pending_ready:  # first the command thread: no duty goes out after the stop
+            self._stop.set()
+            self._pending = None
+            self._pending_ready.notify()
+        if self._opened:
+            self._sender.join(timeout=1.0)
         self._duty = 0.0
         self._send(lambda seq: sp.MotorCommand(seq, 0))
-        self._stop.set()
-        self._heart.join(timeout=1.0)
-        self._reader.join(timeout=1.0)
+        if self._opened:
+            self._heart.join(timeout=1.0)
+            self._reader.join(timeout=1.0)
         with self._io_lock:
             port, self._serial = self._serial, None
         if port is not None:

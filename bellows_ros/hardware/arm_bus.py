@@ -25,15 +25,16 @@ API
   (config/hardware.yaml, ``hardware.arm_bus.*``).
 - ``open_bus(config, **kwargs) -> can.BusABC``: ``can.Bus(interface=config.interface,
   channel=config.channel, **kwargs)`` (socketcan on the robot; virtual / udp_multicast in tests).
-- ``ArmBus(config, bus=None, on_sample=None)``; takes ownership of `bus` (default
-  ``open_bus(config)``); ``on_sample(sample: ArmSample)`` is called from the reader thread for
-  every complete sample.
-- ``.latest() -> ArmSample | None`` (None when there is none or it is stale); ``.stale``;
+- ``ArmBus(config, bus=None, on_sample=None)``, a `device.Device`: takes ownership of `bus`
+  (default ``open_bus(config)``); ``.start()`` starts the threads; ``on_sample(sample: ArmSample)``
+  is called from the reader thread for every complete sample.
+- ``.read() -> ArmSample | None`` (None when there is none or it is stale); ``.stale``;
   ``.arm_status -> dict | None`` (last ARM_STATUS signals).
-- ``.send_pressures(pressures)``: 2 x n_segments set-points, Pa abs, order segment_1/chain_1,
+- ``.write(pressures)``: 2 x n_segments set-points, Pa abs, order segment_1/chain_1,
   segment_1/chain_2, segment_2/chain_1, ...; clamped into [pressure_min, pressure_max], non-finite
   -> vent.
-- ``.counters() -> dict[str, int]``; ``.close()`` (vents, stops the threads, shuts the bus down).
+- ``.vent()``, ``.release()``, ``.vented``, ``.at_rest(tolerance)``; ``.health() -> dict[str,
+  int]``; ``.close()`` (vents, stops the threads, shuts the bus down).
 """
 import dataclasses
 import logging
@@ -44,6 +45,7 @@ import can
 
 from bellows_ros.hardware import can_protocol as cp
 from bellows_ros.hardware.can_echo_filter import drop_own_frames
+from bellows_ros.hardware.device import Device
 from bellows_ros.hardware.loopback_can import LoopbackUdpMulticastBus
 from bellows_ros.hardware.safety import clamp_pressures, Watchdog
 from bellows_ros.hardware.sample_delivery import deliver, fresh
@@ -96,7 +98,9 @@ class ArmSample:
     t_arrival: float = None
 
 
-class ArmBus:
+class ArmBus(Device):
+    name = 'arm'
+
     def __init__(self, config, bus=None, on_sample=None):
         self.config = config
         self.db = cp.load_dbc(config.dbc or None)
@@ -130,15 +134,20 @@ class ArmBus:
         self._stop = threading.Event()
         self._reader = threading.Thread(target=self._read_loop, name='arm-reader', daemon=True)
         self._writer = threading.Thread(target=self._tx_loop, name='arm-tx', daemon=True)
-        self._reader.start()
-        self._writer.start()
+        self._opened = False
+
+    @property
+    def link(self):
+        return f'{self.config.interface}:{self.config.channel}'
+
+    def start(self):
+        if not self._opened:
+            self._opened = True
+            self._reader.start()
+            self._writer.start()
 
     # -- state for the next layer ---------------------------------------------------------------
-    @property
-    def stale(self):
-        return self.latest() is None
-
-    def latest(self):
+    def read(self):
         return fresh(self._latest, self.config.stale_timeout)
 
     @property
@@ -146,13 +155,18 @@ class ArmBus:
         """True while the chambers are held vented: latched, or no set-point since the watchdog."""
         return self._vented or self.latched
 
-    def counters(self):
+    def at_rest(self, tolerance):
+        sample = self.read()
+        ambient = self.config.pressure_min
+        return sample is not None and all(abs(p - ambient) <= tolerance for p in sample.pressures)
+
+    def health(self):
         out = dict(self._counts)
         out.update(self._checker.counters())
         return out
 
     # -- commands -------------------------------------------------------------------------------
-    def send_pressures(self, pressures):
+    def write(self, pressures):
         """Set-points per chamber (Pa abs); sent with the next ARM_SETPOINT cycle."""
         if len(pressures) != 2 * self.config.n_segments:
             raise ValueError(f'expected {2 * self.config.n_segments} pressure set-points, '
@@ -296,7 +310,9 @@ class ArmBus:
         if self._stop.is_set():
             return
         self._stop.set()
-        self._writer.join(timeout=1.0)
+        if self._opened:
+            self._writer.join(timeout=1.0)
         self._send_setpoints([self.config.pressure_min] * (2 * self.config.n_segments))
-        self._reader.join(timeout=1.0)
+        if self._opened:
+            self._reader.join(timeout=1.0)
         self._bus.shutdown()

@@ -37,9 +37,12 @@ API
   the board applies and returns any object with attributes ``x_c`` (m), ``p`` (Pa abs), ``x_s``
   (m), ``f`` (N) -- e.g. ``ActuatorState``. `config` (ActuatorBoardConfig, default from
   hardware.yaml) gives the encoder resolution and the end-stop switch positions.
-- ``.start()``, ``.stop()``, ``.close()``; ``.port`` (path for the driver); ``.unplug()``,
-  ``.replug()``.
-- ``.faults`` (`Faults`, settable at run time); ``.duty`` (duty applied now); ``.counters()``;
+- ``.start()`` starts the 1 kHz loop, ``.stop()`` stops it (the board goes silent), ``.close()``;
+  ``.port`` (path for the driver); ``.unplug()``, ``.replug()``.
+- A `device.Device` seen from the board's side: ``.read()`` the last sample it sent (an
+  `ActuatorSample`), ``.write(duty)`` a motor duty as if from a host, ``.vent()`` (motor stopped,
+  latched), ``.release()``, ``.vented``, ``.at_rest(tolerance)``.
+- ``.faults`` (`Faults`, settable at run time); ``.duty`` (duty applied now); ``.health()``;
   ``.sent`` (with record=True: {sequence index: Telemetry} of every frame put on the wire,
   uncorrupted); ``.stats`` (LoopStats).
 - ``check_free(port)`` (ParameterError unless nothing, or a dead board's link, is there),
@@ -55,6 +58,7 @@ import dataclasses
 import errno
 import hashlib
 import logging
+import math
 import os
 import re
 import shutil
@@ -67,6 +71,8 @@ import uuid
 from bellows_ros.config.hardware import actuator_board_config
 from bellows_ros.errors import ParameterError
 from bellows_ros.hardware import serial_protocol as sp
+from bellows_ros.hardware.actuator_board import ActuatorSample
+from bellows_ros.hardware.device import Device
 from bellows_ros.hardware.faults import Faults
 from bellows_ros.hardware.loop_timing import device_steps, LoopStats, LoopThread, PeriodicLoop
 from bellows_ros.hardware.safety import into_end_stop
@@ -169,7 +175,9 @@ def owns_link(port, target):
         return False
 
 
-class SimActuatorBoard:
+class SimActuatorBoard(Device):
+    name = 'actuator'
+
     def __init__(self, step, config=None, link_path=None, faults=None, period=1e-3, record=False,
                  serial=None):
         if config is None:
@@ -201,6 +209,7 @@ class SimActuatorBoard:
                                   'simulated actuator board')
         self.duty = 0.0
         self._last_host = time.monotonic()
+        self._last = None  # (time.monotonic(), index, Telemetry, plant state) of the last sample
         self._counts = {'sent': 0, 'dropped': 0, 'corrupted': 0, 'tx_overflow': 0,
                         'motor_commands': 0, 'heartbeats': 0, 'heartbeat_stops': 0}
         self.replug()
@@ -238,6 +247,10 @@ class SimActuatorBoard:
                 os.close(fd)
 
     # -- run ----------------------------------------------------------------------------------
+    @property
+    def link(self):
+        return self.port
+
     def start(self):
         self._last_host = time.monotonic()
         self._thread.start()
@@ -251,7 +264,43 @@ class SimActuatorBoard:
         if self._tmpdir is not None:
             shutil.rmtree(self._tmpdir, ignore_errors=True)
 
-    def counters(self):
+    # -- the device's side of the contract: what it measured, what it was told ------------------
+    def read(self):
+        last = self._last
+        if last is None or time.monotonic() - last[0] > 20 * self.period:
+            return None  # stale once the loop has stopped
+        t_receive, index, telemetry, state = last
+        return ActuatorSample(
+            t_receive=t_receive, t_device=telemetry.t_us * 1e-6, index=index,
+            encoder_counts=telemetry.encoder_counts,
+            x_c=telemetry.encoder_counts * self.config.metres_per_count, x_s=state.x_s,
+            p=float(telemetry.pressure_pa), f=state.f, status=telemetry.status)
+
+    def write(self, duty):
+        """Take a motor duty as if a host had sent it; None while latched."""
+        if self.latched:
+            return None
+        self._last_host = time.monotonic()
+        duty = float(duty)
+        # What a motor frame can carry: -1..1 in Q15; a non-finite duty stops the motor.
+        self.duty = sp.q15_to_duty(sp.duty_to_q15(duty)) if math.isfinite(duty) else 0.0
+        return self.duty
+
+    def vent(self):
+        self.latched = True
+        self.duty = 0.0
+
+    def release(self):
+        self.latched = False
+
+    @property
+    def vented(self):
+        return self.latched or time.monotonic() - self._last_host > sp.BOARD_HEARTBEAT_TIMEOUT
+
+    def at_rest(self, tolerance):
+        return self.duty == 0.0  # the gas is sealed: a still lead screw is the safe state
+
+    def health(self):
         out = dict(self._counts)
         out.update(rx_crc_errors=self._decoder.crc_errors,
                    rx_framing_errors=self._decoder.framing_errors)
@@ -280,6 +329,7 @@ class SimActuatorBoard:
                     spring_um=int(round(state.x_s * 1e6)), force_mn=int(round(state.f * 1e3)),
                     status=status)
                 self._transmit(seq, telemetry)
+                self._last = (time.monotonic(), seq, telemetry, state)  # `read` makes the sample
                 seq += 1
             if time.monotonic() >= self._identity_due:
                 self._identify((seq - 1) & 0xFFFF)
@@ -300,6 +350,8 @@ class SimActuatorBoard:
     def _apply_safety(self, state):
         """Apply the firmware's limits before the plant sees the duty; return the status bits."""
         status = 0
+        if self.latched:
+            self.duty = 0.0
         if time.monotonic() - self._last_host > sp.BOARD_HEARTBEAT_TIMEOUT:
             status |= sp.HEARTBEAT_LOST
             if self.duty != 0.0:

@@ -21,9 +21,13 @@ API
   tuple[float, ...]) -> sequence of n_segments (p1, p2, psi)`` advances the plant by dt seconds
   with the chamber pressure set-points the valves apply (Pa abs, order seg1 chain1, seg1 chain2,
   ...) and returns the measured chain pressures (Pa abs) and angle (rad) per segment.
-- ``.start()``, ``.stop()``, ``.close()`` (also shuts `bus` down: the emulator owns it).
+- ``.start()`` starts the 1 kHz loop, ``.stop()`` stops it (the arm goes silent), ``.close()``
+  (also shuts `bus` down: the emulator owns it).
 - ``.faults`` (`Faults`, settable at run time); ``.setpoints`` (what the valves apply now);
-  ``.counters()``; ``.stats`` (LoopStats).
+  ``.health()``; ``.stats`` (LoopStats).
+- A `device.Device` seen from the arm's side: ``.read()`` the last sample it sent (an `ArmSample`),
+  ``.write(pressures)`` set-points as if from a host, ``.vent()``, ``.release()``, ``.vented``,
+  ``.at_rest(tolerance)``.
 
 Arm behaviour (docs/protocols.md): one ARM_SEGi_SAMPLE per segment per period (DBC cycle time, 1
 ms), all carrying the instant's number as Counter; ARM_STATUS every 100 ms; host frames are
@@ -37,14 +41,19 @@ import can
 
 from bellows_ros.config.hardware import vent_pressure as ambient_pressure
 from bellows_ros.hardware import can_protocol as cp
+from bellows_ros.hardware.arm_bus import ArmSample
 from bellows_ros.hardware.can_echo_filter import drop_own_frames
+from bellows_ros.hardware.device import Device
 from bellows_ros.hardware.faults import Faults
 from bellows_ros.hardware.loop_timing import device_steps, LoopStats, LoopThread, PeriodicLoop
+from bellows_ros.hardware.safety import clamp_pressures
 
 log = logging.getLogger(__name__)
 
 
-class SimArmBus:
+class SimArmBus(Device):
+    name = 'arm'
+
     def __init__(self, bus, step, n_segments=4, faults=None, dbc=None, vent_pressure=None):
         self.db = cp.load_dbc(dbc)
         self._bus = bus
@@ -75,10 +84,53 @@ class SimArmBus:
         self._heartbeat_lost = True
         self._counts = {'sent': 0, 'dropped': 0, 'corrupted': 0, 'replayed': 0, 'tx_errors': 0,
                         'heartbeat_vents': 0}
+        self._last = None  # (time.monotonic(), tick, measured) of the last instant
         self._thread = LoopThread(self._loop, 'sim-arm-bus', log, 'simulated arm')
+
+    @property
+    def link(self):
+        return str(self._bus.channel_info)
 
     def start(self):
         self._thread.start()
+
+    # -- the device's side of the contract: what it measured, what it was told ------------------
+    def read(self):
+        last = self._last
+        if last is None or time.monotonic() - last[0] > 20 * self.period:
+            return None  # stale once the loop has stopped
+        t_receive, tick, measured = last
+        return ArmSample(t_receive=t_receive, index=tick, t_device=tick * self.period,
+                         psi=tuple(psi for _, _, psi in measured),
+                         pressures=tuple(p for p1, p2, _ in measured for p in (p1, p2)))
+
+    def write(self, pressures):
+        """Take set-points as if a host had sent them (and a heartbeat); None while latched."""
+        if len(pressures) != 2 * self.n_segments:
+            raise ValueError(f'expected {2 * self.n_segments} pressure set-points, '
+                             f'got {len(pressures)}')
+        if self.latched:
+            return None
+        # What a set-point frame can carry: the DBC's range; a non-finite value vents its chamber.
+        self._commanded, _, _ = clamp_pressures(pressures, self.vent_pressure, self._p_range[1])
+        self._last_host = time.monotonic()
+        return tuple(self._commanded)
+
+    def vent(self):
+        self.latched = True
+        self.setpoints = (self.vent_pressure,) * (2 * self.n_segments)
+
+    def release(self):
+        self.latched = False
+
+    @property
+    def vented(self):
+        return self.latched or self._heartbeat_lost
+
+    def at_rest(self, tolerance):
+        sample = self.read()
+        return sample is not None and all(abs(p - self.vent_pressure) <= tolerance
+                                          for p in sample.pressures)
 
     def stop(self):
         self._thread.stop()
@@ -87,7 +139,7 @@ class SimArmBus:
         self.stop()
         self._bus.shutdown()
 
-    def counters(self):
+    def health(self):
         out = dict(self._counts)
         out.update({f'rx_{k}': v for k, v in self._checker.counters().items()})
         return out
@@ -103,6 +155,7 @@ class SimArmBus:
             # whole delay and sent one row squeezed the delay into one sample period.
             for step in device_steps(dt, self.period):
                 measured = self._step(step, self.setpoints)
+                self._last = (time.monotonic(), tick, measured)  # `read` makes the sample
                 for frame in self._encode(tick, measured):
                     previous = self._transmit(frame, previous)
                 if tick % self._status_every == 0:
@@ -140,7 +193,7 @@ class SimArmBus:
         if lost and not self._heartbeat_lost:
             self._counts['heartbeat_vents'] += 1
         self._heartbeat_lost = lost
-        self.setpoints = ((self.vent_pressure,) * (2 * self.n_segments) if lost
+        self.setpoints = ((self.vent_pressure,) * (2 * self.n_segments) if lost or self.latched
                           else tuple(self._commanded))
 
     def _encode(self, counter, measured):

@@ -18,6 +18,7 @@ The ROS 2 nodes (rclpy), one job each; each module's `main` is a console script 
 The topic contract they share is `bellows_ros.interfaces`; docs/nodes.md describes every node.
 """
 __all__ = [
+    'device_topics',              # each kind of device as driver_node publishes it
     'driver_node',                # the devices on the topics (a lifecycle node)
     'model_node',                 # paper A's driving torque for every sample
     'arm_controller_node',        # angle tracking with the model as feedforward

@@ -25,7 +25,9 @@ burst read after a stall keeps its 1 ms spacing. For the arm the arrival that an
 is the bus's receive timestamp (`sample_delivery.arrival_ns`), so samples a starved reader takes
 late from the socket carry their true age; there is no ROS timer at 1 kHz.
 Commands (`/bellows/pressure_command`, `/actuator/motor_command`) pass through the hardware layer's
-safety limits (clamping, end stops, watchdogs).
+safety limits (clamping, end stops, watchdogs). The node holds a list of devices, one per enabled
+group, and treats them alike: each is a `hardware.device.Device`, and `device_topics` says what
+its topics are and how it is made.
 
 A managed (lifecycle) node, as ros2_control's hardware is (rclpy.lifecycle, docs/protocols.md
 "Safety states"): `configure` opens the devices and waits for their first samples (inactive: the
@@ -56,8 +58,6 @@ Parameters (config/nodes_*.yaml, section `driver_node`):
   cpu_latency_limit (s): CPU wake-up latency held while the node runs, 0 = idle CPUs poll;
       negative = off (runtime/realtime.py).
 """
-import dataclasses
-import math
 import os
 import stat
 import threading
@@ -67,83 +67,14 @@ from rclpy.duration import Duration
 from rclpy.lifecycle import TransitionCallbackReturn
 
 from bellows_ros import interfaces
-from bellows_ros.config.hardware import actuator_board_config, arm_bus_config
 from bellows_ros.errors import BellowsError
-from bellows_ros.hardware import actuator_board, arm_bus
 from bellows_ros.hardware.can_protocol import dbc_segments
-from bellows_ros.hardware.loop_timing import LoopStats
-from bellows_ros.hardware.sample_delivery import arrival_ns, DeviceClock, on_host_clock
-from bellows_ros.models.derivatives import rate
 from bellows_ros.nodes import diagnostics
+from bellows_ros.nodes.device_topics import KINDS
 from bellows_ros.runtime import LifecycleNode, realtime, run
-from bellows_ros.runtime.joint_state_cdr import JointStateWriter
 from bellows_ros.runtime.parameters import Spec
 
 _DISCOVERY_SETTLE = 0.5  # s, see DriverNode._wait_for_subscribers
-ACTUATOR_NAMES = interfaces.actuator_sample_names()
-ACTUATOR_WRITER = JointStateWriter(ACTUATOR_NAMES, velocity=False)  # no rates (interfaces.py)
-
-
-class SampleClock:
-    """Timing of a device's sample stream, for /diagnostics: the samples are the loop ticks."""
-
-    def __init__(self, period):
-        self.period = period
-        self.stats = LoopStats()
-        # The sample rate against the device's own (diagnostic_updater's check and keys).
-        self.frequency = diagnostics.FrequencyStatus(1.0 / period, 1.0 / period, tolerance=0.1,
-                                                     window_size=5, name='sample rate')
-        self._last_time = None
-        self._last_index = None
-
-    def tick(self, index, arrival, compute):
-        self.frequency.tick()
-        if self._last_time is not None:
-            gap = index - self._last_index
-            if gap > 1:
-                self.stats.add_misses(gap - 1)
-            interval = arrival - self._last_time
-            self.stats.record(interval, max(0.0, interval - self.period * max(gap, 1)), compute)
-        self._last_time, self._last_index = arrival, index
-
-
-class NewestWriter:
-    """
-    Call `send(value)` from a thread of its own with the newest value `put`, never blocking `put`.
-
-    A value not yet sent when a newer one arrives is replaced (a motor duty: only the latest
-    counts).
-    """
-
-    def __init__(self, send, name):
-        self._send = send
-        self._value = None
-        self._stop = False
-        self._ready = threading.Condition()
-        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
-        self._thread.start()
-
-    def put(self, value):
-        with self._ready:
-            self._value = value
-            self._ready.notify()
-
-    def close(self):
-        """Stop the thread (values not yet sent are dropped); waits up to 1 s for a send."""
-        with self._ready:
-            self._stop = True
-            self._ready.notify()
-        self._thread.join(timeout=1.0)
-
-    def _run(self):
-        while True:
-            with self._ready:
-                while self._value is None and not self._stop:
-                    self._ready.wait()
-                if self._stop:
-                    return
-                value, self._value = self._value, None
-            self._send(value)
 
 
 def _port_problem(port):
@@ -152,21 +83,6 @@ def _port_problem(port):
         return 'not a character device (a serial port is one, or absent)'
     return ''
 
-
-# The arm's clock (`DeviceClock`), by whether the bus times the frames' arrivals on the system
-# clock (`sample_delivery.on_host_clock`). An outage longer than the 8-bit frame counter can count
-# leaves the arm's time base behind by multiples of 256 ms; without a new base every later sample
-# would look too old to act on, and the arm would stay vented.
-# - Timed (kernel timestamps: no reader delay, jitter far under 50 ms): arrivals 50 ms later than
-#   the base predicts for a second of samples mean the base moved; a simulated arm that paused and
-#   then sent its backlog is back on time within its pause. The offset may rise by 1 % of device
-#   time: the arm's time is its sample count times the nominal period, so its oscillator's error
-#   (and a host clock being slewed) shows as drift, and 100 ppm would let its samples age past
-#   `max_sample_age` (20 ms) within minutes; with timed arrivals a delayed frame cannot raise it.
-# - Untimed (read times): a reader stalled for up to 2 s keeps the base and its backlog its age;
-#   a base 250 ms or more behind for longer is taken as moved.
-ARM_CLOCK = {True: {'drift': 1e-2, 'resync': 0.05, 'settle': 1.0},
-             False: {'drift': 1e-4, 'resync': 0.25, 'settle': 2.0}}
 
 PARAMETERS = (
     Spec('arm.enabled', False, 'drive the arm on CAN'),
@@ -200,34 +116,27 @@ class DriverNode(LifecycleNode):
     def __init__(self, **kwargs):
         super().__init__('driver_node', **kwargs)
         self.given = self.declare_specs(PARAMETERS)
-        self.use_arm = self.given['arm.enabled']
-        self.use_actuator = self.given['actuator.enabled']
         self.startup_timeout = self.given['startup_timeout']
         realtime.declare(self)  # SCHED_FIFO priority, CPU latency limit: run() applies them
         self.check_parameters()
-        if not (self.use_arm or self.use_actuator):
+        # One entry per enabled device (device_topics.py); each group on its own sample topic.
+        self.devices = [kind() for kind in KINDS if self.given[f'{kind.name}.enabled']]
+        if not self.devices:
             raise BellowsError('driver_node: neither arm.enabled nor actuator.enabled is set')
-
-        # Each device group on its own sample topics: only the enabled groups' are advertised.
-        self.state_pub = self.actuator_state_pub = None
-        if self.use_arm:
-            self.state_pub = self.publisher(interfaces.JOINT_STATES)
-            self.vented_pub = self.publisher(interfaces.VENTED)
-        if self.use_actuator:
-            self.actuator_state_pub = self.publisher(interfaces.ACTUATOR_JOINT_STATES)
-        self._publish_lock = threading.Lock()  # both reader threads publish
-        self.arm = self.actuator = None
-        self.reports = {}
-        self.published = {'arm': 0, 'actuator': 0}
-        self.arm_vented = None        # the state bellows/vented last said
-        self.refused = 0              # commands that arrived while not active
+        self._publish_lock = threading.Lock()  # every device's reader thread publishes
+        for topics in self.devices:
+            topics.publisher = self.publisher(topics.sample_topic)
+            topics.vented_pub = (self.publisher(topics.vented_topic) if topics.vented_topic
+                                 else None)
+            topics.said_vented = None    # what its vented topic last said
+            self.subscription(topics.command_topic,
+                              lambda msg, topics=topics: self.on_command(topics, msg))
+        self.refused = 0              # commands that arrived while not configured
         self.estop_held = False       # /bellows/estop is True
         self.vent_requested = False   # ~/vent or the estop latched a vent: ~/release ends it
         self.failure = ''             # why the last configure failed
-        self.vent_time = None         # s from shutdown to every chamber at ambient
+        self.vent_time = None         # s from shutdown to every device at rest
         self.state = 'unconfigured'  # the lifecycle state's label, as each transition ends
-        self.subscription(interfaces.PRESSURE_COMMAND, self.on_pressure_command)
-        self.subscription(interfaces.MOTOR_COMMAND, self.on_motor_command)
         self.subscription(interfaces.ESTOP, self.on_estop)
         self.create_service(self.srv.Trigger, '~/vent', self.on_vent)
         self.create_service(self.srv.Trigger, '~/release', self.on_release)
@@ -245,19 +154,26 @@ class DriverNode(LifecycleNode):
     def active(self):
         return self.state == 'active'
 
+    def _opened(self):
+        """Return the devices that are open (configured)."""
+        return [topics.device for topics in self.devices if topics.device is not None]
+
     # --- lifecycle (rclpy.lifecycle): each returns SUCCESS or FAILURE, and keeps self.state ----
     def on_configure(self, previous):
         """Open the devices and wait for their first samples; they start vented, refusing."""
         given = self.given
         if given['wait_for_subscribers'] > 0:
             self._wait_for_subscribers(given['wait_for_subscribers'])
-        hardware_params = given['hardware_params'] or None
         try:
-            if self.use_actuator:
-                self._open_actuator(actuator_board_config(hardware_params), given['actuator.port'])
-            if self.use_arm:
-                self._open_arm(arm_bus_config(hardware_params), given['arm.interface'],
-                               given['arm.channel'], given['arm.n_segments'])
+            for topics in self.devices:
+                topics.new_clock()
+                device = topics.make(given, given['hardware_params'] or None,
+                                     lambda sample, topics=topics: self.on_sample(topics, sample))
+                topics.device = device
+                device.vent()  # vented and refusing from its first sample: nothing commanded
+                device.start()
+                self.diagnostics.add(
+                    topics.name, lambda stat, topics=topics: self.diagnose_device(topics, stat))
             self._wait_for_samples()
         except BellowsError as error:
             self.failure = str(error)
@@ -267,15 +183,16 @@ class DriverNode(LifecycleNode):
             return FAILURE
         self._hold_vented()
         self.state = 'inactive'
-        self.get_logger().info(f'configured: {self._devices()} open, vented until activated')
+        self.get_logger().info(f'configured: {self._names()} open, vented until activated')
         return SUCCESS
 
     def on_activate(self, previous):
         """Accept commands, unless a vent is latched (then from ~/release on)."""
         if not (self.vent_requested or self.estop_held):
-            self._release_devices()
+            for device in self._opened():
+                device.release()
         self.state = 'active'
-        self.get_logger().info(f'driving {self._devices()}'
+        self.get_logger().info(f'driving {self._names()}'
                                + (' (vented until ~/release)' if self.vented else ''))
         return SUCCESS
 
@@ -292,7 +209,7 @@ class DriverNode(LifecycleNode):
 
     def on_shutdown(self, previous):
         self._hold_vented()
-        self._wait_for_ambient()
+        self._wait_for_rest()
         self._close_devices()
         self.state = 'finalized'
         return SUCCESS
@@ -303,128 +220,63 @@ class DriverNode(LifecycleNode):
         self.state = 'unconfigured'  # the error handled: rcl_lifecycle's errorprocessing -> here
         return SUCCESS
 
-    def _devices(self):
-        return ' and '.join(name for name, on in (('arm', self.use_arm),
-                                                  ('actuator', self.use_actuator)) if on)
+    def _names(self):
+        return ' and '.join(topics.name for topics in self.devices)
 
     def _hold_vented(self):
-        """Vent every chamber and stop the motor at the devices: they refuse commands."""
-        if self.arm is not None:
-            self.arm.vent()
-        if self.actuator is not None:
-            self.actuator.stop()
-        self._publish_vented()
+        """Put every device in its safe state (chambers vented, motor stopped); they refuse."""
+        for device in self._opened():
+            device.vent()
+        for topics in self.devices:
+            self._publish_vented(topics)
 
-    def _release_devices(self):
-        for device in (self.arm, self.actuator):
-            if device is not None:
-                device.release()
-
-    def _publish_vented(self):
-        """Say on bellows/vented when the arm's chambers start or stop being held vented."""
-        if not self.use_arm:
+    def _publish_vented(self, topics):
+        """Say on the device's vented topic (if any) when it starts or stops being vented."""
+        if topics.vented_pub is None:
             return
         # Read under the lock: the reader thread (after each sample) and the executor (a vent)
         # both call this, and a state read before the other's publish would overwrite it.
         with self._publish_lock:
-            arm = self.arm
-            vented = arm is None or arm.vented
-            if vented != self.arm_vented:
-                self.arm_vented = vented
-                self.vented_pub.publish(self.msg.Bool(data=vented))
+            device = topics.device
+            vented = device is None or device.vented
+            if vented != topics.said_vented:
+                topics.said_vented = vented
+                topics.vented_pub.publish(self.msg.Bool(data=vented))
 
-    def _wait_for_ambient(self):
-        """Wait until every arm chamber reads ambient (the vent pressure p0), or the timeout."""
-        if self.arm is None:
-            return  # the actuator's gas is sealed: a still lead screw is its safe state
-        ambient, tolerance = self.arm.config.pressure_min, self.given['ambient_tolerance']
-        timeout = self.given['shutdown_timeout']
+    def _wait_for_rest(self):
+        """Wait until every device is at rest (each chamber at ambient), or the timeout."""
+        tolerance, timeout = self.given['ambient_tolerance'], self.given['shutdown_timeout']
         start = time.monotonic()
         while True:
-            sample = self.arm.latest()
-            worst = None if sample is None else max(abs(p - ambient) for p in sample.pressures)
+            moving = [topics.name for topics in self.devices
+                      if topics.device is not None and not topics.device.at_rest(tolerance)]
             waited = time.monotonic() - start
-            if worst is not None and worst <= tolerance:
+            if not moving:
                 self.vent_time = waited
-                self.get_logger().info(f'shutdown: every chamber within {tolerance:g} Pa of '
-                                       f'ambient after {waited:.3f} s')
+                self.get_logger().info(f'shutdown: every device at rest (chambers within '
+                                       f'{tolerance:g} Pa of ambient) after {waited:.3f} s')
                 return
             if waited >= timeout:
-                reading = 'no samples' if worst is None else f'{worst:.0f} Pa from ambient'
-                self.get_logger().error(f'shutdown: chambers not at ambient after {timeout:g} s '
-                                        f'({reading}): check the valves before touching the arm')
+                self.get_logger().error(f'shutdown: {", ".join(moving)} not at rest after '
+                                        f'{timeout:g} s: check the valves before touching it')
                 return
             time.sleep(0.005)
 
-    # --- devices
-    # -----------------------------------------------------------------------------------
-    def _open_actuator(self, config, port):
-        if port:
-            config = dataclasses.replace(config, port=port)
-        # A port may appear a moment after the driver starts (a USB board being enumerated, a
-        # simulated board started beside the driver by a launch file): wait for it as for the
-        # first sample.
-        end = time.monotonic() + self.startup_timeout
-        while not os.path.exists(config.port) and time.monotonic() < end:
-            time.sleep(0.01)
-        if not os.path.exists(config.port):
-            raise BellowsError(f'driver_node: actuator board port {config.port} does not exist '
-                               f'after {self.startup_timeout:g} s (device absent? set '
-                               'actuator.port)')
-        self.actuator_clock = SampleClock(interfaces.SAMPLE_PERIOD)
-        self.actuator_stamps = DeviceClock()
-        self.reports['actuator'] = diagnostics.LoopReport(self.actuator_clock.stats)
-        self.diagnostics.add('actuator', lambda stat: self.diagnose_device('actuator', stat))
-        self.actuator = actuator_board.ActuatorBoard(config, on_sample=self.on_actuator_sample)
-        self.actuator_port = config.port
-        # A write to the board's serial port can block for up to its write timeout (a board, or
-        # a simulated one, that does not read for a while); the arm's pressure commands share
-        # the callback thread, and the arm's watchdog vents after 0.1 s without one.
-        self.duty_writer = NewestWriter(self.actuator.send_duty, 'motor-commands')
-
-    def _open_arm(self, config, interface, channel, n_segments):
-        config = dataclasses.replace(config, interface=interface or config.interface,
-                                     channel=channel or config.channel,
-                                     n_segments=n_segments or config.n_segments)
-        segments = range(1, config.n_segments + 1)
-        self.arm_names = interfaces.arm_sample_names(segments)
-        self.chain_names = self.arm_names[config.n_segments:]  # the chambers, after the joints
-        # The sample message's constant parts: its joints have no effort, its chambers no
-        # position or rate (interfaces.py). Sent serialized (runtime/joint_state_cdr.py).
-        self._arm_nans = (math.nan,) * len(self.chain_names)
-        self._arm_no_effort = (math.nan,) * config.n_segments
-        self.arm_writer = JointStateWriter(self.arm_names)
-        self.arm_clock = SampleClock(interfaces.SAMPLE_PERIOD)
-        self.arm_stamps = None  # made at the first sample: does the bus time its arrivals?
-        self.reports['arm'] = diagnostics.LoopReport(self.arm_clock.stats)
-        self.diagnostics.add('arm', lambda stat: self.diagnose_device('arm', stat))
-        self._last_arm = None
-        self._psi_dot = [0.0] * config.n_segments
-        self.setpoints = dict.fromkeys(self.chain_names, config.pressure_min)  # vented
-        try:
-            bus = arm_bus.open_bus(config)
-        except Exception as exc:  # python-can raises OSError/CanError subclasses per interface
-            raise BellowsError(f'driver_node: cannot open CAN bus {config.interface}:'
-                               f'{config.channel} ({exc})') from None
-        self.arm = arm_bus.ArmBus(config, bus=bus, on_sample=self.on_arm_sample)
-        self.arm_link = f'{config.interface}:{config.channel}'
-
+    # --- devices -----------------------------------------------------------------------------
     def _wait_for_samples(self):
         end = time.monotonic() + self.startup_timeout
-        waiting = [(name, device) for name, device in (('actuator', self.actuator),
-                                                       ('arm', self.arm)) if device]
+        waiting = list(self.devices)
         while waiting and time.monotonic() < end:
-            waiting = [(name, device) for name, device in waiting if device.latest() is None]
+            waiting = [topics for topics in waiting if topics.device.read() is None]
             time.sleep(0.01)
         if waiting:
-            name = waiting[0][0]
-            where = self.actuator_port if name == 'actuator' else self.arm_link
-            raise BellowsError(f'driver_node: no {name} samples on {where} within '
-                               f'{self.startup_timeout:g} s (device absent or not powered)')
+            raise BellowsError(f'driver_node: no {waiting[0].name} samples on '
+                               f'{waiting[0].device.link} within {self.startup_timeout:g} s '
+                               '(device absent or not powered)')
 
     def _wait_for_subscribers(self, timeout):
         end = time.monotonic() + timeout
-        publishers = self._sample_publishers()
+        publishers = [topics.publisher for topics in self.devices]
         while not all(p.get_subscription_count() for p in publishers):
             if time.monotonic() > end:
                 alone = ', '.join(p.topic_name for p in publishers
@@ -438,102 +290,58 @@ class DriverNode(LifecycleNode):
         # lost, half of some, under load). Give the other side the same chance.
         time.sleep(_DISCOVERY_SETTLE)
 
-    def _sample_publishers(self):
-        """Return the enabled groups' sample publishers."""
-        return [p for p in (self.state_pub, self.actuator_state_pub) if p is not None]
-
     def close(self):
-        """End of the process: shut down (vent, wait for ambient) from wherever it is."""
+        """End of the process: shut down (vent, wait for rest) from wherever it is."""
         if self.state in ('inactive', 'active'):
             self.trigger_shutdown()
         self._close_devices()
 
     def _close_devices(self):
-        if getattr(self, 'duty_writer', None) is not None:
-            self.duty_writer.close()
-            self.duty_writer = None
-        devices = [(n, d) for n, d in (('actuator', self.actuator), ('arm', self.arm)) if d]
-        for _, device in devices:
+        opened = self._opened()
+        for device in opened:
             device.close()
-        if devices and self.reports:
+        if opened:
             self.stopped = True  # the closing counts, STALE: nothing is published after
             self.diagnostics.force_update()
             self.stopped = False
             # Samples still being repaired (a packet lost under load) must reach the readers
             # before the participant goes; bounded, so a reader that died cannot hold it up.
             end = time.monotonic() + 1.0
-            for publisher in (*self._sample_publishers(), self.diagnostics.publisher):
+            for publisher in (*(t.publisher for t in self.devices), self.diagnostics.publisher):
                 left = max(0.0, end - time.monotonic())
                 publisher.wait_for_all_acked(Duration(seconds=left))
-        self.actuator = self.arm = None
-        for name in self.reports:
-            self.diagnostics.removeByName(name)
-        self.reports = {}
+        for topics in self.devices:
+            if topics.device is not None:
+                self.diagnostics.removeByName(topics.name)
+            topics.device = None
 
-    # --- samples -> topics (called from the drivers' reader threads) ----------------------------
-    def on_actuator_sample(self, sample):
+    # --- samples -> topics (called from the devices' reader threads) ----------------------------
+    def on_sample(self, topics, sample):
         start = time.monotonic()
-        stamp = self.actuator_stamps.stamp(int(round(sample.t_device * 1e9)),
-                                           self.get_clock().now().nanoseconds)
-        # One message: air chamber and spring compressions, the load cell's spring force as the
-        # spring's effort, the chamber pressure as the chamber's (interfaces.py).
-        state = ACTUATOR_WRITER.serialize(stamp, position=(sample.x_c, sample.x_s, math.nan),
-                                          effort=(math.nan, sample.f, sample.p))
+        state = topics.message(sample, self.get_clock().now().nanoseconds)
         with self._publish_lock:
-            self.actuator_state_pub.publish(state)
-            self.published['actuator'] += 1
-        self.actuator_clock.tick(sample.index, sample.t_receive, time.monotonic() - start)
-
-    def on_arm_sample(self, sample):
-        start = time.monotonic()
-        # The arm's clock mapped onto the node clock, from when each frame reached the host (the
-        # bus's timestamp): stamped when this thread got to it, a backlog read 0.5-1.5 s late by
-        # a starved reader went out as fresh samples, and the arm controller acted on them.
-        arrival = arrival_ns(self.get_clock().now().nanoseconds, sample.t_arrival)
-        if self.arm_stamps is None:
-            self.arm_stamps = DeviceClock(**ARM_CLOCK[on_host_clock(sample.t_arrival)])
-        stamp = self.arm_stamps.stamp(int(round(sample.t_device * 1e9)), arrival)
-        previous = self._last_arm
-        if previous is not None:
-            # The encoder-less arm has no Ψ̇ sensor: the project's rate estimator (derivatives).
-            dt = sample.t_device - previous.t_device
-            self._psi_dot = [rate(a, b, dt, held)
-                             for a, b, held in zip(sample.psi, previous.psi, self._psi_dot)]
-        self._last_arm = sample
-        state = self.arm_writer.serialize(
-            stamp, position=(*sample.psi, *self._arm_nans),
-            velocity=(*self._psi_dot, *self._arm_nans),
-            effort=(*self._arm_no_effort, *sample.pressures))
-        with self._publish_lock:
-            self.state_pub.publish(state)
-            self.published['arm'] += 1
-        self._publish_vented()   # the watchdog and the first accepted command change it
-        self.arm_clock.tick(sample.index, sample.t_receive, time.monotonic() - start)
+            topics.publisher.publish(state)
+            topics.published += 1
+        self._publish_vented(topics)   # the watchdog and the first accepted command change it
+        topics.clock.tick(sample.index, sample.t_receive, time.monotonic() - start)
 
     # --- commands (refused by the devices unless active and released) ---------------------------
-    def on_pressure_command(self, msg):
-        if self.arm is None:
+    def on_command(self, topics, msg):
+        device = topics.device
+        if device is None:
             self.refused += 1
             return
-        # A command may name some chambers only; the others keep their last set-point.
-        for name, value in zip(msg.name, msg.effort):
-            if name in self.setpoints:
-                self.setpoints[name] = value
-        self.arm.send_pressures([self.setpoints[name] for name in self.chain_names])
-
-    def on_motor_command(self, msg):
-        if self.actuator is None:
-            self.refused += 1
-            return
-        self.duty_writer.put(msg.data)
+        command = topics.command(msg)
+        if command is not None:
+            device.write(command)
 
     # --- the stop that latches (docs/protocols.md, "Safety states") ----------------------------
     @property
     def vented(self):
-        return any(device.latched for device in (self.arm, self.actuator) if device is not None)
+        return any(device.latched for device in self._opened())
 
     def vent(self, why):
-        """Vent every chamber and stop the motor now; refuse commands until `release`."""
+        """Put every device in its safe state now; refuse commands until `release`."""
         self.vent_requested = True
         self._hold_vented()
         self.get_logger().warn(f'vented ({why}): commands refused until released')
@@ -546,7 +354,8 @@ class DriverNode(LifecycleNode):
         if not self.active:
             why = f'released: commands accepted once active (now {self.state})'
         else:
-            self._release_devices()
+            for device in self._opened():
+                device.release()
             why = 'released: commands accepted again (vented until the next set-point)'
         self.get_logger().info(why)
         return True, why
@@ -567,29 +376,28 @@ class DriverNode(LifecycleNode):
         self.estop_held = bool(msg.data)
 
     # --- diagnostics -----------------------------------------------------------------------------
-    def diagnose_device(self, name, stat):
+    def diagnose_device(self, topics, stat):
         """One device: its link (hardware_id), sample rate and timing, counters, safety state."""
-        device = self.actuator if name == 'actuator' else self.arm
+        device = topics.device
         if device is None:  # closed between two reports
             stat.summary(diagnostics.STALE, 'device closed')
             return stat
-        link = self.actuator_port if name == 'actuator' else self.arm_link
-        clock = self.actuator_clock if name == 'actuator' else self.arm_clock
-        stat.hardware_id = link
-        values, _, new_misses = self.reports[name].values()
-        values.update(device.counters())
-        values['published'] = str(self.published[name])
+        stat.hardware_id = device.link
+        values, _, new_misses = topics.report.values()
+        values.update(device.health())
+        values['published'] = str(topics.published)
         values['stale'] = str(device.stale)
         values['lifecycle'] = self.state
         values['vented'] = str(device.latched)
         values['estop_held'] = str(self.estop_held)
         values['refused_unconfigured'] = str(self.refused)
         stat.update(values)
-        clock.frequency.run(stat)  # summary and keys of the sample rate against 1 kHz
+        topics.clock.frequency.run(stat)  # summary and keys of the sample rate against 1 kHz
         if self.stopped:
             stat.summary(diagnostics.STALE, 'driver stopped: these are the final counts')
         elif device.stale:
-            stat.summary(diagnostics.ERROR, f'no data from {link} (link down or device stopped)')
+            stat.summary(diagnostics.ERROR, f'no data from {device.link} (link down or device '
+                         'stopped)')
         else:
             if new_misses:
                 stat.mergeSummary(diagnostics.WARN, f'{new_misses} samples missed')
@@ -605,7 +413,7 @@ class DriverNode(LifecycleNode):
     def diagnose_lifecycle(self, stat):
         """Report the node's state: lifecycle, emergency stop, vent latch, refused commands."""
         state = self.state
-        stat.update({'lifecycle': state, 'devices': self._devices() or 'none',
+        stat.update({'lifecycle': state, 'devices': self._names() or 'none',
                      'estop_held': str(self.estop_held),
                      'vent_requested': str(self.vent_requested),
                      'refused_unconfigured': str(self.refused),

@@ -148,7 +148,7 @@ class SimActuatorNode(LiveEffectStrengths, Node):
     def diagnose_plant(self, stat):
         """Report the simulated board's 1 kHz loop and the plant's state."""
         values, rate, new_misses = self.report.values()
-        values.update(self.board.counters())
+        values.update(self.board.health())
         values.update(x_c=f'{self.plant.x_nut:.6f}', gas_p_ref=f'{self.plant.gas:.1f}',
                       pressure=f'{self.plant.pressure:.1f}', duty=f'{self.board.duty:.3f}',
                       x_c_min_seen=f'{self.x_c_seen[0]:.6f}',

@@ -151,7 +151,7 @@ class SimArmNode(LiveEffectStrengths, Node):
     def diagnose_plant(self, stat):
         """Report the simulated arm's 1 kHz bus loop and each segment's angle."""
         values, rate, new_misses = self.report.values()
-        values.update(self.sim.counters())
+        values.update(self.sim.health())
         for i, plant in enumerate(self.plants):
             values[f'segment_{i + 1}.psi'] = f'{plant.psi:.4f}'
         # The strengths the plants step with (taken at their last step: 0 = off).
