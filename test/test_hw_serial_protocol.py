@@ -13,6 +13,7 @@
 # limitations under the License.
 
 """Actuator board serial protocol: round trips, resynchronisation, fuzzing of the decoder."""
+import math
 import zlib
 
 from cobs import cobs
@@ -168,3 +169,9 @@ def test_every_delimited_chunk_is_a_message_or_one_counted_error(parts, mutation
     out = decoder.feed(bytes(stream))
     assert len(out) == decoder.frames
     assert decoder.frames + errors(decoder) == delimited_chunks(bytes(stream))
+
+
+def test_a_duty_saturates_and_a_non_finite_one_stops_the_motor():
+    assert sp.duty_to_q15(2.0) == 32767 and sp.duty_to_q15(-2.0) == -32767
+    assert sp.duty_to_q15(0.5) == 16384
+    assert [sp.duty_to_q15(v) for v in (math.nan, math.inf, -math.inf)] == [0, 0, 0]

@@ -39,6 +39,7 @@ API
 - ``duty_to_q15(duty)``, ``q15_to_duty(q)``.
 """
 import dataclasses
+import math
 import operator
 import struct
 import zlib
@@ -140,7 +141,9 @@ _FIELDS = {cls: _fields_getter(cls) for cls in _TYPES}
 
 
 def duty_to_q15(duty):
-    """Duty -1..1 -> int16 wire value (saturating)."""
+    """Duty -1..1 -> int16 wire value (saturating); a non-finite duty is 0 (motor stopped)."""
+    if not math.isfinite(duty):
+        return 0  # min/max would make NaN a full duty
     return int(round(max(-1.0, min(1.0, duty)) * 32767))
 
 
