@@ -78,7 +78,10 @@ class DeviceTopics:
     vented_topic = None
 
     def __init__(self):
-        self.device = None
+        self.device = None          # the Device, while the driver has it open
+        self.publisher = None       # of sample_topic, and of vented_topic: the driver's
+        self.vented_pub = None
+        self.said_vented = None     # what vented_topic last said
         self.published = 0
         self.new_clock()
 

@@ -126,9 +126,8 @@ class DriverNode(LifecycleNode):
         self._publish_lock = threading.Lock()  # every device's reader thread publishes
         for topics in self.devices:
             topics.publisher = self.publisher(topics.sample_topic)
-            topics.vented_pub = (self.publisher(topics.vented_topic) if topics.vented_topic
-                                 else None)
-            topics.said_vented = None    # what its vented topic last said
+            if topics.vented_topic:
+                topics.vented_pub = self.publisher(topics.vented_topic)
             self.subscription(topics.command_topic,
                               lambda msg, topics=topics: self.on_command(topics, msg))
         self.refused = 0              # commands that arrived while not configured
