@@ -97,6 +97,10 @@ class ArmSample:
     pressures: tuple
     t_arrival: float = None
 
+    def at(self, pressure, tolerance):
+        """Tell whether every chamber reads within `tolerance` Pa of `pressure` (Pa abs)."""
+        return all(abs(p - pressure) <= tolerance for p in self.pressures)
+
 
 class ArmBus(Device):
     name = 'arm'
@@ -157,8 +161,7 @@ class ArmBus(Device):
 
     def at_rest(self, tolerance):
         sample = self.read()
-        ambient = self.config.pressure_min
-        return sample is not None and all(abs(p - ambient) <= tolerance for p in sample.pressures)
+        return sample is not None and sample.at(self.config.pressure_min, tolerance)
 
     def health(self):
         out = dict(self._counts)

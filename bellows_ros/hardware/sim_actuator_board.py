@@ -58,7 +58,6 @@ import dataclasses
 import errno
 import hashlib
 import logging
-import math
 import os
 import re
 import shutil
@@ -281,9 +280,8 @@ class SimActuatorBoard(Device):
         if self.latched:
             return None
         self._last_host = time.monotonic()
-        duty = float(duty)
-        # What a motor frame can carry: -1..1 in Q15; a non-finite duty stops the motor.
-        self.duty = sp.q15_to_duty(sp.duty_to_q15(duty)) if math.isfinite(duty) else 0.0
+        # What a motor frame can carry: -1..1 in Q15 (a non-finite duty is 0: duty_to_q15).
+        self.duty = sp.q15_to_duty(sp.duty_to_q15(duty))
         return self.duty
 
     def vent(self):

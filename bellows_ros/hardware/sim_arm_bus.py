@@ -129,8 +129,7 @@ class SimArmBus(Device):
 
     def at_rest(self, tolerance):
         sample = self.read()
-        return sample is not None and all(abs(p - self.vent_pressure) <= tolerance
-                                          for p in sample.pressures)
+        return sample is not None and sample.at(self.vent_pressure, tolerance)
 
     def stop(self):
         self._thread.stop()
