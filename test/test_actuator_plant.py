@@ -138,7 +138,7 @@ def test_every_strength_switches_its_effect_on_and_off_while_running(effect):
     assert plant.effects == {effect: defaults}          # its other parameters from the YAML
     plant.set_strengths({effect: 0.0})
     run(plant, 0.05, x_s=0.001)
-    assert plant.effects == {} and plant.temperature == plant._t_amb
+    assert plant.effects == {} and plant.temperature == plant.t_ambient
 
 
 def test_a_strength_the_plant_cannot_use_is_refused_and_nothing_changes():

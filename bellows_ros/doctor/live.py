@@ -47,7 +47,7 @@ here: the controller feeds samples and reports the numbers on /diagnostics.
   make it about twice its size); where the model holds M Ψ̈, Ψ̈ is a difference again.
 - `SampleCost`: the sample thread's cost, per sample (`cost_us`).
 - `diagnose_window`: the doctor (`diagnosis.diagnose`) on block means of the last window with the
-  healthy window's noise floors, over the causes that develop in service (`LIVE_CAUSES`), from
+  healthy window's noise floors, over the causes that develop in service (`live_causes`), from
   the model the residuals compare with (its own E_V and buckling in the baseline: `standing`).
 - `DiagnosisWorker`: runs `diagnose_window` in a separate process (spawned: no fork of a process
   holding DDS threads; a process, not a thread, so the fit does not take the interpreter lock
@@ -74,10 +74,6 @@ from bellows_ros.models.actuator import evaluate_array
 
 COLUMNS = TABLE_COLUMNS['actuator'][0]   # t, x_c, x_s, p, f
 OUTPUTS = ('p', 'f')
-# Causes that develop while the actuator runs (a leak opens, a sensor's port clogs, the spring
-# starts to buckle); the others (wall bulging, heat exchange, backlash) belong to the build and
-# are the offline doctor's (`bellows diagnose`).
-LIVE_CAUSES = ('air_leak', 'sensor_lag', 'buckling')
 LIMIT_MIN = 3.0     # the limit of the RMS-over-floor ratio is never below this ...
 MARGIN = 2.0        # ... nor below this times the largest ratio of the healthy window
 PERSIST = 2         # updates in a row above the limit before the residual has left the floor
@@ -275,7 +271,13 @@ def block_means(rows, factor):
             for name, column in rows.items()}
 
 
-def diagnose_window(config, rows, floors, causes=LIVE_CAUSES):
+def live_causes():
+    """Return the causes that develop while the actuator runs (each effect's `in_service`)."""
+    from bellows_ros.models.actuator_effects import EFFECTS   # the doctor's imports: see above
+    return tuple(effect.name for effect in EFFECTS if effect.in_service)
+
+
+def diagnose_window(config, rows, floors, causes=None):
     """
     Return the doctor's verdict on one window: {'causes', 'values', 'seconds', 'error'}.
 
@@ -287,7 +289,8 @@ def diagnose_window(config, rows, floors, causes=LIVE_CAUSES):
     the model's own E_V and buckling stay in it (`actuator_causes.standing_physics`), so that the
     doctor names what changed, not the standing physics of the device. Without them the buckling
     fit, free over its physical range, took up the model's own buckling and E_V on a healthy
-    window (#32).
+    window (#32). `causes`: default `live_causes()`; the others belong to the build and are the
+    offline doctor's (`bellows diagnose`).
     """
     from bellows_ros.doctor import actuator_causes, diagnosis    # in the worker process
     started = time.perf_counter()
@@ -295,7 +298,7 @@ def diagnose_window(config, rows, floors, causes=LIVE_CAUSES):
     factor = max(1, int(round(1.0 / (dt * FIT_RATE))))
     try:
         result = diagnosis.diagnose('actuator', block_means(rows, factor), config,
-                                    causes=causes, source='live window',
+                                    causes=causes or live_causes(), source='live window',
                                     raw_noise=floors, factor=factor,
                                     standing=actuator_causes.standing_physics(config.model))
     except Exception as exc:   # reported, not raised: a live window may be anything
@@ -484,7 +487,7 @@ def describe(verdict):
     if verdict.get('error'):
         return f'no diagnosis: {verdict["error"]}'
     if not verdict['causes']:
-        return 'no live cause explains it (' + ', '.join(LIVE_CAUSES) + ' tried)'
+        return 'no live cause explains it (' + ', '.join(live_causes()) + ' tried)'
     parts = []
     for cause in verdict['causes']:
         sizes = ', '.join(f'{k} {v:.3g}' for k, v in verdict['values'][cause].items())

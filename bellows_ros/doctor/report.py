@@ -265,7 +265,7 @@ def markdown(d, plots):
               'the defaults wherever parameters are read:', '',
               f'    bellows simulate {d.system} --input IN.csv --output OUT.csv --params '
               f'{EXTENDED_FILE}'
-              + ''.join(f' --effect {c}' for c in d.causes if c in _PLANT_ONLY.get(d.system, ())),
+              + ''.join(f' --effect {c}' for c in _plant_effects(d)),
               f'    ros2 run bellows_ros <node> --ros-args --params-file {EXTENDED_FILE}', '']
     if d.system == 'segment':
         output, name = (('tau_drive',
@@ -273,7 +273,7 @@ def markdown(d, plots):
                         else ('tau_prev', 'previous model (34)'))
         lines.append(f"The extended segment model's driving torque is the `{output}` output of "
                      f'`bellows simulate segment` and of the model node ({name}).')
-    plant_only = [c for c in d.causes if c in _PLANT_ONLY.get(d.system, ())]
+    plant_only = _plant_effects(d)
     if plant_only:
         verb = 'is a dynamic effect' if len(plant_only) == 1 else 'are dynamic effects'
         lines.append(f'{", ".join(plant_only)} {verb} of the plant: the fitted values are its '
@@ -290,7 +290,6 @@ def markdown(d, plots):
     return '\n'.join(lines) + '\n'
 
 
-# Causes that are plant effects switched on by `--effect` (the rest change the model's own
-# parameters).
-_PLANT_ONLY = {'actuator': ('air_leak', 'heat_exchange', 'sensor_lag', 'backlash', 'buckling'),
-               'segment': ('sensor_lag',)}
+def _plant_effects(d):
+    """Return the causes of `d` that are plant effects switched on by `--effect`."""
+    return [c for c in d.causes if c in engine.system_module(d.system).SWITCHED_BY_EFFECT]

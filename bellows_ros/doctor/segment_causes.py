@@ -43,6 +43,8 @@ from bellows_ros.models.segment import (actuator_regressor, contact_lengths, fri
                                         previous_regressor, restoring_regressor, scaled_pressure)
 
 CAUSES = ('contact_hysteresis', 'pressure_friction', 'natural_curvature', 'sensor_lag')
+# Causes the plant has only with `--effect NAME` (the rest are the model's own parameters).
+SWITCHED_BY_EFFECT = ('sensor_lag',)
 # What a record must hold to decide each cause when it came closest but did not pay (report.md).
 DECIDING_DATA = {
     'contact_hysteresis': 'several angle reversals with a chain held pressurised',

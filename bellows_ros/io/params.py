@@ -402,30 +402,33 @@ def _check_kind(source, name, default, value):
                                  f'(like {default!r}), got {wrong!r} in it')
 
 
-def overlay(defaults, overrides, source):
+def overlay(defaults, overrides, source, open_sections=()):
     """
     Lay `overrides` over `defaults`.
 
     A name the defaults lack, or a value of another kind (a string for a number, a scalar for a
-    list), raises ParameterError.
+    list), raises ParameterError. Names under `open_sections` (prefixes such as
+    'actuator.effects.') are the business of what reads that section, which checks them.
     """
-    unknown = sorted(set(overrides) - set(defaults))
+    unknown = sorted(name for name in set(overrides) - set(defaults)
+                     if not name.startswith(tuple(open_sections)))
     if unknown:
         raise ParameterError(f"{source}: unknown parameter '{unknown[0]}'"
                              + (f' (and {len(unknown) - 1} more)' if len(unknown) > 1 else ''))
     for name, value in overrides.items():
-        _check_kind(source, name, defaults[name], value)
+        if name in defaults:
+            _check_kind(source, name, defaults[name], value)
     merged = dict(defaults)
     merged.update(overrides)
     return merged
 
 
-def load(name, params_path=None, check=None):
+def load(name, params_path=None, check=None, open_sections=()):
     """
     Defaults of `config/<name>.yaml`, with the user's file (if any) laid over them.
 
     `check(flat, source)` (e.g. `config.ranges.check_ranges`) sees each file's own values, so that
-    its error names the file a bad value came from.
+    its error names the file a bad value came from. `open_sections`: see `overlay`.
     """
     path = default_file(name)
     flat = read_file(path)
@@ -433,7 +436,7 @@ def load(name, params_path=None, check=None):
         check(flat, path)
     if params_path is not None:
         user = read_file(params_path)
-        flat = overlay(flat, user, params_path)
+        flat = overlay(flat, user, params_path, open_sections)
         if check is not None:
             check(user, params_path)
     return flat

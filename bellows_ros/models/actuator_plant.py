@@ -24,19 +24,12 @@ What the simulated hardware and the tests run. Underneath is paper B's model (`a
   friction) and cannot turn it.
 - spring: compression imposed (a test machine) or the quasi-static position under a load force.
 - sensors: pressure and force with white noise and quantisation.
-- effects, each off unless named (parameters SI, defaults under `actuator.effects` in the YAML):
-  `air_leak` (conductance, m³/(s·Pa)): laminar flow through a restriction to ambient,
-      dN/dt = -P · conductance · (P - P_atm) · T_amb/T   (N = P·V in Pa·m³ at ambient temperature);
-  `heat_exchange` (time_constant s, gamma, t_ambient K): the gas heats on compression
-      (adiabatic over each step, T V^(γ-1) = const) and relaxes to ambient through the walls,
-      dT/dt = -(T - T_amb)/time_constant;
-  `wall_bulging` (scale): the volume error E_V (5, 6) of the YAML times `scale`; without it the
-      plant's volumes are purely geometric (4), the doctor's baseline;
-  `sensor_lag` (time_constant s): first-order lag of the pressure sensor;
-  `backlash` (width m): dead band between the lead-screw nut (what the encoder sees) and the plate;
-  `buckling` (scale): the spring buckles under pressure and compression, `actuator.buckling_force`
-      with the YAML's `actuator.buckling` parameters and the stiffness loss times `scale`; without
-      it the force is paper B's (7)-(12) alone, the doctor's force baseline.
+- effects, each off unless named: every module of `models.actuator_effects` (parameters SI,
+  defaults in the effect, overridden under `actuator.effects` in the YAML). Each effect's
+  `plant_term` says what the plant steps: the plate behind the nut, the gas temperature and
+  amount before the pressure is solved, the pressure reading; its `model_params` what it changes
+  in paper B's static model (E_V, buckling). Without an effect the volumes are purely geometric
+  (4) and the force is (7)-(12) alone: the doctor's baseline.
 
 Each effect's strength (`STRENGTHS`, 0 = off) can change while the plant runs
 (`set_strengths`): the new effects take over at the start of the next step, in the stepping
@@ -54,19 +47,14 @@ from typing import NamedTuple
 
 from bellows_ros.errors import ParameterError
 from bellows_ros.models import effect_strengths
-from bellows_ros.models.actuator import (forward, gas_amount, p_ref_of_amount, scaled_buckling,
-                                         scaled_bulging, total_volume, without_buckling,
-                                         without_bulging)
+from bellows_ros.models.actuator import forward, gas_amount, p_ref_of_amount
 from bellows_ros.models.actuator_drive import Drive
+from bellows_ros.models.actuator_effects import BY_NAME, EFFECTS, NAMES, STRENGTHS
 from bellows_ros.models.actuator_geometry import area, P_ATM
 
-ACTUATOR_EFFECTS = ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash',
-                    'buckling')
-# The parameter of each effect that says how strong it is, 0 = off (`ActuatorPlant.set_strengths`):
-# a heat-exchange time constant of 0 is instant exchange, the isothermal gas of the baseline.
-STRENGTHS = {'air_leak': 'conductance', 'heat_exchange': 'time_constant',
-             'wall_bulging': 'scale', 'sensor_lag': 'time_constant', 'backlash': 'width',
-             'buckling': 'scale'}
+ACTUATOR_EFFECTS = NAMES
+# K: the ambient temperature of a plant whose effects set none (heat exchange sets its own)
+T_AMBIENT = 293.15
 NOISE_KEYS = ('pressure_noise', 'pressure_quantum', 'force_noise', 'force_quantum')
 
 
@@ -87,8 +75,8 @@ class ActuatorPlantParams:
 
     drive: `Drive` (config/hardware.yaml, `hardware.actuator_board.drive.*`: the hardware's drive
     train, shared with the driver); sensors: `Sensors` (config/actuator.yaml,
-    `actuator.sensors.*`); effects: ((effect, ((parameter, value), ...)), ...), the defaults of
-    `actuator.effects.*`.
+    `actuator.sensors.*`); effects: ((effect, ((parameter, value), ...)), ...), the YAML's
+    `actuator.effects.*`, over the effects' own defaults.
     """
 
     drive: Drive
@@ -96,8 +84,11 @@ class ActuatorPlantParams:
     effects: tuple = ()
 
     def effect_defaults(self):
-        """{effect name: {parameter: value}} from the YAML."""
-        return {name: dict(items) for name, items in self.effects}
+        """{effect name: {parameter: value}}: each effect's defaults, the YAML's over them."""
+        defaults = {e.name: {key: p.default for key, p in e.parameters.items()} for e in EFFECTS}
+        for name, items in self.effects:
+            defaults.setdefault(name, {}).update(items)
+        return defaults
 
 
 @dataclass(frozen=True)
@@ -106,12 +97,7 @@ class _Effects:
 
     chosen: tuple   # ((effect, ((parameter, value), ...)), ...)
     params: object  # ActuatorParams with E_V and buckling as the effects say (`model_params`)
-    leak: float
-    heat_tau: object  # s, None = off
-    gamma: float
-    t_amb: float
-    lag_tau: float
-    half_play: float
+    terms: tuple    # ((effect, PlantTerm), ...) in the effects' order
 
 
 class ActuatorSample(NamedTuple):
@@ -148,9 +134,10 @@ def effect_parameters(plant, effects):
     defaults = plant.effect_defaults()
     chosen = {}
     for name, overrides in effects.items():
-        if name not in ACTUATOR_EFFECTS:
+        if name not in BY_NAME:
             raise ParameterError(f"unknown actuator effect '{name}' (known: "
-                                 f"{', '.join(ACTUATOR_EFFECTS)})")
+                                 f"{', '.join(NAMES)})")
+        effect = BY_NAME[name]
         values = dict(defaults.get(name, {}))
         for key, value in (overrides or {}).items():
             if key not in values:
@@ -159,13 +146,16 @@ def effect_parameters(plant, effects):
             values[key] = value
         for key, value in values.items():
             value = float(value)
-            if not math.isfinite(value) or value < 0.0:
+            low = effect.parameters[key].low if key in effect.parameters else 0.0
+            if not math.isfinite(value) or value < low:
                 raise ParameterError(
-                    f"effect '{name}': parameter '{key}' must be finite and >= 0, got {value}")
+                    f"effect '{name}': parameter '{key}' must be finite and >= {low:g}, "
+                    f'got {value}')
             values[key] = value
+        problem = effect.check(values)
+        if problem:
+            raise ParameterError(f"effect '{name}': {problem}")
         chosen[name] = values
-    if 'heat_exchange' in chosen and chosen['heat_exchange']['time_constant'] <= 0.0:
-        raise ParameterError("effect 'heat_exchange': parameter 'time_constant' must be > 0")
     return chosen
 
 
@@ -187,16 +177,9 @@ def model_params(params, chosen=None):
     effect).
     """
     chosen = chosen or {}
-    if 'wall_bulging' in chosen:
-        params = scaled_bulging(params, chosen['wall_bulging']['scale'])
-    else:
-        params = without_bulging(params)
-    if 'buckling' in chosen:
-        if params.buckling is None:
-            raise ParameterError("effect 'buckling': the parameters have no actuator.buckling "
-                                 'section')
-        return scaled_buckling(params, chosen['buckling']['scale'])
-    return without_buckling(params)
+    for effect in EFFECTS:
+        params = effect.model_params(params, chosen.get(effect.name))
+    return params
 
 
 class ActuatorPlant:
@@ -220,8 +203,6 @@ class ActuatorPlant:
                  gas=None):
         self._raw_params = params
         self.plant = plant
-        self._effects_now = self._pending = self._effects_of(effect_parameters(plant, effects))
-        self._apply_effects(self._effects_now)
         drive = plant.drive
         self.counts_per_rev = int(drive.counts_per_rev)
         self.x_c_min, self.x_c_max = params.chamber.x_min, params.chamber.x_max
@@ -240,43 +221,49 @@ class ActuatorPlant:
         self._theta = x_c / self._metres_per_rad
         self._omega = 0.0
         self._current = 0.0
-        self._x_c = x_c                              # plate
-        self._x_s = float(x_s0)
-        self._gas = gas_amount(self.params,
-                               params.p_ref if gas is None else float(gas))  # N = P V at T_amb
-        self._temperature = self._t_amb
-        p, force, k = forward(self.params, self._x_c, self._x_s, self._gas)
+        self.x_c = x_c                               # plate, m
+        self.x_s = float(x_s0)                       # spring, m
+        # The gas: N = P V at ambient temperature (Pa·m³), its temperature and ambient (K).
+        self.t_ambient = self.temperature = T_AMBIENT
+        chosen = effect_parameters(plant, effects)
+        self.params = model_params(params, chosen)
+        self.gas_amount = gas_amount(self.params, params.p_ref if gas is None else float(gas))
+        p, force, k = forward(self.params, self.x_c, self.x_s, self.gas_amount)
         self._p, self._f, self._k = p, force, k
-        self._p_sensor = p
-        self._volume = (total_volume(self.params, self._x_c, self._x_s, p) if self._heat_tau
-                        else None)
+        self._terms = ()
+        self._effects_now = self._pending = self._effects_of(chosen)
+        self._apply_effects(self._effects_now)
 
     def _effects_of(self, chosen):
         """Return the immutable `_Effects` of validated effect parameters (`effect_parameters`)."""
-        heat = chosen.get('heat_exchange')
+        terms = tuple((e.name, e.plant_term(chosen[e.name])) for e in EFFECTS if e.name in chosen)
         return _Effects(
             chosen=tuple((name, tuple(values.items())) for name, values in chosen.items()),
             params=model_params(self._raw_params, chosen),
-            leak=chosen.get('air_leak', {}).get('conductance', 0.0),
-            heat_tau=heat['time_constant'] if heat else None,
-            gamma=heat['gamma'] if heat else 1.4,
-            t_amb=heat['t_ambient'] if heat else 293.15,
-            lag_tau=chosen.get('sensor_lag', {}).get('time_constant', 0.0),
-            half_play=0.5 * chosen.get('backlash', {}).get('width', 0.0))
+            terms=tuple((name, term) for name, term in terms if term is not None))
 
     def _apply_effects(self, new):
-        """Take `new` (`_Effects`), in the stepping thread; heat exchange off = gas at ambient."""
+        """
+        Take `new` (`_Effects`), in the stepping thread: the gas, plate and sensor carry on.
+
+        Each term starts from the plant's state and its effect's earlier term; a gas that no
+        term heats is at ambient.
+        """
         self._effects_now = new
         self.effects = {name: dict(values) for name, values in new.chosen}
         self.params = new.params
-        self._leak, self._heat_tau, self._lag_tau = new.leak, new.heat_tau, new.lag_tau
-        self._gamma, self._t_amb, self._half_play = new.gamma, new.t_amb, new.half_play
-        self._exp_cache = (None, 0.0, 0.0, 0.0)
-        if hasattr(self, '_gas'):  # a change while running: the state carries on
-            if not self._heat_tau:
-                self._temperature = self._t_amb
-            self._volume = (total_volume(self.params, self._x_c, self._x_s, self._p)
-                            if self._heat_tau else None)
+        previous = dict(self._terms)
+        self._terms = new.terms
+        self.t_ambient = T_AMBIENT
+        for name, term in new.terms:
+            term.start(self, previous.get(name))
+        hooked = {hook: tuple(term for _, term in new.terms if hook in term.hooks())
+                  for hook in ('plate', 'temperature', 'gas', 'sensor')}
+        self._plate_terms, self._heat_terms = hooked['plate'], hooked['temperature']
+        self._gas_terms, self._sensor_terms = hooked['gas'], hooked['sensor']
+        if not self._heat_terms:
+            self.temperature = self.t_ambient
+        self._decay = (None, 0.0)
 
     def strengths(self):
         """Return {effect: strength} of the effects set (`STRENGTHS`, 0 = off)."""
@@ -334,14 +321,9 @@ class ActuatorPlant:
         return self._f
 
     @property
-    def temperature(self):
-        """Gas temperature, K (stays at ambient without `heat_exchange`)."""
-        return self._temperature
-
-    @property
     def gas(self):
-        """Present gas amount as design-point pressure p_ref, Pa (drops with `air_leak`)."""
-        return p_ref_of_amount(self.params, self._gas)
+        """Present gas amount as design-point pressure p_ref, Pa (drops with a leak)."""
+        return p_ref_of_amount(self.params, self.gas_amount)
 
     def travel_time(self, x_from, x_to):
         """Return a lower bound on the time (s) the lead screw needs between two points."""
@@ -374,7 +356,6 @@ class ActuatorPlant:
         if not dt > 0.0:
             raise ParameterError(f'time step must be > 0, got {dt}')
         self._take_pending()
-        self._update_exp(dt)
         x_nut = min(max(float(x_nut), self.x_c_min), self.x_c_max)
         new_theta = x_nut / self._metres_per_rad
         self._omega = (new_theta - self._theta) / dt
@@ -385,9 +366,9 @@ class ActuatorPlant:
     def _finish_step(self, dt, x_s_imposed, f_load):
         """Finish a step once the plate has moved: spring imposed or loaded, gas, clock."""
         if x_s_imposed is not None:
-            self._x_s = float(x_s_imposed)
+            self.x_s = float(x_s_imposed)
         elif f_load is not None:
-            self._x_s = self._spring_under_load(float(f_load))
+            self.x_s = self._spring_under_load(float(f_load))
         self._step_gas(dt)
         self.t += dt
         return self._sample(dt)
@@ -397,26 +378,18 @@ class ActuatorPlant:
         """True dF/dx_s (N/m) at the present state (13)."""
         return self._k
 
-    def _update_exp(self, dt):
-        if self._exp_cache[0] != dt:
-            d = self._drive
-            self._exp_cache = (dt, math.exp(-d.resistance * dt / d.inductance),
-                               1.0 - math.exp(-dt / self._lag_tau) if self._lag_tau > 0.0 else 1.0,
-                               math.exp(-dt / self._heat_tau) if self._heat_tau else 1.0)
-
     def _move_plate(self, nut):
-        """Backlash as a play operator: the plate moves only when the nut pushes it."""
-        h = self._half_play
-        if nut - self._x_c > h:
-            self._x_c = nut - h
-        elif self._x_c - nut > h:
-            self._x_c = nut + h
-        self._x_c = min(max(self._x_c, self.x_c_min), self.x_c_max)
+        """Move the plate with the nut, unless an effect's term stands between them (a play)."""
+        x_c = nut
+        for term in self._plate_terms:
+            x_c = term.plate(nut, self.x_c)
+        self.x_c = min(max(x_c, self.x_c_min), self.x_c_max)
 
     def _step_drive(self, dt, duty):
         d = self._drive
-        self._update_exp(dt)
-        decay = self._exp_cache[1]
+        if self._decay[0] != dt:
+            self._decay = (dt, math.exp(-d.resistance * dt / d.inductance))
+        decay = self._decay[1]
         k = d.torque_constant
         # R-L armature, exact over the step for the present back-EMF.
         i_ss = (duty * d.supply_voltage - k * self._omega) / d.resistance
@@ -425,7 +398,7 @@ class ActuatorPlant:
         # Gas load on the plate, reflected to the motor through a self-locking screw: it resists
         # motion in either direction and never drives the motor.
         # (10) for the chamber: the plate does the work (P - P_atm) dV_c [ours].
-        area_c = area(self.params.chamber, self._x_c, self._p)[0]
+        area_c = area(self.params.chamber, self.x_c, self._p)[0]
         resist = abs((self._p - P_ATM) * area_c) * self._metres_per_rad / d.efficiency
         omega = self._omega
         if omega == 0.0 and abs(torque) <= resist:
@@ -446,11 +419,11 @@ class ActuatorPlant:
         self._move_plate(theta * self._metres_per_rad)
 
     def _spring_under_load(self, f_load):
-        x = self._x_s
-        amount = self._gas * self._temperature / self._t_amb
+        x = self.x_s
+        amount = self.gas_amount * self.temperature / self.t_ambient
         s = self.params.spring
         for _ in range(20):
-            _, force, k = forward(self.params, self._x_c, x, amount)
+            _, force, k = forward(self.params, self.x_c, x, amount)
             step = (force - f_load) / k if k > 0.0 else 0.0
             x = min(max(x - step, s.x_min), s.x_max)
             if abs(step) < 1e-9:
@@ -458,24 +431,19 @@ class ActuatorPlant:
         return x
 
     def _step_gas(self, dt):
-        if self._heat_tau:
-            # Volume at the new geometry (E_V at the last pressure; the Newton solve below is
-            # exact), needed only for the adiabatic temperature change.
-            volume_new = total_volume(self.params, self._x_c, self._x_s, self._p)
-            t = self._temperature * (self._volume / volume_new) ** (self._gamma - 1.0)
-            self._temperature = self._t_amb + (t - self._t_amb) * self._exp_cache[3]
-            self._volume = volume_new
-        if self._leak:
-            self._gas -= (dt * self._p * self._leak * (self._p - P_ATM) * self._t_amb
-                          / self._temperature)
-        amount = self._gas * self._temperature / self._t_amb
-        self._p, self._f, self._k = forward(self.params, self._x_c, self._x_s, amount)
+        for term in self._heat_terms:
+            term.temperature(self, dt)
+        for term in self._gas_terms:
+            term.gas(self, dt)
+        amount = self.gas_amount * self.temperature / self.t_ambient
+        self._p, self._f, self._k = forward(self.params, self.x_c, self.x_s, amount)
 
     def _sample(self, dt):
         n = self._noise
-        self._p_sensor += (self._p - self._p_sensor) * self._exp_cache[2]
-        p = self._p_sensor + (self._random.gauss(0.0, n['pressure_noise'])
-                              if n['pressure_noise'] else 0.0)
+        p = self._p
+        for term in self._sensor_terms:
+            p = term.sensor(p, dt, self.t)
+        p += (self._random.gauss(0.0, n['pressure_noise']) if n['pressure_noise'] else 0.0)
         f = self._f + (self._random.gauss(0.0, n['force_noise']) if n['force_noise'] else 0.0)
         if n['pressure_quantum']:
             p = round(p / n['pressure_quantum']) * n['pressure_quantum']
@@ -483,7 +451,7 @@ class ActuatorPlant:
             f = round(f / n['force_quantum']) * n['force_quantum']
         nut = self._theta * self._metres_per_rad
         counts = int(round(self._theta / (2.0 * math.pi) * self.counts_per_rev))
-        return ActuatorSample(self.t, counts, self._x_c, self._x_s, p, f,
+        return ActuatorSample(self.t, counts, self.x_c, self.x_s, p, f,
                               nut <= self.x_c_min, nut >= self.x_c_max)
 
     def x_from_counts(self, counts):

@@ -32,3 +32,6 @@ MAX_CONVOLUTIONS = 1000
 # Pa abs: ambient pressure, about 50 kPa 5000 m up to 108 kPa at the lowest places on earth; a p0
 # outside it was written in bar, kPa or hPa.
 AMBIENT_RANGE = (5e4, 1.1e5)
+# s: time constants of valves, sensors and wall heat transfer, from 0.1 ms (fast piezo valves) to
+# hours (a thermally insulated chamber).
+TIME_CONSTANT = (1e-4, 1e4)

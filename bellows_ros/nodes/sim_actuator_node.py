@@ -47,9 +47,8 @@ import math
 
 from rclpy.time import Time
 
-from bellows_ros.config.actuator import load_actuator
+from bellows_ros.config.actuator import effect_range, load_actuator
 from bellows_ros.config.hardware import actuator_board_config
-from bellows_ros.config.ranges import effect_range
 from bellows_ros.hardware.sim_actuator_board import SimActuatorBoard
 from bellows_ros.models import effect_strengths
 from bellows_ros.models.actuator_plant import (ACTUATOR_EFFECTS, ActuatorPlant, effect_parameters,
@@ -61,12 +60,13 @@ from bellows_ros.runtime.parameters import Spec
 
 
 def _strength_spec(effect, key):
-    # The physical range of the YAML's value, as the CLI's --effect takes it (config/ranges.py),
-    # from 0 = off.
-    rule = effect_range('actuator', effect, key)
+    # The physical range of the YAML's value, as the CLI's --effect takes it (the effect's own),
+    # and 0 = off.
+    rule = effect_range(effect, key)
     return Spec(effect_strengths.parameter_name(effect, key), math.nan,
                 f'strength of the {effect} effect ({key}, {rule.unit}); 0 = off, nan = as effects '
-                'and actuator_params say', low=0.0, high=rule.high, read_only=False)
+                'and actuator_params say', low=min(0.0, rule.low), high=rule.high,
+                read_only=False)
 
 
 PARAMETERS = (

@@ -42,7 +42,7 @@ import math
 
 from rclpy.time import Time
 
-from bellows_ros.config.ranges import effect_range
+from bellows_ros.config.ranges import segment_effect_range
 from bellows_ros.config.segment import load_segment
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.arm_bus import open_can
@@ -58,7 +58,7 @@ from bellows_ros.runtime.parameters import Spec
 
 def _strength_spec(effect, key):
     # The range the CLI's --effect takes too (config/ranges.py, one home).
-    rule = effect_range('segment', effect, key)
+    rule = segment_effect_range(effect, key)
     return Spec(effect_strengths.parameter_name(effect, key), math.nan,
                 f'strength of the {effect} effect on every segment ({key}, {rule.unit}); 0 = off, '
                 'nan = as effects and segment_params say', low=rule.low, high=rule.high,

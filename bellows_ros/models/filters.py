@@ -21,9 +21,9 @@ Vectorised dynamic operators the candidate causes are built from (pure functions
   (temperature after a compression, relaxing to ambient with a time constant).
 - `play`: the backlash (play) operator of width `width`, computed as a prefix scan of clamps so
   that it needs log2(n) NumPy passes instead of a Python loop over samples.
+- `reversals`: how often a signal reverses by more than a threshold (a zig-zag count).
 """
 import numpy as np
-from scipy.signal import lfilter
 
 
 def lag(x, dt, tau):
@@ -41,6 +41,7 @@ def lag(x, dt, tau):
     a = np.exp(-dt / tau)
     c = tau / dt * (1.0 - a)
     b0, b1 = 1.0 - c, c - a
+    from scipy.signal import lfilter   # here: the plants import the effects, not their fits
     y, _ = lfilter([b0, b1], [1.0, -a], x, zi=[(1.0 - b0) * x[0]])
     return y
 
@@ -54,6 +55,7 @@ def relax(x, dt, tau):
     x = np.asarray(x, float)
     a = np.exp(-dt / tau) if tau > 0 else 0.0
     increments = np.diff(x, prepend=x[0])
+    from scipy.signal import lfilter
     return lfilter([1.0], [1.0, -a], increments)
 
 
@@ -100,3 +102,31 @@ def recurrence(a, b, x0):
         x[lo:hi] = np.exp(log_gain) * (start + inputs)
         start = a[hi - 1] * x[hi - 1] + b[hi - 1]
     return x
+
+
+def reversals(signal, threshold):
+    """
+    Count the direction reversals of `signal` by more than `threshold`.
+
+    A zig-zag count that ignores noise smaller than the threshold.
+    """
+    count, direction = 0, 0
+    high = low = float(signal[0])
+    for value in np.asarray(signal, float).tolist():
+        if direction == 0:
+            high, low = max(high, value), min(low, value)
+            if high - value > threshold:
+                direction, low = -1, value
+            elif value - low > threshold:
+                direction, high = 1, value
+        elif direction > 0:
+            if value > high:
+                high = value
+            elif high - value > threshold:
+                direction, low, count = -1, value, count + 1
+        else:
+            if value < low:
+                low = value
+            elif value - low > threshold:
+                direction, high, count = 1, value, count + 1
+    return count

@@ -23,7 +23,7 @@ import numpy as np
 
 from bellows_ros.doctor import scoring
 from bellows_ros.doctor.checks import reversals
-from bellows_ros.doctor.filters import lag, play, recurrence, relax
+from bellows_ros.models.filters import lag, play, recurrence, relax
 
 
 def loop_play(x, width):
