@@ -44,10 +44,11 @@ def fast_spring_step(t, start=0.5, rise=0.05, amplitude=0.012):
     return amplitude * min(max((t - start) / rise, 0.0), 1.0)
 
 
-def test_effect_names():
-    assert ACTUATOR_EFFECTS == ('air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag',
-                                'backlash',
-                                'buckling')
+def test_effect_names_are_the_registrys_and_keep_the_papers_effects():
+    from bellows_ros.models.actuator_effects import NAMES
+    assert ACTUATOR_EFFECTS == NAMES
+    assert {'air_leak', 'heat_exchange', 'wall_bulging', 'sensor_lag', 'backlash',
+            'buckling'} <= set(NAMES)
 
 
 def test_unknown_effect_or_parameter_is_named():
