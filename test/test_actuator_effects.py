@@ -19,11 +19,11 @@ Each test holds one promise that the plant, the doctor, the ranges or the benche
 they iterate over `EFFECTS` without naming an effect. A new effect module is held to all of them
 by being there.
 """
-import ast
 import math
 from pathlib import Path
 import pkgutil
 
+from code_rules import names_in_conditions
 import numpy as np
 import pytest
 
@@ -172,19 +172,6 @@ ITERATING = ['bellows_ros/models/actuator_plant.py', 'bellows_ros/doctor/actuato
              'bellows_ros/doctor/diagnosis.py', 'bellows_ros/doctor/checks.py',
              'bellows_ros/config/ranges.py', 'bellows_ros/config/actuator.py',
              *sorted(str(p.relative_to(ROOT)) for p in (ROOT / 'bellows_ros/bench').glob('*.py'))]
-
-
-def names_in_conditions(source, names):
-    """Return (line, name) of every string of `names` inside an if, a loop's or a match's test."""
-    found = []
-    for node in ast.walk(ast.parse(source)):
-        tests = ([node.test] if isinstance(node, (ast.If, ast.IfExp, ast.While)) else
-                 node.ifs if isinstance(node, ast.comprehension) else
-                 [node.subject] if isinstance(node, ast.Match) else [])
-        for test in tests:
-            found += [(test.lineno, c.value) for c in ast.walk(test)
-                      if isinstance(c, ast.Constant) and c.value in names]
-    return found
 
 
 @pytest.mark.parametrize('path', ITERATING)

@@ -353,9 +353,7 @@ def test_the_nodes_strengths_and_the_cli_effects_share_their_ranges(module, syst
     """A strength the node takes live is one `--effect` takes too (0 = off only on the node)."""
     from importlib import import_module
 
-    from bellows_ros.config.actuator import effect_range as actuator_range
-    from bellows_ros.config.ranges import segment_effect_range
-    effect_range = actuator_range if system == 'actuator' else segment_effect_range
+    effect_range = import_module(f'bellows_ros.config.{system}').effect_range
     specs = getattr(import_module(f'bellows_ros.nodes.{module}'), 'PARAMETERS', None)
     if specs is None:
         pytest.skip(f'{module} has no PARAMETERS table (rewritten): compare its ranges by hand')

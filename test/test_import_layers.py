@@ -312,7 +312,7 @@ def test_the_file_commands_run_without_importing_rclpy(tmp_path):
 def test_every_package_states_what_it_holds():
     """Each sub-package says what it holds (docstring) and what is public (`__all__`, REP-2004)."""
     problems = []
-    for init in sorted(PACKAGE.glob('*/__init__.py')):
+    for init in sorted(PACKAGE.glob('*/**/__init__.py')):
         tree = ast.parse(init.read_text(), str(init))
         if not ast.get_docstring(tree):
             problems.append(f'{init.parent.name}: no docstring')
@@ -329,5 +329,6 @@ def test_every_package_states_what_it_holds():
             for a in n.names}
         problems += [f'{init.parent.name}: {name} is neither a module nor defined there'
                      for name in names
-                     if name not in defined and not (init.parent / f'{name}.py').exists()]
+                     if name not in defined and not (init.parent / f'{name}.py').exists()
+                     and not (init.parent / name / '__init__.py').exists()]
     assert problems == []

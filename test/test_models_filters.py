@@ -22,8 +22,7 @@ from hypothesis import strategies as st
 import numpy as np
 
 from bellows_ros.doctor import scoring
-from bellows_ros.doctor.checks import reversals
-from bellows_ros.models.filters import lag, play, recurrence, relax
+from bellows_ros.models.filters import lag, play, recurrence, relax, reversals
 
 
 def loop_play(x, width):

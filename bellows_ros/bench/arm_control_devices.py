@@ -44,6 +44,7 @@ from bellows_ros.bench.devices import draw_segment  # noqa: F401 (this bench's d
 from bellows_ros.config.segment import load_segment
 from bellows_ros.control import angle_trajectory, closed_loop
 from bellows_ros.identify.segment import fit_segment
+from bellows_ros.models.segment_effects import driving_torque
 from bellows_ros.models.segment_plant import FULL_MODEL
 from bellows_ros.papers.segment_experiments import dynamic_record, quasi_static_record
 
@@ -101,7 +102,8 @@ def extended_model(device, record):
     flat = {name[len('segment.'):]: value for name, value in found.extended_flat.items()
             if name.startswith('segment.')}
     params = segment_from_flat(flat, 'extended.yaml').model
-    mode = 'paper_a' if 'contact_hysteresis' in found.causes else 'previous'
+    # the tracker's feedforward mode of the torque the extended model drives with
+    mode = {'tau_drive': 'paper_a', 'tau_prev': 'previous'}[driving_torque(found.causes)]
     return params, mode, found.causes
 
 

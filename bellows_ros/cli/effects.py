@@ -49,13 +49,12 @@ def parse_effects(texts, system):
 
     The same effect given twice is refused, as the nodes refuse it in their `effects` list; each
     value must lie in the range of the parameter it sets (`config.actuator.effect_range`,
-    `config.ranges.segment_effect_range`: the nodes' ranges too).
+    `config.segment.effect_range`: the nodes' ranges too).
     """
+    from importlib import import_module
+
     from bellows_ros.config.ranges import check_effects
-    if system == 'actuator':
-        from bellows_ros.config.actuator import effect_range
-    else:
-        from bellows_ros.config.ranges import segment_effect_range as effect_range
+    effect_range = import_module(f'bellows_ros.config.{system}').effect_range
     effects = {}
     for text in texts:
         name, options = parse_effect(text)

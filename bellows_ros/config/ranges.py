@@ -216,19 +216,8 @@ def load(name, params_path=None, more=None):
 
 
 # --- the `bellows` command's numbers: the same table as the nodes' parameters -------------------
-# `--effect NAME:k=v`: each effect parameter is the YAML parameter it sets, so it has that one's
-# range; an effect's strength, which the simulated nodes offer live (0 = off), is never negative.
-# (effect, key) -> (parameter of RANGES, lowest value or None for the parameter's own) of the
-# segment's effects; the actuator's carry their ranges themselves (`config.actuator.effect_range`).
-# The simulated nodes' live strengths (nodes/sim_*_node.py `_strength_spec`) take the same
-# ranges; `segment_effect_range` is the one place to read the segment's from.
-_SEGMENT_EFFECTS = {
-    ('pressure_friction', 'c_fp'): ('segment.friction.c_fp', 0.0),
-    ('natural_curvature', 'c_psi0'): ('segment.restoring.c_psi0', None),
-    ('natural_curvature', 'c_psi0_p'): ('segment.restoring.c_psi0_p', None),
-    ('natural_curvature', 'k_sp'): ('segment.restoring.k_sp', None),
-    ('sensor_lag', 'tau'): ('segment.plant.sensor_lag_tau', 0.0),
-}
+# `--effect NAME:k=v` takes the range of the parameter it sets: `config.actuator.effect_range`,
+# `config.segment.effect_range`; the simulated nodes' live strengths take the same.
 # Options of the `bellows` command that take a number, with the reason of each range.
 OPTIONS = {
     # one period of the spring motion: from a fast test rig (10 ms) to an hour; a shorter window
@@ -239,15 +228,6 @@ OPTIONS = {
     # a recording: from a millisecond to thirty days (a bag beyond that outgrows any reader)
     'record.duration': Range(1e-3, 30 * 86400.0, 's'),
 }
-
-
-def segment_effect_range(effect, key):
-    """`Range` of the segment's `--effect effect:key=...`, or None for a parameter with none."""
-    name, low = _SEGMENT_EFFECTS.get((effect, key), (None, None))
-    if name is None:
-        return None
-    rule = RANGES[name]
-    return rule if low is None else rule._replace(low=max(rule.low, low))
 
 
 def _outside(rule, value):

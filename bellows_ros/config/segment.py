@@ -27,6 +27,7 @@ from bellows_ros.config import ranges
 from bellows_ros.errors import ParameterError
 from bellows_ros.io import params as param_files
 from bellows_ros.models.segment import check_params, SegmentParams, UNDOTTED
+from bellows_ros.models.segment_effects import BY_NAME
 from bellows_ros.models.segment_plant import (check_plant_params, PLANT_DOTTED,
                                               SegmentPlantParams)
 
@@ -52,6 +53,21 @@ class SegmentConfig(NamedTuple):
     def flat(self):
         """All of them as flat ROS 2 names, for `params.write_file` (a complete segment file)."""
         return {**self.model.flat(), **self.plant.flat(), **self.identify.flat()}
+
+
+def effect_range(effect, key):
+    """
+    `Range` of the segment's `--effect effect:key=...`, or None for a parameter with none.
+
+    Each effect parameter is the YAML parameter it sets, so it has that one's range
+    (config/ranges.py), from its effect's lowest value where it has one (a strength is never
+    negative: 0 = off).
+    """
+    parameter = BY_NAME[effect].parameters.get(key) if effect in BY_NAME else None
+    if parameter is None:
+        return None
+    rule = ranges.RANGES['segment.' + parameter.name]
+    return rule if parameter.low is None else rule._replace(low=max(rule.low, parameter.low))
 
 
 def load_segment(params_path=None):

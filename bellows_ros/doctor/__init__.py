@@ -15,9 +15,10 @@
 """
 The model doctor: what the simulation gets wrong on measured data, its physical cause, the gain.
 
-`diagnosis.diagnose` is the entry point (docs/doctor.md); the causes of each device are in
-`segment_causes` and `actuator_causes`; `live` runs the doctor beside the nodes. `checks`,
-`filters` and `scoring` are its internals.
+`diagnosis.diagnose` is the entry point (docs/doctor.md); the causes of each device are the
+effects of `models.segment_effects` and `models.actuator_effects` (docs/effects.md), built into
+models by `segment_causes` and `actuator_causes`; `live` runs the doctor beside the nodes.
+`checks` and `scoring` are its internals.
 """
 __all__ = [
     'diagnosis',        # the decision procedure: diagnose(system, table, config)

@@ -29,7 +29,7 @@ from bellows_ros.errors import DataError
 from bellows_ros.io.data import check_range
 from bellows_ros.io.table import check_increasing, COLUMNS, Table
 from bellows_ros.models.actuator_geometry import P_ATM
-from bellows_ros.models.filters import reversals
+from bellows_ros.models.segment_effects import EFFECTS as SEGMENT_EFFECTS
 
 MIN_SAMPLES = 200
 MIN_DURATION = 5.0        # s
@@ -198,12 +198,6 @@ def _check_excitation(record):
                                          'segment angle never changes by 1 degree')
 
 
-def moving_fraction(position, dt, speed):
-    """Fraction of samples moving faster than `speed` (position units per s)."""
-    rate = np.gradient(position, dt)
-    return float(np.mean(np.abs(rate) > speed))
-
-
 def pressure_coverage(record, ambient, share=0.5):
     """
     Tell why not every fold's training rows reach `share` of the highest chain pressure.
@@ -233,38 +227,20 @@ def pressure_coverage(record, ambient, share=0.5):
 
 def identifiability(record, ambient=P_ATM):
     """
-    For each cause: None if this record can separate it, else the reason why not.
+    For each segment cause: None if this record can separate it, else the reason why not.
 
     `record` is the (decimated) record, `ambient` the ambient pressure (Pa) gauge pressures are
-    taken from: the segment's p0 (paper A), paper B's P_atm for the actuator. The actuator's
-    causes are judged as each effect says (`actuator_causes.identifiability`): none here.
+    taken from: the segment's p0 (paper A). Each effect states its own condition
+    (`structural_reason`). The actuator's causes are judged by what the model says the record
+    can show (`actuator_causes.identifiability`): none here.
     """
-    reasons = {}
     if record.system == 'actuator':
-        return reasons   # each effect says how a record shows it (actuator_causes)
-    else:
-        psi, p1, p2 = record['psi'], record['p1'], record['p2']
-        turns = reversals(psi, np.radians(1.0))
-        spread = max(np.ptp(p1), np.ptp(p2))
-        moving = moving_fraction(psi, record.dt, np.radians(0.5))
-        reasons['contact_hysteresis'] = (None if turns >= 2
-                                         and max(p1.max(), p2.max()) > ambient + 2e4 else
-                                         f'the angle reverses only {turns} time(s) or no chain is '
-                                         'pressurised; the contact memory shows only on a return '
-                                         'path')
-        reasons['pressure_friction'] = (None if spread > 5e4 and moving > 0.02 and turns >= 2 else
-                                        'friction needs motion in both directions at several '
-                                        'pressures')
-        reasons['natural_curvature'] = (None if spread > 5e4 else
-                                        f'the chain pressures span only {spread:.0f} Pa; a '
-                                        'pressure-dependent rest angle needs a wider range')
-        rate = np.abs(np.gradient(p1, record.dt)) + np.abs(np.gradient(p2, record.dt))
-        reasons['sensor_lag'] = (None if spread > 5e4 and np.percentile(rate, 99) > 1e5 else
-                                 'the pressures never change fast, so a lag of the sensors cannot '
-                                 'be seen')
-        # Every segment cause acts through the chain pressures: none can be scored on held-out
-        # blocks that only one fold's refit has not seen pressurised.
-        uncovered = pressure_coverage(record, ambient)
-        if uncovered:
-            reasons = {cause: reason or uncovered for cause, reason in reasons.items()}
+        return {}
+    reasons = {effect.name: effect.structural_reason(record, ambient)
+               for effect in SEGMENT_EFFECTS}
+    # Every segment cause acts through the chain pressures: none can be scored on held-out
+    # blocks that only one fold's refit has not seen pressurised.
+    uncovered = pressure_coverage(record, ambient)
+    if uncovered:
+        reasons = {cause: reason or uncovered for cause, reason in reasons.items()}
     return reasons

@@ -30,6 +30,7 @@ import numpy as np
 
 from bellows_ros.doctor import diagnosis as engine
 from bellows_ros.doctor import scoring
+from bellows_ros.models.segment_effects import driving_torque
 
 EXTENDED_FILE = 'extended.yaml'
 
@@ -268,9 +269,8 @@ def markdown(d, plots):
               + ''.join(f' --effect {c}' for c in _plant_effects(d)),
               f'    ros2 run bellows_ros <node> --ros-args --params-file {EXTENDED_FILE}', '']
     if d.system == 'segment':
-        output, name = (('tau_drive',
-                         'membrane-contact torque (29)') if 'contact_hysteresis' in d.causes
-                        else ('tau_prev', 'previous model (34)'))
+        output = driving_torque(d.causes)
+        name = TORQUES[output]
         lines.append(f"The extended segment model's driving torque is the `{output}` output of "
                      f'`bellows simulate segment` and of the model node ({name}).')
     plant_only = _plant_effects(d)
@@ -288,6 +288,10 @@ def markdown(d, plots):
               '(see docs/doctor.md).', '', '## Plots', '']
     lines += [f'![{name}]({name})' for name in plots]
     return '\n'.join(lines) + '\n'
+
+
+# The segment model's outputs that can be its driving torque, and what each is.
+TORQUES = {'tau_prev': 'previous model (34)', 'tau_drive': 'membrane-contact torque (29)'}
 
 
 def _plant_effects(d):

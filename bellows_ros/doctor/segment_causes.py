@@ -23,54 +23,33 @@ Baseline (docs/doctor.md): paper A's previous model (34) with constant friction 
 and no natural curvature (Ψ_j0 = 0, no k_s,p): Y = X_prev θ_prev + 2Ψ k_s + tanh(c_vel Ψ̇) c_f, all
 linear coefficients solved by least squares (32) on the training rows.
 
-Each cause adds the missing piece (paper A; docs/equations.md):
-- contact_hysteresis: X_prev is swapped for the membrane-contact actuator torque (29), X_a(s̃_a),
-  with s̃_a carried along the record by the no-slip strain memory (Algorithm 1) for the material
-  and geometry of the parameter file; θ_a refitted.
-- pressure_friction: adds c_f,p (5), the friction that grows with the bearing load.
-- natural_curvature: adds Ψ_j0(p) = σ_j c_Ψ0,p tanh(c_Ψ0 p_scl,j) (4) and k_s,p (3); c_Ψ0, c_Ψ0,p
-  are fitted (nonlinear), k_s, k_s,p by least squares.
-- sensor_lag: the pressure sensors lag the chambers with a time constant τ; the model is fed the
-  pressures the sensors lag behind, p + τ dp/dt (the inverse of the first-order lag).
+Each cause is an effect of `models.segment_effects` (docs/effects.md): it feeds the model other
+pressures (a sensor lag), swaps or extends a block of the regression (the contact torque, c_f,p,
+the natural curvature) and may add nonlinear variables of its own.
 """
+from types import SimpleNamespace
+
 import numpy as np
-from scipy.signal import savgol_filter
 
 from bellows_ros.doctor.scoring import Model, noise_floor
 from bellows_ros.identify.segment import filter_inputs, least_squares, target
 from bellows_ros.models.derivatives import rates
-from bellows_ros.models.segment import (actuator_regressor, contact_lengths, friction_regressor,
-                                        previous_regressor, restoring_regressor, scaled_pressure)
+from bellows_ros.models.segment import (contact_lengths, friction_regressor, previous_regressor,
+                                        restoring_regressor, scaled_pressure)
+from bellows_ros.models.segment_effects import BY_NAME, EFFECTS, NAMES
 
-CAUSES = ('contact_hysteresis', 'pressure_friction', 'natural_curvature', 'sensor_lag')
+CAUSES = NAMES
 # Causes the plant has only with `--effect NAME` (the rest are the model's own parameters).
-SWITCHED_BY_EFFECT = ('sensor_lag',)
+SWITCHED_BY_EFFECT = tuple(effect.name for effect in EFFECTS if effect.switched_by_effect)
 # What a record must hold to decide each cause when it came closest but did not pay (report.md).
-DECIDING_DATA = {
-    'contact_hysteresis': 'several angle reversals with a chain held pressurised',
-    'pressure_friction': 'motion in both directions at several held pressures',
-    'natural_curvature': 'the chain pressures stepped over many levels, 0 to > 1 bar gauge',
-    'sensor_lag': 'pressure steps faster than the lag, sampled at >= 10 x 1/tau',
-}
+DECIDING_DATA = {effect.name: effect.deciding_data for effect in EFFECTS}
 BASELINE = ('paper A previous model (34), constant friction c_f, no natural curvature '
             '(psi_j0 = 0, k_s,p = 0); coefficients refitted')
 # Hz, highest rate the doctor fits at: quasi-static bench records; the sensor lag is ~30 ms
 FIT_RATE = 100.0
 UNIT = 'N·m'
-# Samples of the centred Savitzky-Golay derivative dp/dt of `sensor_lag` at the fit rate: 50 ms at
-# 100 Hz. A 9-sample (90 ms) window smoothed the bench's fastest pressure steps (~50 ms) so much
-# that 0.037 N·m of structure stayed behind (test seed 203: 0.0367 -> 0.0246 N·m with 5 samples).
-RATE_WINDOW = 5
-
-# Nonlinear parameters: (name, start, lower, upper); alternative starts for multi-start.
-SPECS = {
-    'natural_curvature': [('c_psi0', 3.0, 0.1, 30.0), ('c_psi0_p', 0.3, 0.0, 1.5)],
-    'sensor_lag': [('log10_tau', -1.5, -2.5, 0.0)],
-}
-STARTS = {
-    'natural_curvature': [[1.0, 0.1], [10.0, 0.6], [20.0, 0.8]],
-    'sensor_lag': [[-2.3], [-0.8]],
-}
+# Linear columns of the baseline's regression: A(34)'s pressure polynomial (4), k_s, c_f.
+BASELINE_COLUMNS = 6
 
 
 def add_columns(record, params, input_cutoff):
@@ -153,51 +132,46 @@ def build_model(record, params, causes, warm=None, contact=None, noise=None):
     # Prior of the linear solve; the floor keeps an all-zero column (a chain never
     # pressurised) from making a noise-free record's system singular.
     ridge = max((noise / max(np.std(y), noise, 1e-12)) ** 2, 1e-10)
-    nonlinear = [c for c in causes if c in SPECS]
+    effects = [BY_NAME[cause] for cause in causes]
     names, x0, lower, upper = [], [], [], []
-    for cause in nonlinear:
-        for name, start, lo, hi in SPECS[cause]:
-            key = f'{cause}.{name}'
+    for effect in effects:
+        for name, start, lo, hi in effect.fit:
+            key = f'{effect.name}.{name}'
             names.append(key)
             x0.append(warm[key] if warm and key in warm else start)
             lower.append(lo)
             upper.append(hi)
     starts = []
-    if causes and causes[-1] in SPECS:
-        width = len(SPECS[causes[-1]])
-        starts = [x0[:-width] + list(alt) for alt in STARTS[causes[-1]]]
+    if effects and effects[-1].fit:
+        width = len(effects[-1].fit)
+        starts = [x0[:-width] + list(alt) for alt in effects[-1].starts]
+
+    def raw(theta):
+        """{cause: {fit variable: value}} of `theta`."""
+        values, k = {}, 0
+        for effect in effects:
+            values[effect.name] = {v.name: float(theta[k + i]) for i, v in enumerate(effect.fit)}
+            k += len(effect.fit)
+        return values
 
     def columns(theta):
-        values = dict(zip(names, theta))
+        values = raw(theta)
         p1, p2 = record['p1'], record['p2']
-        if 'sensor_lag' in causes:
-            tau = 10.0 ** values['sensor_lag.log10_tau']
-            p1 = p1 + tau * savgol_filter(p1, RATE_WINDOW, 2, deriv=1, delta=dt)
-            p2 = p2 + tau * savgol_filter(p2, RATE_WINDOW, 2, deriv=1, delta=dt)
+        for effect in effects:
+            p1, p2 = effect.pressures(p1, p2, dt, values[effect.name])
         ps1, ps2 = scaled_pressure(params, p1), scaled_pressure(params, p2)
-        blocks, labels = [], []
-        if 'contact_hysteresis' in causes:
-            sa1, sa2 = contact()
-            blocks.append(actuator_regressor(psi, ps1, ps2, sa1, sa2))
-            labels += [f'actuator.theta[{k}]' for k in range(8)]
-        else:
-            blocks.append(previous_regressor(psi, ps1, ps2))
-            labels += [f'previous.theta[{k}]' for k in range(4)]
-        if 'natural_curvature' in causes:
-            blocks.append(restoring_regressor(psi, ps1, ps2, values['natural_curvature.c_psi0'],
-                                              values['natural_curvature.c_psi0_p']))
-            labels += ['restoring.k_s', 'restoring.k_sp']
-        else:
-            blocks.append(restoring_regressor(psi, ps1, ps2, 0.0, 0.0)[:, :1])
-            labels += ['restoring.k_s']
         friction = friction_regressor(psi_dot, ps1, ps2, params.friction_c_vel)
-        if 'pressure_friction' in causes:
-            blocks.append(friction)
-            labels += ['friction.c_f', 'friction.c_fp']
-        else:
-            blocks.append(friction[:, :1])
-            labels += ['friction.c_f']
-        return np.column_stack(blocks), labels
+        blocks = {'pressure': (previous_regressor(psi, ps1, ps2),
+                               [f'previous.theta[{k}]' for k in range(4)]),
+                  'restoring': (restoring_regressor(psi, ps1, ps2, 0.0, 0.0)[:, :1],
+                                ['restoring.k_s']),
+                  'friction': (friction[:, :1], ['friction.c_f'])}
+        data = SimpleNamespace(psi=psi, psi_dot=psi_dot, ps1=ps1, ps2=ps2, params=params,
+                               contact=contact)
+        for effect in effects:
+            blocks = effect.regressors(blocks, data, values[effect.name])
+        parts = [blocks[name] for name in ('pressure', 'restoring', 'friction')]
+        return np.column_stack([x for x, _ in parts]), [label for _, ls in parts for label in ls]
 
     cache = {}
 
@@ -213,29 +187,16 @@ def build_model(record, params, causes, warm=None, contact=None, noise=None):
         coefficients = least_squares(x[train], y[train], ridge, scale)
         return x @ coefficients, dict(zip(labels, coefficients))
 
-    n_linear = (8 if 'contact_hysteresis' in causes else 4) + 1 + ('natural_curvature' in causes) \
-        + 1 + ('pressure_friction' in causes)
+    n_linear = BASELINE_COLUMNS + sum(effect.extra_columns for effect in effects)
 
     def physical(theta, linear):
-        values = dict(zip(names, theta))
-        out = {'baseline': {}}
-        for cause in causes:
-            out[cause] = {}
+        out = {'baseline': {}, **{cause: {} for cause in causes}}
         for label, value in linear.items():
-            part = 'baseline'
-            if label.startswith('actuator.'):
-                part = 'contact_hysteresis'
-            elif label == 'friction.c_fp':
-                part = 'pressure_friction'
-            elif label == 'restoring.k_sp':
-                part = 'natural_curvature'
+            part = next((e.name for e in effects if e.owned and label.startswith(e.owned)),
+                        'baseline')
             out[part][label] = float(value)
-        if 'natural_curvature' in causes:
-            curvature = out['natural_curvature']
-            curvature['restoring.c_psi0'] = float(values['natural_curvature.c_psi0'])
-            curvature['restoring.c_psi0_p'] = float(values['natural_curvature.c_psi0_p'])
-        if 'sensor_lag' in causes:
-            out['sensor_lag']['tau'] = float(10.0 ** values['sensor_lag.log10_tau'])
+        for effect, values in zip(effects, raw(theta).values()):
+            out[effect.name].update(effect.to_si(values))
         return out
 
     return Model(causes, names, x0, lower, upper, run, physical, n_linear=n_linear, starts=starts)
@@ -249,27 +210,27 @@ def extended_flat(config, causes, values):
     `bellows_ros.config.segment.load_segment`.
 
     The fitted coefficients go to their YAML names; physics a cause did not find is written as
-    switched off (c_f,p = 0, c_Ψ0,p = k_s,p = 0), so the file describes exactly the extended model.
-    A fitted sensor lag goes to `segment.plant.sensor_lag_tau` (the plant's `sensor_lag` effect).
+    switched off (each effect's `off`: c_f,p = 0, c_Ψ0,p = k_s,p = 0), so the file describes
+    exactly the extended model. A fitted sensor lag goes to `segment.plant.sensor_lag_tau` (the
+    plant's `sensor_lag` effect: its `label`).
     """
     params = config.model
     flat = config.flat()
     vector = {'actuator.theta': list(params.actuator_theta),
               'previous.theta': list(params.previous_theta)}
     scalars = {}
-    if 'pressure_friction' not in causes:
-        scalars['friction.c_fp'] = 0.0
-    if 'natural_curvature' not in causes:
-        scalars.update({'restoring.c_psi0_p': 0.0, 'restoring.k_sp': 0.0})
-    for part in values.values():
-        for label, value in part.items():
+    for effect in EFFECTS:
+        if effect.name not in causes:
+            scalars.update({field.replace('_', '.', 1): value
+                            for field, value in effect.off.items()})
+    for part, fitted in values.items():
+        label_of = BY_NAME[part].label if part in BY_NAME else str
+        for label, value in fitted.items():
             if '[' in label:
                 name, index = label[:-1].split('[')
                 vector[name][int(index)] = value
-            elif label == 'tau':
-                scalars['plant.sensor_lag_tau'] = value
             else:
-                scalars[label] = value
+                scalars[label_of(label)] = value
     for name, value in vector.items():
         flat[f'segment.{name}'] = [float(v) for v in value]
     for name, value in scalars.items():

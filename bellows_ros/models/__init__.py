@@ -31,6 +31,10 @@ __all__ = [
     'ogden',              # paper A's membrane material
     'contact',            # paper A's membrane-rib contact
     'derivatives',        # the one rate estimator of the project
+    'actuator_effects',   # the actuator's physical effects, one module each, and their registry
+    'segment_effects',    # the segment's physical effects, one module each, and their registry
+    'effect_registry',    # how a package of effect modules becomes a registry
     'effect_strengths',   # live effect strengths of a simulated plant
+    'filters',            # vectorised lag, relaxation, play operator, recurrence, reversals
     'limits',             # bounds on parameters that size a computation
 ]

@@ -20,15 +20,9 @@ segment".
 
 With no effects the plant *is* the doctor's baseline (docs/doctor.md): the previous model (34) with
 constant friction (c_f only) and no natural curvature (Ψ_j0 = 0, k_s,p = 0). Each effect switches
-on one piece of missing physics (the doctor's segment vocabulary, `SEGMENT_EFFECTS`):
-
-- `contact_hysteresis`: the actuator torque is paper A's membrane-contact torque (29) with the
-  no-slip strain memory (Algorithm 1) instead of the pressure polynomial of (34). No parameters.
-- `pressure_friction`: friction grows with the bearing load, c_f,p (5). Parameter `c_fp` (N·m).
-- `natural_curvature`: Ψ_j0(p) (4) and k_s,p (3). Parameters `c_psi0`, `c_psi0_p` (rad), `k_sp`
-  (N·m/rad).
-- `sensor_lag`: first-order lag of the measured pressures. Parameter `tau` (s).
-The full paper-A physics is the first three together. Unset effect parameters take the YAML values.
+on one piece of missing physics: every module of `models.segment_effects` (docs/effects.md), the
+doctor's segment vocabulary (`SEGMENT_EFFECTS`). The full paper-A physics is those marked
+`paper_a` together (`FULL_MODEL`). Unset effect parameters take the YAML values.
 The strengths (`STRENGTHS`, 0 = off) can change while the plant runs (`set_strengths`): taken at
 the start of the next step, in the stepping thread, as one immutable object; the state (angle,
 pressures, strain memories) carries on.
@@ -51,22 +45,10 @@ from bellows_ros.errors import ParameterError
 from bellows_ros.models import effect_strengths
 from bellows_ros.models.derivatives import rate
 from bellows_ros.models.segment import motion_torque, SegmentModel, SegmentOutput
+from bellows_ros.models.segment_effects import BY_NAME, driving_torque, EFFECTS, NAMES, STRENGTHS
 
-SEGMENT_EFFECTS = ('contact_hysteresis', 'pressure_friction', 'natural_curvature', 'sensor_lag')
-FULL_MODEL = ('contact_hysteresis', 'pressure_friction', 'natural_curvature')
-
-# effect -> {effect parameter: SegmentParams field it sets}
-EFFECT_PARAMETERS = {
-    'contact_hysteresis': {},
-    'pressure_friction': {'c_fp': 'friction_c_fp'},
-    'natural_curvature': {'c_psi0': 'restoring_c_psi0', 'c_psi0_p': 'restoring_c_psi0_p',
-                          'k_sp': 'restoring_k_sp'},
-    'sensor_lag': {'tau': 'sensor_lag_tau'},  # a field of SegmentPlantParams, not of the model
-}
-# The parameter of each effect that says how strong it is, 0 = off (`SegmentPlant.set_strengths`):
-# c_f,p (5) N·m, c_Ψ0,p (4) rad (the pressure-driven natural angle; k_s,p from the YAML), lag s.
-# `contact_hysteresis` is a choice of torque model, (29) or (34), with no strength.
-STRENGTHS = {'pressure_friction': 'c_fp', 'natural_curvature': 'c_psi0_p', 'sensor_lag': 'tau'}
+SEGMENT_EFFECTS = NAMES
+FULL_MODEL = tuple(effect.name for effect in EFFECTS if effect.paper_a)
 NOISE_KEYS = ('p', 'psi', 'psi_dot', 'tau')
 NO_NOISE = dict.fromkeys(NOISE_KEYS, 0.0)
 # Longest step of the free-motion integration, s (a numerical setting, not physics: see `step`).
@@ -131,8 +113,9 @@ class _SegmentEffects:
     effects: tuple     # ((effect, ((parameter, value), ...)), ...)
     physics: object    # SegmentParams of the true physics (`plant_physics`)
     model: object      # SegmentModel of `physics`, on the plant's strain memories
-    hysteresis: bool
+    torque: str        # the model output that is the driving torque: tau_prev (34), tau_drive
     lag: float         # s, 0 = off
+    strengths: tuple   # ((effect, strength in use), ...) of the effects on that have one
 
 
 SegmentSample = namedtuple('SegmentSample', 't psi psi_dot p1 p2 tau_ext')
@@ -150,20 +133,21 @@ def check_effects(effects):
         effects = {name: {} for name in (effects or ())}
     checked = {}
     for name, options in effects.items():
-        if name not in EFFECT_PARAMETERS:
+        if name not in BY_NAME:
             raise ParameterError(f"unknown segment effect '{name}' (known: "
                                  f"{', '.join(SEGMENT_EFFECTS)})")
+        known = BY_NAME[name].parameters
         options = dict(options or {})
         for key, value in options.items():
-            if key not in EFFECT_PARAMETERS[name]:
-                known = ', '.join(EFFECT_PARAMETERS[name]) or 'none'
+            if key not in known:
                 raise ParameterError(f"segment effect '{name}': unknown parameter '{key}' (known: "
-                                     f'{known})')
+                                     f"{', '.join(known) or 'none'})")
             if not math.isfinite(float(value)):
                 raise ParameterError(f"segment effect '{name}': parameter '{key}' is not finite")
         checked[name] = {key: float(value) for key, value in options.items()}
-    if 'sensor_lag' in checked and checked['sensor_lag'].get('tau', 1.0) < 0:
-        raise ParameterError("segment effect 'sensor_lag': parameter 'tau' must be >= 0")
+        problem = BY_NAME[name].check(checked[name])
+        if problem:
+            raise ParameterError(f"segment effect '{name}': {problem}")
     return checked
 
 
@@ -171,20 +155,19 @@ def plant_physics(params, effects):
     """
     Return SegmentParams of the true physics for the switched-on `effects` (validated mapping).
 
-    Missing physics is switched off: c_f,p = 0 without `pressure_friction`; c_Ψ0,p = k_s,p = 0
-    without `natural_curvature`. Effect parameters override the YAML values (`sensor_lag`'s is the
-    plant's, applied by `SegmentPlant`).
+    Missing physics is switched off (each effect's `off`: c_f,p = 0 without `pressure_friction`).
+    Effect parameters override the YAML values; those of the plant's own (a sensor lag) are
+    applied by `SegmentPlant`.
     """
     changes = {}
-    if 'pressure_friction' not in effects:
-        changes['friction_c_fp'] = 0.0
-    if 'natural_curvature' not in effects:
-        changes.update(restoring_c_psi0_p=0.0, restoring_k_sp=0.0)
-    for name, options in effects.items():
-        if name == 'sensor_lag':
+    for effect in EFFECTS:
+        if effect.name not in effects:
+            changes.update(effect.off)
             continue
-        for key, value in options.items():
-            changes[EFFECT_PARAMETERS[name][key]] = value
+        for key, value in effects[effect.name].items():
+            field = effect.parameters[key].field
+            if hasattr(params, field):
+                changes[field] = value
     return params.replace(**changes)
 
 
@@ -223,18 +206,27 @@ class SegmentPlant:
     def _effects_of(self, effects, model_of):
         """Return the immutable `_SegmentEffects` of validated `effects`; `model_of(physics)`."""
         physics = plant_physics(self.params, effects)
+        on = [effect for effect in EFFECTS if effect.name in effects]
+        # the driving torque: (29) with the effect that says so (contact hysteresis), else (34)
+        strengths = []
+        for effect in on:
+            if effect.strength:
+                field = effect.parameters[effect.strength].field
+                source = physics if hasattr(physics, field) else self.plant
+                strengths.append((effect.name, effects[effect.name].get(
+                    effect.strength, getattr(source, field))))
         return _SegmentEffects(
             effects=tuple((name, tuple(values.items())) for name, values in effects.items()),
             physics=physics, model=model_of(physics),
-            hysteresis='contact_hysteresis' in effects,
-            lag=(effects['sensor_lag'].get('tau', self.plant.sensor_lag_tau)
-                 if 'sensor_lag' in effects else 0.0))
+            torque=driving_torque(effects),
+            lag=sum(e.plant_lag(effects[e.name], self.plant) for e in on),
+            strengths=tuple(strengths))
 
     def _apply_effects(self, new):
         self._effects_now = new
         self.effects = {name: dict(values) for name, values in new.effects}
         self.physics, self.model = new.physics, new.model
-        self.hysteresis, self.lag = new.hysteresis, new.lag
+        self.torque, self.lag = new.torque, new.lag
 
     def strengths(self, in_use=False):
         """
@@ -243,10 +235,7 @@ class SegmentPlant:
         in_use: of those the plant stepped with last (a change not taken yet left out).
         """
         chosen = self._effects_now if in_use else self._pending
-        effects, physics = dict(chosen.effects), chosen.physics
-        in_use = {'pressure_friction': physics.friction_c_fp,
-                  'natural_curvature': physics.restoring_c_psi0_p, 'sensor_lag': chosen.lag}
-        return {name: in_use[name] if name in effects else 0.0 for name in STRENGTHS}
+        return {**dict.fromkeys(STRENGTHS, 0.0), **dict(chosen.strengths)}
 
     def set_strengths(self, strengths):
         """
@@ -285,8 +274,7 @@ class SegmentPlant:
 
     def _drive(self):
         self.outputs = self.model.step(self.psi, self.psi_dot, self.p1, self.p2)
-        # with contact_hysteresis: τ_drive of paper A; without: the previous model's torque (34)
-        return self.outputs.tau_drive if self.hysteresis else self.outputs.tau_prev
+        return getattr(self.outputs, self.torque)
 
     def _end_stop(self):
         """

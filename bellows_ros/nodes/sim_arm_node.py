@@ -42,8 +42,7 @@ import math
 
 from rclpy.time import Time
 
-from bellows_ros.config.ranges import segment_effect_range
-from bellows_ros.config.segment import load_segment
+from bellows_ros.config.segment import effect_range, load_segment
 from bellows_ros.errors import BellowsError
 from bellows_ros.hardware.arm_bus import open_can
 from bellows_ros.hardware.can_protocol import dbc_segments
@@ -58,7 +57,7 @@ from bellows_ros.runtime.parameters import Spec
 
 def _strength_spec(effect, key):
     # The range the CLI's --effect takes too (config/ranges.py, one home).
-    rule = segment_effect_range(effect, key)
+    rule = effect_range(effect, key)
     return Spec(effect_strengths.parameter_name(effect, key), math.nan,
                 f'strength of the {effect} effect on every segment ({key}, {rule.unit}); 0 = off, '
                 'nan = as effects and segment_params say', low=rule.low, high=rule.high,

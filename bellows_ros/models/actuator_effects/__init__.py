@@ -18,29 +18,13 @@ The actuator's physical effects, one module each, and their one registry (`EFFEC
 
 Every module of this package but `base` defines `EFFECT`, an instance of
 `base.ActuatorEffect`: adding an effect is adding a module here (with its test and its
-section in docs/doctor.md). The plant, the doctor, the live doctor, the YAML's ranges and the
+section in docs/effects.md). The plant, the doctor, the live doctor, the ranges and the
 benches iterate over `EFFECTS`; none of them names an effect.
 """
-import importlib
-import pkgutil
-
 from bellows_ros.models.actuator_effects.base import ActuatorEffect
+from bellows_ros.models.effect_registry import discover
 
-
-def _discover():
-    effects = []
-    for module in pkgutil.iter_modules(__path__):
-        if module.name == 'base':
-            continue
-        effect = importlib.import_module(f'{__name__}.{module.name}').EFFECT
-        if not isinstance(effect, ActuatorEffect) or effect.name != module.name:
-            raise TypeError(f'{__name__}.{module.name}.EFFECT must be an ActuatorEffect '
-                            f'named {module.name!r}')
-        effects.append(effect)
-    return tuple(sorted(effects, key=lambda e: (e.rank, e.name)))
-
-
-EFFECTS = _discover()
+EFFECTS = discover(__name__, __path__, ActuatorEffect)
 NAMES = tuple(effect.name for effect in EFFECTS)
 BY_NAME = {effect.name: effect for effect in EFFECTS}
 # The parameter of each effect that says how strong it is, 0 = off.
