@@ -109,7 +109,7 @@ def test_after_a_vent_the_set_point_moves_back_from_where_the_segment_fell(contr
     The resumption is not a step: from the measured angle, a half-cosine at `resume_speed`.
 
     A step of 0.7 rad overshot by 0.37-0.73 rad on drawn segments, a move at 0.5 rad/s peak by
-    0.006-0.034 rad (docs/bench_log.md, 2026-11-26).
+    0.006-0.034 rad (bench_results/0.1.0/notebook.md, 2026-11-26).
     """
     node, peer, commands = controller
     [loop] = node.loops

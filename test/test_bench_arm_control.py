@@ -37,7 +37,7 @@ DEVICE_NAMES = ['arm_control.devices.feedback_only', 'arm_control.devices.previo
 @pytest.mark.slow  # three closed-loop runs, and two identified devices with three each
 def test_bench_figures_structure_and_order(capsys):
     assert bellows(['bench', '--only', 'arm_control', '--json', '--quick']) == 0
-    everything = json.loads(capsys.readouterr().out)
+    everything = json.loads(capsys.readouterr().out)['results']
     assert [r['name'] for r in everything] == NAMES + DEVICE_NAMES
     results, devices = everything[:3], everything[3:]
     for r in devices:

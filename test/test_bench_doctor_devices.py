@@ -132,8 +132,8 @@ def test_one_device_per_cause_names_it_or_says_why_in_numbers():
     """
     The CI subset: one drawn device per cause; no false names, and every miss says why.
 
-    The 90 % naming target is the full bench's (20
-    devices per cause, docs/bench_log.md): on one device a rate is 0 or 1. What holds for every
+    The 90 % naming target is the full bench's (20 devices per cause,
+    bench_results/0.1.0/notebook.md): on one device a rate is 0 or 1. What holds for every
     device is the contract: no false names, and a due cause that is not named comes with a reason
     in numbers (or `unexplained`).
     """

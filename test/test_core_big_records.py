@@ -23,7 +23,7 @@ the noise.
 The output of a record read in many small chunks is byte for byte the output of one chunk
 (model and plant state carried across, Ψ̇'s backward difference too); an error in a late chunk
 names the file's own line and leaves no output; and peak memory does not grow with the record.
-The 10-million-row measurement is in docs/bench_log.md.
+The 10-million-row measurement is in bench_results/0.1.0/notebook.md.
 """
 import json
 import os

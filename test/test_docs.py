@@ -293,13 +293,14 @@ def test_the_diagnostics_check_sees_a_status():
     assert coded_statuses('self.diagnostics.add(topics.name, f)') == {'<device>'}
 
 
-# Dated measurements live in docs/bench_log.md only. In the reference documents (README.md and
-# docs/*.md but the log) a date may appear only inside inline code (a parameter example) or as a
-# citation of a log entry: `docs/bench_log.md, YYYY-MM-DD` (more dates joined by `,` or `and`).
-BENCH_LOG = ROOT / 'docs' / 'bench_log.md'
+# Dated measurements live in the records and in the 0.1.0 notebook only. In the reference
+# documents (README.md and docs/*.md) a date may appear only inside inline code (a parameter
+# example) or as a citation of a notebook entry: `bench_results/0.1.0/notebook.md, YYYY-MM-DD`
+# (more dates joined by `,` or `and`).
+BENCH_LOG = ROOT / 'bench_results' / '0.1.0' / 'notebook.md'
 DATE = r'\d{4}-[01]\d-[0-3]\d'
 INLINE_CODE = re.compile(r'`[^`\n]*`')
-CITATION = re.compile(r'bench_log\.md,\s+(' + DATE + r'(?:(?:,\s+|,?\s+and\s+)' + DATE + r')*)')
+CITATION = re.compile(r'notebook\.md,\s+(' + DATE + r'(?:(?:,\s+|,?\s+and\s+)' + DATE + r')*)')
 LOG_HEADING = re.compile(r'^#{2,3} (' + DATE + r'):', re.MULTILINE)
 
 
@@ -320,9 +321,9 @@ def test_reference_documents_carry_no_dated_measurement():
     found = []
     for path in reference_documents():
         loose, cited = uncited_dates(path.read_text(encoding='utf-8'))
-        found += [f'{path.relative_to(ROOT)}: {date} (move the measurement to docs/bench_log.md)'
-                  for date in loose]
-        found += [f'{path.relative_to(ROOT)}: cites docs/bench_log.md, {date}, not a log entry'
+        found += [f'{path.relative_to(ROOT)}: {date} (a measurement: a bench record, or cite '
+                  'the notebook)' for date in loose]
+        found += [f'{path.relative_to(ROOT)}: cites the notebook, {date}, not an entry of it'
                   for date in cited if date not in logged]
     assert not found, '\n'.join(found)
 
@@ -331,13 +332,13 @@ def test_the_dated_measurement_rule_sees_what_it_should():
     assert uncited_dates('Runs of 2026-11-22 (host busy):') == (['2026-11-22'], [])
     assert uncited_dates('### rclpy on Fast DDS (2026-11-23)') == (['2026-11-23'], [])
     assert uncited_dates('`2026-01-01` strings') == ([], [])
-    assert uncited_dates('(numbers: docs/bench_log.md, 2026-11-22, 2026-11-23 and\n2026-11-24)') \
+    assert uncited_dates('(numbers: 0.1.0/notebook.md, 2026-11-22, 2026-11-23 and\n2026-11-24)') \
         == ([], ['2026-11-22', '2026-11-23', '2026-11-24'])
-    assert uncited_dates('docs/bench_log.md, 2026-11-23; measured again 2026-11-25') \
+    assert uncited_dates('0.1.0/notebook.md, 2026-11-23; measured again 2026-11-25') \
         == (['2026-11-25'], ['2026-11-23'])
 
 
-def test_the_bench_log_is_newest_first():
+def test_the_notebook_is_newest_first():
     dates = LOG_HEADING.findall(BENCH_LOG.read_text(encoding='utf-8'))
     assert dates and dates == sorted(dates, reverse=True), dates
 
@@ -352,8 +353,8 @@ def test_the_bench_log_is_newest_first():
 # parameters, targets and tolerances have neither ('≤ 20 µs per step' and 'p99 <= 1 ms' are
 # targets). What it cannot see: a figure with neither (an RMS error, a rate) stays the author's
 # to move; the rule catches the timings, loads and machines that date a sentence. Inline code
-# and fenced blocks are not read, and a sentence that cites the log (docs/bench_log.md) carries
-# its date: it may keep a figure.
+# and fenced blocks are not read, and a sentence that cites the notebook
+# (bench_results/0.1.0/notebook.md) carries its date: it may keep a figure.
 FENCED = re.compile(r'^```.*?^```', re.MULTILINE | re.DOTALL)
 NUMBER = r'(?<![\d.])(?<![≤<>≥=] )(?<![≤<>≥=])\d+(?:[.,]\d+)?(?:\s?[-–]\s?\d+(?:[.,]\d+)?)?'
 AMOUNT = NUMBER + r'\s?(?:µs|us|ms|s|min|h|%|[kKMG]i?B)(?![\w/²³])'
@@ -385,7 +386,7 @@ def statements(text):
 def undated_measurements(text):
     """Return the statements of `text` that carry a measurement and no log citation."""
     return [statement for statement in statements(text)
-            if 'bench_log.md' not in statement
+            if 'notebook.md' not in statement
             and (MEASUREMENT.search(statement)
                  or (re.search(AMOUNT, statement) and EVIDENCE.search(statement)))]
 
@@ -394,7 +395,8 @@ def test_reference_documents_carry_no_undated_measurement():
     found = [f'{path.relative_to(ROOT)}: {statement[:160]}'
              for path in reference_documents()
              for statement in undated_measurements(path.read_text(encoding='utf-8'))]
-    assert not found, 'measurements belong in docs/bench_log.md (cite it):\n' + '\n'.join(found)
+    assert not found, ('measurements belong in bench records or the notebook (cite it):\n'
+                       + '\n'.join(found))
 
 
 def test_the_undated_measurement_rule_sees_what_it_should():
@@ -418,7 +420,7 @@ def test_the_undated_measurement_rule_sees_what_it_should():
                  'a heartbeat thread (20 ms) also sends duty 0; after **100 ms** it vents.',
                  'the spring moves between 0 and 20 mm every 4 s, so the load cell measures it.',
                  'Every hidden effect must reach a gain of 30 %.',
-                 'The tick costs tens of µs here (docs/bench_log.md, 2026-11-22).',
+                 'The tick costs tens of µs here (bench_results/0.1.0/notebook.md, 2026-11-22).',
                  '`took 3 s here`, in code',
                  '```\ntook 3 s here\n```',
                  'measured Ψ every 20 ms of sample time',

@@ -105,7 +105,7 @@ def graph_results():
         assert main(['bench', '--only', 'graph', '--quick', '--json']) == 0
     # Every node process the benches started was stopped and reaped: none is left.
     assert [name for pid, name in session_processes().items() if pid not in before] == []
-    return {r['name']: r for r in json.loads(out.getvalue())}
+    return {r['name']: r for r in json.loads(out.getvalue())['results']}
 
 
 @pytest.mark.slow

@@ -20,8 +20,8 @@ physics), driver_node, stiffness_controller_node; the test steps the stiffness s
 two values every few seconds (the chamber moves, as in use) and listens to the controller's
 `model_health` on /diagnostics. After the controller's healthy window (its noise floors) it
 watches HEALTHY s of the healthy rig (no WARN allowed: a shorter watch than the issue's 10 min,
-which docs/bench_log.md records once by hand), then `ros2 param set` switches the plant's leak
-on; a WARN `model_health` naming air_leak must follow within DEADLINE s.
+which bench_results/0.1.0/notebook.md records once by hand), then `ros2 param set` switches the
+plant's leak on; a WARN `model_health` naming air_leak must follow within DEADLINE s.
 """
 import os
 import time

@@ -281,7 +281,7 @@ def test_a_driver_stopped_for_half_a_second_stamps_its_backlog_on_the_arms_clock
     SIGSTOP stands for a driver the machine does not schedule; the arm's frames wait in the
     socket meanwhile. Stamped when read, the backlog went out as fresh samples: a hole in the
     stamps, then a burst stamped at the same instant, each sample's age hidden from the arm
-    controller's `max_sample_age` (docs/bench_log.md, 2026-11-26).
+    controller's `max_sample_age` (bench_results/0.1.0/notebook.md, 2026-11-26).
     """
     processes, domain, tmp_path, watcher, final, seen, stamps, _ = graph
 

@@ -335,7 +335,7 @@ def test_a_reader_that_falls_behind_knows_when_its_frames_arrived():
 
     The driver stamps from it (`sample_delivery.arrival_ns`): stamped when read, a backlog of
     0.5-1.5 s behind a starved reader went out as fresh samples and the arm controller acted on
-    them (docs/bench_log.md, 2026-11-26).
+    them (bench_results/0.1.0/notebook.md, 2026-11-26).
     """
     port = 45000 + random.randint(0, 999)
     group = '239.74.166.13'

@@ -159,7 +159,7 @@ def test_unknown_parameter_and_effect_are_named(tmp_path, capsys, record):
 def test_bench_reports_the_step_and_the_previous_model_in_one_run(capsys):
     import json
     assert main(['bench', '--only', 'segment', '--quick', '--json']) == 0
-    results = {r['name']: r for r in json.loads(capsys.readouterr().out)}
+    results = {r['name']: r for r in json.loads(capsys.readouterr().out)['results']}
     step = results['segment: paper A model step (both chains)']
     assert step['reference'] == 'segment: previous model (34) step'
     # structure only: tests never judge wall-clock times

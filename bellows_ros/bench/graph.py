@@ -28,8 +28,8 @@ own on the bench's domain (GraphRun). Everything stays on this host (LOOPBACK_EN
 - the simulated arm runs at the host nodes' priority. A real arm has a processor of its own: it
   neither delays the host nor waits for it. On one machine its stand-in can be kept from one of
   the two only. At equal SCHED_FIFO priority no thread preempts another: each runs until it
-  blocks (above them, each tick of the stand-in lands on the host path: docs/bench_log.md,
-  2026-11-24, "where rclpy's tail came from");
+  blocks (above them, each tick of the stand-in lands on the host path:
+  bench_results/0.1.0/notebook.md, 2026-11-24, "where rclpy's tail came from");
 - `.composed`: the driver and the model node in one process (runtime.run with both classes, as
   nodes/arm_graph.py composes them): what composition saves against separate processes
   (`cpu.driver_node+model_node` against the sum of the two);

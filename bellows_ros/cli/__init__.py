@@ -62,6 +62,7 @@ def build_parser():
 
 def main(argv=None):
     args = build_parser().parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)   # what was asked, for records
     module = importlib.import_module(f'bellows_ros.cli.{args.command}')
     # `record` takes SIGINT and SIGTERM itself (runtime/record.py): an exception raised into its
     # writer would corrupt the chunk being written.

@@ -12,14 +12,23 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""`bellows bench [--json]`: run every benchmark module in `bellows_ros.bench`."""
+"""
+`bellows bench`: run every benchmark module in `bellows_ros.bench`, or render kept records.
+
+`--json` prints the run's record (`bench_records.record`: package, commit, date, host, command,
+results); `--output FILE` writes it. `--render FILE...` renders records instead of running
+anything: the results side by side, and with `--plot PNG` a figure of them.
+"""
+import datetime
 import importlib
 import inspect
 import json
 import pkgutil
 import sys
+import time
 
 import bellows_ros.bench as bench_package
+from bellows_ros.cli import bench_records
 from bellows_ros.errors import BellowsError
 
 
@@ -39,9 +48,24 @@ def add_arguments(parser):
                              'doctor_devices.KINDS), COUNT devices each (default --devices)')
     parser.add_argument('--workers', type=int, metavar='N',
                         help='worker processes of a bench that takes it (doctor_devices)')
+    parser.add_argument('--output', metavar='FILE',
+                        help="write the run's record (as --json prints it) to FILE, e.g. "
+                             'bench/results/<version>/<benches>.json')
+    parser.add_argument('--render', nargs='+', metavar='FILE',
+                        help='run nothing: render these records as Markdown, side by side')
+    parser.add_argument('--plot', metavar='PNG',
+                        help='with --render: also plot each result across the records')
 
 
 def run(args):
+    if args.render:
+        return render(args.render, args.plot)
+    if args.plot:
+        raise BellowsError('--plot draws records: give them with --render FILE...')
+    if args.output:
+        from bellows_ros.io.outputs import check_output
+        check_output(args.output)
+    started, clock = datetime.datetime.now(datetime.timezone.utc), time.perf_counter()
     results = []
     options = {name: getattr(args, name, None) for name in ('devices', 'kinds', 'workers')}
     for name in chosen_modules(args.only):
@@ -53,10 +77,24 @@ def run(args):
         if refused:
             raise BellowsError(f"bench {name} takes no --{', --'.join(refused)}")
         results.extend(module.run(quick=args.quick, **given))
-    if args.json:
-        print(json.dumps([r.as_dict() for r in results], indent=2))
-    else:
-        print(format_table(results))
+    record = bench_records.record(results, args.argv, started, time.perf_counter() - clock)
+    text = json.dumps(record, indent=2) + '\n'
+    if args.output:
+        from bellows_ros.io.outputs import write_text
+        write_text(args.output, text)
+    print(text if args.json else format_table(results), end='' if args.json else '\n')
+    return 0
+
+
+def render(paths, plot=None):
+    """Print the records in `paths` as Markdown; with `plot`, write the figure there too."""
+    if plot:
+        from bellows_ros.io.outputs import check_output
+        check_output(plot, paths, '--plot')
+    records = [(path, bench_records.read(path)) for path in paths]
+    print(bench_records.render(records), end='')
+    if plot:
+        bench_records.plot(records, plot)
     return 0
 
 

@@ -18,7 +18,7 @@ One BLAS thread for the fits.
 The identification's and the doctor's linear algebra is on tall, narrow matrices (thousands of
 rows, a few parameters), where OpenBLAS's threads cost more than they share: on two cores an
 actuator diagnosis took half the time on one thread, and two side by side a fifth
-(docs/bench_log.md, 2026-11-29).
+(bench_results/0.1.0/notebook.md, 2026-11-29).
 """
 
 

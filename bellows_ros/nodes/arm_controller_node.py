@@ -162,9 +162,9 @@ class SegmentLoop:
 
         After a vent the segment rests wherever it fell; the set-point it should be at is a step
         away, and the gains' step response overshoots by more than half the step
-        (docs/bench_log.md, 2026-11-26). So the set-point starts at `psi` and the offset fades out
-        in a half-cosine whose peak speed is `speed` rad/s, as the built-in trajectory's moves do
-        and as joint_trajectory_controller starts from the present state.
+        (bench_results/0.1.0/notebook.md, 2026-11-26). So the set-point starts at `psi` and the
+        offset fades out in a half-cosine whose peak speed is `speed` rad/s, as the built-in
+        trajectory's moves do and as joint_trajectory_controller starts from the present state.
         """
         offset = psi - self.source_setpoint(now)[0]
         duration = abs(offset) * math.pi / (2.0 * speed)

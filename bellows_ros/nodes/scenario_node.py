@@ -74,7 +74,8 @@ RUNS = (('paper A feedforward', 'paper_a'), ('feedback only', 'none'))
 READY, READY_TOLERANCE = 1.0, 0.05
 # Of the 1 kHz samples the scenario keeps one in SERIES_EVERY: 200 Hz resolves the trajectory's
 # moves. It reads every sample's bytes as the 1 kHz nodes do (runtime/joint_state_cdr.py): 2.6 us
-# a sample, against 1.8 us a sample for rclpy decoding one in five (docs/bench_log.md, 2026-11-29).
+# a sample, against 1.8 us a sample for rclpy decoding one in five
+# (bench_results/0.1.0/notebook.md, 2026-11-29).
 SERIES_EVERY = 5
 
 PARAMETERS = (

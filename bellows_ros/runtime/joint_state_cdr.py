@@ -18,7 +18,7 @@ sensor_msgs/msg/JointState as serialized bytes, for the 1 kHz sample topics.
 The 1 kHz nodes publish and take their samples serialized (rclpy's `Publisher.publish(bytes)`
 and `create_subscription(..., raw=True)`). Building a JointState object and converting it
 costs a node more CPU than packing the same numbers into bytes laid out once for its names
-(docs/bench_log.md, 2026-11-29, "raw samples"):
+(bench_results/0.1.0/notebook.md, 2026-11-29, "raw samples"):
 - `JointStateWriter(names)` lays out the message once; `serialize(stamp_ns, position, velocity,
   effort)` copies that template and packs the stamp and the arrays into it;
 - `JointStateReader()` reads stamp, names and arrays back; the names of the previous message
