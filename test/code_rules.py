@@ -12,7 +12,7 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""Rules the tests hold the code to, read from its source."""
+"""Rules the tests hold the code and the docs to, read from their text."""
 import ast
 
 
@@ -27,3 +27,10 @@ def names_in_conditions(source, names):
             found += [(test.lineno, c.value) for c in ast.walk(test)
                       if isinstance(c, ast.Constant) and c.value in names]
     return found
+
+
+def missing_from_section(text, heading, names):
+    """Return the `names` the Markdown section under `heading` of `text` does not name in code."""
+    assert heading in text, f'no section {heading!r}'
+    section = text.split(heading, 1)[1].split('\n## ', 1)[0]
+    return [name for name in names if f'`{name}`' not in section]

@@ -30,9 +30,16 @@ are A(34)'s pressure polynomial, k_s and c_f; each effect in `rank` order may re
 import abc
 from typing import NamedTuple
 
+import numpy as np
+
 from bellows_ros.models.actuator_effects.base import FitVariable
 
-__all__ = ['FitVariable', 'SegmentEffect', 'SegmentParameter']
+__all__ = ['FitVariable', 'SegmentEffect', 'SegmentParameter', 'pressure_span']
+
+
+def pressure_span(record):
+    """Return the larger of the two chains' pressure spans over `record`, Pa."""
+    return max(float(np.ptp(record['p1'])), float(np.ptp(record['p2'])))
 
 
 class SegmentParameter(NamedTuple):

@@ -19,10 +19,9 @@ Natural curvature: a pressure-dependent rest angle Ψ_j0(p) of A(4) and the stif
 Ψ_j0(p) = σ_j c_Ψ0,p tanh(c_Ψ0 p_scl,j): c_Ψ0 and c_Ψ0,p are fitted (nonlinear), k_s and k_s,p
 by least squares. c_Ψ0,p ≥ 0: the sign of the natural curvature is set by the mirrored chains.
 """
-import numpy as np
-
 from bellows_ros.models.segment import restoring_regressor
-from bellows_ros.models.segment_effects.base import FitVariable, SegmentEffect, SegmentParameter
+from bellows_ros.models.segment_effects.base import (FitVariable, pressure_span, SegmentEffect,
+                                                     SegmentParameter)
 
 
 class NaturalCurvature(SegmentEffect):
@@ -53,7 +52,7 @@ class NaturalCurvature(SegmentEffect):
                 'restoring.c_psi0_p': float(raw['c_psi0_p'])}
 
     def structural_reason(self, record, ambient):
-        spread = max(np.ptp(record['p1']), np.ptp(record['p2']))
+        spread = pressure_span(record)
         if spread > 5e4:
             return None
         return (f'the chain pressures span only {spread:.0f} Pa; a pressure-dependent rest angle '

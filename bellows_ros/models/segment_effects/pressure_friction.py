@@ -18,7 +18,8 @@ import numpy as np
 
 from bellows_ros.models.filters import reversals
 from bellows_ros.models.segment import friction_regressor
-from bellows_ros.models.segment_effects.base import SegmentEffect, SegmentParameter
+from bellows_ros.models.segment_effects.base import (pressure_span, SegmentEffect,
+                                                     SegmentParameter)
 
 
 class PressureFriction(SegmentEffect):
@@ -41,9 +42,8 @@ class PressureFriction(SegmentEffect):
 
     def structural_reason(self, record, ambient):
         psi, dt = record['psi'], record.dt
-        spread = max(np.ptp(record['p1']), np.ptp(record['p2']))
         moving = float(np.mean(np.abs(np.gradient(psi, dt)) > np.radians(0.5)))
-        if spread > 5e4 and moving > 0.02 and reversals(psi, np.radians(1.0)) >= 2:
+        if pressure_span(record) > 5e4 and moving > 0.02 and reversals(psi, np.radians(1.0)) >= 2:
             return None
         return 'friction needs motion in both directions at several pressures'
 

@@ -22,7 +22,8 @@ Savitzky-Golay derivative.
 """
 import numpy as np
 
-from bellows_ros.models.segment_effects.base import FitVariable, SegmentEffect, SegmentParameter
+from bellows_ros.models.segment_effects.base import (FitVariable, pressure_span, SegmentEffect,
+                                                     SegmentParameter)
 
 # Samples of the centred Savitzky-Golay derivative dp/dt at the fit rate: 50 ms at 100 Hz. A
 # 9-sample (90 ms) window smoothed the bench's fastest pressure steps (~50 ms) so much that
@@ -65,9 +66,8 @@ class SensorLag(SegmentEffect):
 
     def structural_reason(self, record, ambient):
         p1, p2, dt = record['p1'], record['p2'], record.dt
-        spread = max(np.ptp(p1), np.ptp(p2))
         rate = np.abs(np.gradient(p1, dt)) + np.abs(np.gradient(p2, dt))
-        if spread > 5e4 and np.percentile(rate, 99) > 1e5:
+        if pressure_span(record) > 5e4 and np.percentile(rate, 99) > 1e5:
             return None
         return 'the pressures never change fast, so a lag of the sensors cannot be seen'
 
