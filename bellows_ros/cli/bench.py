@@ -66,6 +66,7 @@ def run(args):
         from bellows_ros.io.outputs import check_output
         check_output(args.output)
     started, clock = datetime.datetime.now(datetime.timezone.utc), time.perf_counter()
+    commit = bench_records.commit()
     results = []
     options = {name: getattr(args, name, None) for name in ('devices', 'kinds', 'workers')}
     for name in chosen_modules(args.only):
@@ -77,7 +78,8 @@ def run(args):
         if refused:
             raise BellowsError(f"bench {name} takes no --{', --'.join(refused)}")
         results.extend(module.run(quick=args.quick, **given))
-    record = bench_records.record(results, args.argv, started, time.perf_counter() - clock)
+    record = bench_records.record(results, args.argv, started, time.perf_counter() - clock,
+                                  commit)
     text = json.dumps(record, indent=2) + '\n'
     if args.output:
         from bellows_ros.io.outputs import write_text

@@ -35,9 +35,13 @@ KEYS = ('format', 'bellows_ros', 'commit', 'started', 'seconds', 'command', 'hos
 RESULT_KEYS = ('name', 'value', 'unit')
 
 
-def record(results, command, started, seconds):
-    """Return the record of one run: `results` (Result), `command` (argv), `started` (datetime)."""
-    return {'format': FORMAT, 'bellows_ros': _version(), 'commit': _commit(),
+def record(results, command, started, seconds, commit):
+    """
+    Return the record of one run: `results` (Result), `command` (argv), `started` (datetime).
+
+    `commit`: `commit()` when the run started (a commit made during a long run is not what ran).
+    """
+    return {'format': FORMAT, 'bellows_ros': _version(), 'commit': commit,
             'started': started.astimezone(datetime.timezone.utc).isoformat(timespec='seconds'),
             'seconds': round(seconds, 3), 'command': ['bellows', *command],
             'host': {'machine': platform.machine(), 'system': platform.platform(),
@@ -53,9 +57,9 @@ def _version():
         return None
 
 
-def _commit():
-    """Return the git commit the package runs from ('+' if its tree has changes), or None."""
-    here = Path(__file__).resolve().parent
+def commit():
+    """Return the git commit the package runs from ('+' if its code has changes), or None."""
+    here = Path(__file__).resolve().parents[1]   # bellows_ros: the code that runs
     try:
         head = subprocess.run(['git', '-C', str(here), 'rev-parse', 'HEAD'], capture_output=True,
                               text=True, timeout=5, check=True).stdout.strip()
