@@ -337,7 +337,7 @@ def test_a_bag_metadata_beyond_the_yaml_limits_is_one_line(tmp_path, capsys):
 
 
 def test_a_bag_over_the_message_limit_is_refused_before_reading(tmp_path, monkeypatch):
-    from test_core_one_writer import write_bag
+    from test_io_bag_lock import write_bag
 
     from bellows_ros.io import bag as bag_reader
     monkeypatch.setattr(bag_reader, 'MAX_BAG_MESSAGES', 100)
@@ -383,7 +383,7 @@ def test_a_chunk_inflates_no_further_than_it_declares(compression):
 
 
 def test_a_bag_with_a_chunk_over_the_limit_is_refused(tmp_path, monkeypatch, capsys):
-    from test_core_one_writer import write_bag
+    from test_io_bag_lock import write_bag
 
     from bellows_ros.io import bag as bag_reader
     path = write_bag(tmp_path / 'bag', n=200)
