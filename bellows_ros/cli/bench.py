@@ -30,6 +30,7 @@ import time
 import bellows_ros.bench as bench_package
 from bellows_ros.cli import bench_records
 from bellows_ros.errors import BellowsError
+from bellows_ros.io.outputs import check_output, write_text
 
 
 def add_arguments(parser):
@@ -63,7 +64,6 @@ def run(args):
     if args.plot:
         raise BellowsError('--plot draws records: give them with --render FILE...')
     if args.output:
-        from bellows_ros.io.outputs import check_output
         check_output(args.output)
     started, clock = datetime.datetime.now(datetime.timezone.utc), time.perf_counter()
     commit = bench_records.commit()
@@ -82,7 +82,6 @@ def run(args):
                                   commit)
     text = json.dumps(record, indent=2) + '\n'
     if args.output:
-        from bellows_ros.io.outputs import write_text
         write_text(args.output, text)
     print(text if args.json else format_table(results), end='' if args.json else '\n')
     return 0
@@ -91,7 +90,6 @@ def run(args):
 def render(paths, plot=None):
     """Print the records in `paths` as Markdown; with `plot`, write the figure there too."""
     if plot:
-        from bellows_ros.io.outputs import check_output
         check_output(plot, paths, '--plot')
     records = [(path, bench_records.read(path)) for path in paths]
     print(bench_records.render(records), end='')

@@ -29,6 +29,7 @@ import platform
 import subprocess
 
 from bellows_ros.errors import BellowsError
+from bellows_ros.io.outputs import atomic_file
 
 FORMAT = 'bellows_ros bench record 1'
 KEYS = ('format', 'bellows_ros', 'commit', 'started', 'seconds', 'command', 'host', 'results')
@@ -140,7 +141,6 @@ def plot(records, path):
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
-    from bellows_ros.io.outputs import atomic_file
     by_name = [{r['name']: r for r in data['results']} for _, data in records]
     names = [n for n in dict.fromkeys(n for results in by_name for n in results)
              if sum(n in results for results in by_name) > 1]

@@ -80,10 +80,9 @@ ML = 1e-6  # m³ per mL: volumes are fitted in mL so that all parameters are O(1
 BASELINE_FIT = (FitVariable('p_ref_kpa', 101.325, 20.0, 500.0),
                 FitVariable('v_tube_ml', 20.0, 0.0, 400.0),
                 FitVariable('x_c_offset_mm', 0.0, -1.0, 1.0))
-# The effect judged by its onset (`judged_by == 'onset'`: buckling, `buckling_profile`). Onsets on
+# An effect judged by its onset (`judged_by == 'onset'`: buckling, `buckling_profile`): onsets on
 # a grid over its bounds, kept where the record's rows reach them; the best PROFILE_STARTS of
 # them start the fit. Four decades each: about 2.3 onsets per octave of x_cr, 1.5 of p_cr.
-_ONSET = next((effect for effect in EFFECTS if effect.judged_by == 'onset'), None)
 PROFILE_COMPRESSIONS = 28
 PROFILE_PRESSURES = 18
 PROFILE_STARTS = 3
@@ -131,7 +130,7 @@ class Onset:
     improvement: float            # the fall of the force's squared error (noise floors²)
 
 
-def buckling_profile(record, params, force_scale, standing=(), effect=None):
+def buckling_profile(record, params, force_scale, standing, effect):
     """
     Profile buckling over its onset across the record's range: a list of `Onset`, best first.
 
@@ -143,9 +142,8 @@ def buckling_profile(record, params, force_scale, standing=(), effect=None):
     (`detectable`); the k_b >= 0 fitted to the baseline's force residual gives the improvement.
     No nonlinear fit: a few least-squares projections, cheap at any onset. With `standing` E_V,
     the force the model knows keeps it; a standing buckling is left out (the cause replaces it).
-    `effect`: the effect judged by its onset (default the first with `judged_by == 'onset'`).
+    `effect`: the effect judged by its onset (`judged_by == 'onset'`).
     """
-    effect = effect or _ONSET
     variables = effect.fit_variables(params)
     k_max = effect.to_si({v.name: v.upper for v in variables})['stiffness_loss']
     _, (_, _, *p_cr), (_, _, *x_cr) = variables   # (k_b, p_cr, x_cr): lower, upper
@@ -364,18 +362,23 @@ def _kept(params, standing):
     return params
 
 
-def _gas_model(params, causes, values, standing=()):
+def _volume_model(params, causes, values, standing=()):
     """
-    Return `params` with the baseline's gas and tube, and the volumes of the causes (E_V).
+    Return `params` with the volumes of the causes (E_V).
 
     The model's own physics where it is `standing` and not a cause; else none.
     """
-    base = values['baseline']
-    model = dataclasses.replace(_kept(params, standing), p_ref=base['p_ref'],
-                                v_tube=base['v_tube'])
+    model = _kept(params, standing)
     for cause in causes:
         model = BY_NAME[cause].volumes(model, values[cause])
     return model
+
+
+def _gas_model(params, causes, values, standing=()):
+    """Return `_volume_model` with the baseline's gas and tube."""
+    base = values['baseline']
+    return dataclasses.replace(_volume_model(params, causes, values, standing),
+                               p_ref=base['p_ref'], v_tube=base['v_tube'])
 
 
 def force_columns(params, causes, values, x_s, p_gas, standing=()):
@@ -386,9 +389,7 @@ def force_columns(params, causes, values, x_s, p_gas, standing=()):
     shape exp(C2 (P - P_atm) + C3 Δh) (11), C1 being its coefficient. A `standing` E_V or
     buckling that is not a cause is the model's own.
     """
-    model = _kept(params, standing)
-    for cause in causes:
-        model = BY_NAME[cause].volumes(model, values[cause])
+    model = _volume_model(params, causes, values, standing)
     known = air_force(model, x_s, p_gas)[0]                          # (9), (10)
     for effect in EFFECTS:
         if effect.name in causes:
@@ -454,7 +455,7 @@ def build_model(record, params, causes, warm=None, scales=None, standing=()):
             elif part == 'baseline':
                 start = guess[name]
             elif name in own:
-                start = min(max(own[name], lo + 0.01 * (hi - lo)), hi - 0.01 * (hi - lo))
+                start = _off_edges(own[name], lo, hi)
             x0.append(start)
             lower.append(lo)
             upper.append(hi)
@@ -509,10 +510,13 @@ def _profile_starts(record, params, scales, standing, effect):
         k_b = onset.stiffness_loss or 0.25 * 10.0 ** variables[0].upper * 1e3
         start = effect.own_start(dataclasses.replace(params, buckling=Buckling(
             k_b, onset.critical_pressure, onset.critical_compression, 1.0)))
-        # inside the bounds, off their edges (a start on an edge stays there under trf)
-        starts.append([min(max(start[name], low + 0.01 * (high - low)), high - 0.01 * (high - low))
-                       for name, _, low, high in variables])
+        starts.append([_off_edges(start[name], low, high) for name, _, low, high in variables])
     return starts
+
+
+def _off_edges(value, low, high):
+    """Return `value` inside [low, high], 1 % of the range off its edges (trf keeps an edge)."""
+    return min(max(value, low + 0.01 * (high - low)), high - 0.01 * (high - low))
 
 
 def extended_flat(config, causes, values, standing=()):

@@ -225,13 +225,12 @@ class ActuatorPlant:
         self.x_s = float(x_s0)                       # spring, m
         # The gas: N = P V at ambient temperature (Pa·m³), its temperature and ambient (K).
         self.t_ambient = self.temperature = T_AMBIENT
-        chosen = effect_parameters(plant, effects)
-        self.params = model_params(params, chosen)
+        self._effects_now = self._pending = self._effects_of(effect_parameters(plant, effects))
+        self.params = self._effects_now.params
         self.gas_amount = gas_amount(self.params, params.p_ref if gas is None else float(gas))
         p, force, k = forward(self.params, self.x_c, self.x_s, self.gas_amount)
         self._p, self._f, self._k = p, force, k
         self._terms = ()
-        self._effects_now = self._pending = self._effects_of(chosen)
         self._apply_effects(self._effects_now)
 
     def _effects_of(self, chosen):

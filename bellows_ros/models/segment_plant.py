@@ -165,9 +165,9 @@ def plant_physics(params, effects):
             changes.update(effect.off)
             continue
         for key, value in effects[effect.name].items():
-            field = effect.parameters[key].field
-            if hasattr(params, field):
-                changes[field] = value
+            parameter = effect.parameters[key]
+            if not parameter.in_plant:
+                changes[parameter.field] = value
     return params.replace(**changes)
 
 
@@ -207,18 +207,17 @@ class SegmentPlant:
         """Return the immutable `_SegmentEffects` of validated `effects`; `model_of(physics)`."""
         physics = plant_physics(self.params, effects)
         on = [effect for effect in EFFECTS if effect.name in effects]
-        # the driving torque: (29) with the effect that says so (contact hysteresis), else (34)
         strengths = []
         for effect in on:
             if effect.strength:
-                field = effect.parameters[effect.strength].field
-                source = physics if hasattr(physics, field) else self.plant
+                parameter = effect.parameters[effect.strength]
+                source = self.plant if parameter.in_plant else physics
                 strengths.append((effect.name, effects[effect.name].get(
-                    effect.strength, getattr(source, field))))
+                    effect.strength, getattr(source, parameter.field))))
         return _SegmentEffects(
             effects=tuple((name, tuple(values.items())) for name, values in effects.items()),
             physics=physics, model=model_of(physics),
-            torque=driving_torque(effects),
+            torque=driving_torque(effects),   # (29) with contact hysteresis, else (34)
             lag=sum(e.plant_lag(effects[e.name], self.plant) for e in on),
             strengths=tuple(strengths))
 

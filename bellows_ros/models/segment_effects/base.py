@@ -49,6 +49,11 @@ class SegmentParameter(NamedTuple):
     name: str            # YAML name below `segment.`, whose range config/ranges.py holds
     low: float = None    # lowest value an `--effect` or a live strength takes; None: the YAML's
 
+    @property
+    def in_plant(self):
+        """Whether it sets the simulated plant's own parameter, not the model's physics."""
+        return self.name.startswith('plant.')
+
 
 class SegmentEffect(abc.ABC):
     """One piece of paper A's physics beyond the baseline: plant, regression, fit, docs."""
