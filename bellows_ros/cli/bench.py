@@ -20,6 +20,7 @@ results); `--output FILE` writes it. `--render FILE...` renders records instead 
 anything: the results side by side, and with `--plot PNG` a figure of them.
 """
 import datetime
+import fnmatch
 import importlib
 import inspect
 import json
@@ -35,9 +36,9 @@ from bellows_ros.io.outputs import check_output, write_text
 
 def add_arguments(parser):
     parser.add_argument('--json', action='store_true', help='print results as JSON')
-    parser.add_argument('--only', metavar='TEXT[,TEXT...]',
-                        help='run only benchmark modules whose name contains TEXT (any of '
-                             'several, comma-separated: one seeded run of several benches)')
+    parser.add_argument('--only', metavar='NAME[,NAME...]',
+                        help='run only these benchmark modules: names or shell patterns '
+                             "('graph*'), comma-separated for one seeded run of several")
     parser.add_argument('--quick', action='store_true',
                         help='fewer calls (a smoke run, less precise)')
     # A subset of a drawn-device bench (doctor_devices): the full one takes hours on 2 cores.
@@ -102,16 +103,18 @@ def chosen_modules(only):
     """
     Return the benchmark modules `--only` selects, in name order: every one if `only` is empty.
 
-    `only`: comma-separated texts; a module is chosen if its name contains any of them. A text
-    that no module's name contains is an error (a typo would otherwise run nothing of it).
+    `only`: comma-separated module names or shell patterns (`graph*`). A name is that module
+    alone, so `doctor` is not also the hours-long `doctor_devices`. A name or pattern that selects
+    no module is an error (a typo would otherwise run nothing of it).
     """
     names = sorted(info.name for info in pkgutil.iter_modules(bench_package.__path__))
     wanted = [text.strip() for text in only.split(',')] if only else []
     for text in wanted:
-        if not text or not any(text in name for name in names):
-            raise BellowsError(f"--only {only!r}: no benchmark module's name contains {text!r} "
+        if not any(fnmatch.fnmatchcase(name, text) for name in names):
+            raise BellowsError(f'--only {only!r}: {text!r} is no benchmark module '
                                f"(modules: {', '.join(names)})")
-    return [name for name in names if not wanted or any(text in name for text in wanted)]
+    return [name for name in names
+            if not wanted or any(fnmatch.fnmatchcase(name, text) for text in wanted)]
 
 
 def _show(value, unit):

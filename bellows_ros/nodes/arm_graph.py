@@ -19,7 +19,7 @@ The same three nodes, with their own names, parameters, topics and services, as 
 executables run them (`ros2 run bellows_ros arm_graph --ros-args --params-file
 config/nodes_sim.yaml`): a params file's sections reach each by its name, `-p name:=value` all
 three. Composition saves the processes' own costs (interpreters, DDS participants, wake-ups):
-`bellows bench --only graph` measures it against separate processes. All three spin on one
+`bellows bench --only 'graph*'` measures it against separate processes. All three spin on one
 executor in the main thread (runtime/node.py `run`): no GIL handed between threads per sample.
 """
 from bellows_ros.nodes.arm_controller_node import ArmControllerNode
