@@ -30,6 +30,7 @@ import numpy as np
 from bellows_ros.bench import Result, timing
 from bellows_ros.config.actuator import load_actuator
 from bellows_ros.models.actuator import estimate_gas, evaluate, evaluate_array
+from bellows_ros.models.actuator_effects import NAMES as EFFECT_NAMES
 from bellows_ros.models.actuator_geometry import P_ATM, volume_geo
 from bellows_ros.models.actuator_plant import ActuatorPlant
 from bellows_ros.models.stiffness_map import (compression_for_stiffness, stiffness_map,
@@ -85,9 +86,8 @@ def run(quick=False):
     results.append(timing('actuator plant step (dt = 1 ms, no effects)',
                           lambda: plant.step(1e-3, next(duties), x_s_imposed=0.005), calls,
                           reference=reference, target=100e-6))
-    effects = {'air_leak': {}, 'heat_exchange': {}, 'wall_bulging': {}, 'sensor_lag': {},
-               'backlash': {}}
-    plant_all = ActuatorPlant(params, plant_params, effects, seed=0)
+    every_effect = {name: {} for name in EFFECT_NAMES}  # each at its default parameters
+    plant_all = ActuatorPlant(params, plant_params, every_effect, seed=0)
     results.append(timing('actuator plant step (dt = 1 ms, all effects)',
                           lambda: plant_all.step(1e-3, next(duties), x_s_imposed=0.005), calls,
                           reference=reference, target=100e-6))
