@@ -35,7 +35,6 @@ The code gets only the records; the device's parameters are used to build it and
 """
 from concurrent.futures import ThreadPoolExecutor
 import json
-import math
 import re
 import subprocess
 import sys
@@ -45,13 +44,12 @@ from node_processes import BIN, free_domain, launch, logs, node_env, override, s
 import numpy as np
 import pytest
 from test_doctor_bag import write_actuator_bag
+from test_identify_measured_stiffness import held_chamber_record
 
 from bellows_ros.cli import main
-from bellows_ros.config.actuator import load_actuator, load_actuator_params
+from bellows_ros.config.actuator import load_actuator_params
 from bellows_ros.identify.measured_stiffness import measured_stiffness
-from bellows_ros.io.data import read_table, write_csv
-from bellows_ros.models.actuator import stiffness
-from bellows_ros.models.actuator_plant import ActuatorPlant
+from bellows_ros.io.data import read_table
 from bellows_ros.models.stiffness_map import compression_for_stiffness
 
 pytestmark = pytest.mark.realtime  # runs alone, after the others (scripts/test.sh)
@@ -195,44 +193,6 @@ def test_record_identify_diagnose_extend_track(tmp_path, monkeypatch):
         assert errors[source][0] < 0.5 * errors['default'][0], (summary, errors)
 
 
-def held_chamber_record(x_c, duration=9.0, dt=1e-3):
-    """Simulate a record (plant with sensor noise): chamber held at x_c, spring 0-20 mm."""
-    config = load_actuator()
-    plant = ActuatorPlant(config.model, config.plant, seed=3, x_c0=x_c)
-    rows = {name: [] for name in ('t', 'x_c', 'x_s', 'p', 'f')}
-    for i in range(int(round(duration / dt))):
-        x_s = 0.5 * SPRING * (1.0 - math.cos(2.0 * math.pi * i * dt / PERIOD))
-        sample = plant.step_nut(dt, x_c, x_s_imposed=x_s)
-        for name in rows:
-            rows[name].append(getattr(sample, name))
-    return {name: np.array(values) for name, values in rows.items()}, plant.params
-
-
-def test_stiffness_measured_from_the_load_cell_is_the_models(tmp_path, capsys):
-    default = load_actuator_params()
-    x_c = compression_for_stiffness(default, 1700.0)
-    record, truth = held_chamber_record(x_c)
-    table = tmp_path / 'held.csv'
-    write_csv(table, read_table_from(record), {})
-    assert main(['stiffness', str(table), '--setpoint', '1700']) == 0
-    out = capsys.readouterr().out
-    expected = stiffness(truth, x_c)  # the plant's own static physics, no effects
-    measured = [float(line.split('stiffness')[1].split()[0]) for line in out.splitlines()
-                if line.startswith('t ')]
-    assert len(measured) == 2, out
-    assert all(abs(k - expected) < 0.005 * expected for k in measured), (measured, expected)
-    assert 'RMS' in out.splitlines()[-1]
-
-
-def test_stiffness_refuses_a_record_without_a_held_cycle(tmp_path, capsys):
-    record, _ = held_chamber_record(0.0, duration=3.0)  # shorter than one spring period
-    table = tmp_path / 'short.csv'
-    write_csv(table, read_table_from(record), {})
-    assert main(['stiffness', str(table)]) == 2
-    err = capsys.readouterr().err
-    assert len(err.strip().splitlines()) == 1 and 'short.csv' in err, err
-
-
 def test_export_writes_the_table_identify_reads(tmp_path):
     record, _ = held_chamber_record(0.0, duration=1.0)
     bag = tmp_path / 'bag'
@@ -277,10 +237,3 @@ def test_a_record_with_a_gap_is_split_where_the_doctors_refusal_says(tmp_path, c
         assert len(error) == 1 and ('--start' in error[0] or '--end' in error[0]
                                     or 'no rows' in error[0]), error
         assert not (tmp_path / 'bad.csv').exists()
-
-
-def read_table_from(record):
-    """Return `record` (name -> array) as a Table, for write_csv."""
-    from bellows_ros.io.table import Table
-    names = list(record)
-    return Table('record', names, record)

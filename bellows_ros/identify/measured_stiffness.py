@@ -64,9 +64,14 @@ def measured_stiffness(table, x_s_low, x_s_high, window):
                         f'{MIN_WINDOW_SAMPLES} samples (a sample every {step:g} s): give '
                         'one period of the spring motion', column='t')
     result = []
-    starts = np.arange(t[0], t[-1] - window + 1e-9, window)
-    firsts = np.searchsorted(t, starts, side='left')
-    ends = np.searchsorted(t, starts + window, side='left')
+    # A window is whole when its samples reach to one step before its end: a record of N spring
+    # periods sampled to N P - dt has N windows. Each window's rows are those within half a step
+    # of [start, start + window), so a start computed as 0.07500000000000001 still takes the
+    # sample at 0.075.
+    count = int(math.floor((t[-1] + step - t[0]) / window + 1e-9)) if len(t) > 1 else 0
+    starts = t[0] + window * np.arange(count)
+    firsts = np.searchsorted(t, starts - 0.5 * step, side='left')
+    ends = np.searchsorted(t, starts + window - 0.5 * step, side='left')
     for start, first, end in zip(starts, firsts, ends):
         rows = slice(first, end)
         if end - first < MIN_WINDOW_SAMPLES or np.ptp(x_c[rows]) > HELD:
