@@ -181,9 +181,10 @@ def _used_bytes(path):
     """How many bytes of `path` held complete records (the rest was cut off by the kill)."""
     with open(path, 'rb') as stream:
         reader = _reader(stream, path)
+        used = stream.tell()
         try:
             for _ in reader.records:
-                pass
+                used = stream.tell()  # the end of the last record read whole
         except (McapError, struct.error, EOFError, ValueError):
             pass
-        return stream.tell()
+        return used
