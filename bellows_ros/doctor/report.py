@@ -68,10 +68,11 @@ def report_dict(d):
                            'params': params, 'edges': list(candidate.edges)})
     report = {
         'system': d.system,
-        'baseline': {'model': d.baseline_name, 'rmse': d.baseline_rmse, 'unit': d.unit},
+        # A broken held-out score is not a number: JSON has null for it, not NaN.
+        'baseline': {'model': d.baseline_name, 'rmse': _number(d.baseline_rmse), 'unit': d.unit},
         'cause': d.cause,
-        'extended': {'model': extended_name(d), 'rmse': d.final_rmse},
-        'gain': d.gain,
+        'extended': {'model': extended_name(d), 'rmse': _number(d.final_rmse)},
+        'gain': _number(d.gain),
         'causes': list(d.causes),
         'unexplained': d.unexplained,
         'candidates': candidates,
@@ -79,8 +80,8 @@ def report_dict(d):
     if d.outputs:
         report['outputs'] = {o.name: {
             'quantity': o.label, 'unit': o.unit, 'noise_floor': o.noise,
-            'noise_floor_fitted': o.scale, 'baseline_rmse': o.baseline_rmse,
-            'extended_rmse': o.final_rmse, 'gain': o.gain,
+            'noise_floor_fitted': o.scale, 'baseline_rmse': _number(o.baseline_rmse),
+            'extended_rmse': _number(o.final_rmse), 'gain': _number(o.gain),
             'candidates_heldout_rmse': {c: _number(v) for c, v in o.candidate_rmse.items()}}
             for o in d.outputs}
         report['output'] = d.outputs[d.primary].name
@@ -154,8 +155,12 @@ def closest(d):
     if not tried:
         return None
     best = max(tried, key=lambda c: c.gain)
-    why = best.note or (f'held-out gain {100 * best.gain:.1f} % < '
-                        f'{100 * scoring.MIN_GAIN:.0f} % (or its BIC did not fall)')
+    if best.gain < scoring.MIN_GAIN:
+        measured = f'held-out gain {100 * best.gain:.1f} % < {100 * scoring.MIN_GAIN:.0f} %'
+    else:
+        measured = (f'held-out gain {100 * best.gain:.1f} %, but its BIC did not fall (the '
+                    'gain does not pay for the parameters it adds)')
+    why = best.note or measured
     deciding = engine.system_module(d.system).DECIDING_DATA[best.cause]
     return {'cause': best.cause, 'gain': best.gain, 'why_not': why, 'deciding_data': deciding}
 
