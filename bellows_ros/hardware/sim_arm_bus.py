@@ -75,6 +75,10 @@ class SimArmBus(Device):
         p1 = self._samples[0].get_signal_by_name('P1')
         psi = self._samples[0].get_signal_by_name('Psi')
         self._p_range = (p1.minimum, p1.maximum)
+        # The highest set-point a frame can carry (below the sample's P1 range).
+        self._setpoint_max = min(signal.maximum for m in self.db.messages
+                                 if m.name.startswith('ARM_SETPOINT_') for signal in m.signals
+                                 if cp.chamber_of(signal.name) is not None)
         self._psi_range = (psi.minimum, psi.maximum)
         # Vented valves hold ambient: the segment's p0 (config/segment.yaml).
         self.vent_pressure = ambient_pressure() if vent_pressure is None else vent_pressure
@@ -112,7 +116,7 @@ class SimArmBus(Device):
         if self.latched:
             return None
         # What a set-point frame can carry: the DBC's range; a non-finite value vents its chamber.
-        self._commanded, _, _ = clamp_pressures(pressures, self.vent_pressure, self._p_range[1])
+        self._commanded, _, _ = clamp_pressures(pressures, self.vent_pressure, self._setpoint_max)
         self._last_host = time.monotonic()
         return tuple(self._commanded)
 
