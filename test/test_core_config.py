@@ -18,72 +18,15 @@ import dataclasses
 import pytest
 
 from bellows_ros.config.actuator import load_actuator
-from bellows_ros.config.hardware import actuator_board_config, arm_bus_config, vent_pressure
 from bellows_ros.config.segment import load_segment
 from bellows_ros.errors import ParameterError
 from bellows_ros.io import params as param_files
-from bellows_ros.models.actuator import ActuatorParams
 from bellows_ros.models.segment import SegmentParams
 
 
 def write(path, text):
     path.write_text(text)
     return path
-
-
-def test_the_driver_configuration_builds_no_physics_object(monkeypatch):
-    """The drivers' config comes from the YAML alone: no ActuatorParams, no SegmentParams."""
-    expected_actuator = load_actuator()
-    expected_segment = load_segment().model
-
-    def refuse(*args, **kwargs):
-        raise AssertionError('a physics object was built for the driver configuration')
-    monkeypatch.setattr(ActuatorParams, '__init__', refuse)
-    monkeypatch.setattr(SegmentParams, '__init__', refuse)
-    with pytest.raises(AssertionError):
-        load_actuator()    # the patch bites where physics is built
-    board = actuator_board_config()
-    bus = arm_bus_config()
-    # ... and gives the values of the one source, config/actuator.yaml and config/segment.yaml
-    margin = param_files.load('hardware')['hardware.actuator_board.end_stop_margin']
-    assert board.metres_per_count == expected_actuator.plant.drive.metres_per_count
-    assert board.x_c_min == pytest.approx(expected_actuator.model.chamber.x_min + margin)
-    assert board.x_c_max == pytest.approx(expected_actuator.model.chamber.x_max - margin)
-    assert (bus.pressure_min, bus.pressure_max) == (expected_segment.p0, expected_segment.p_max)
-    assert vent_pressure() == expected_segment.p0
-
-
-def test_the_driver_configuration_follows_the_users_files(tmp_path):
-    hardware = write(tmp_path / 'h.yaml', '/**:\n  ros__parameters:\n    hardware:\n'
-                     '      actuator_board: {drive: {counts_per_rev: 128}}\n')
-    actuator = write(tmp_path / 'a.yaml', '/**:\n  ros__parameters:\n    actuator:\n'
-                     '      air_chamber: {x_max: 0.04}\n')
-    segment = write(tmp_path / 's.yaml', '/**:\n  ros__parameters:\n    segment: {p_max: 6.0e5}\n')
-    default = actuator_board_config()
-    board = actuator_board_config(hardware, actuator)
-    assert board.metres_per_count == pytest.approx(default.metres_per_count / 2)
-    assert board.x_c_max == pytest.approx(default.x_c_max - 0.008)
-    # the simulated actuator's encoder is the same drive train, from the same file
-    assert load_actuator(hardware_params_path=hardware).plant.drive.metres_per_count == \
-        board.metres_per_count
-    assert arm_bus_config(segment_params_path=segment).pressure_max == 6.0e5
-
-
-@pytest.mark.parametrize('name, body, needle', [
-    ('h.yaml', 'hardware: {actuator_board: {drive: {lead: 0.0}}}',
-     "'hardware.actuator_board.drive.lead' is 0, outside its physical range"),
-    ('a.yaml', 'actuator: {air_chamber: {x_min: true}}', "'actuator.air_chamber.x_min'"),
-    ('s.yaml', 'segment: {p_max: 9.0e4}', "'segment.p_max' must exceed p0"),
-    ('h.yaml', 'hardware: {actuator_board: {end_stop_margin: 0.05}}', 'leaves no travel'),
-])
-def test_a_bad_shared_value_is_named_by_the_driver_configuration(tmp_path, name, body, needle):
-    path = write(tmp_path / name, f'/**:\n  ros__parameters:\n    {body}\n')
-    keyword = {'a.yaml': 'actuator_params_path', 'h.yaml': 'params_path'}.get(name)
-    with pytest.raises(ParameterError, match=needle):
-        if name == 's.yaml':
-            arm_bus_config(segment_params_path=path)
-        else:
-            actuator_board_config(**{keyword: path})
 
 
 def test_the_segment_file_splits_into_model_plant_and_identification():

@@ -21,16 +21,13 @@ the channel, the column and the times, and point to `bellows export --start/--en
 that span writes the part that was recorded. A few dropped values stay a normal record.
 """
 from bag_messages import write_actuator_bag
-from hypothesis import given, settings, strategies as st
 import numpy as np
 import pytest
 from rosbags.rosbag2.enums import StoragePlugin
 
 from bellows_ros.cli import main
 from bellows_ros.errors import DataError
-from bellows_ros.io.bag import _hold
 from bellows_ros.io.data import read_table
-from bellows_ros.io.table import check_held, MAX_HELD_STEPS, Table
 
 RATE = 200.0   # Hz
 PERIOD = 4.0   # s: one spring cycle, the stiffness command's default window
@@ -157,32 +154,3 @@ def test_a_few_dropped_values_are_a_normal_record(data, tmp_path, layout):
     rows[900:905] = False
     bag = write_bag(tmp_path / 'bag', data, wrench=rows, chambers=rows, layout=layout)
     assert len(read_table(bag, 'actuator')) == len(data['t'])
-
-
-@settings(max_examples=200, deadline=None)
-@given(st.lists(st.tuples(st.integers(0, 199), st.integers(1, 30)), max_size=3),
-       st.sampled_from([1e-3, 5e-3, 2e-2]))
-def test_a_channel_is_refused_iff_it_is_silent_longer_than_the_limit(holes, dt):
-    """Any holes at any place (start, middle, end): refused exactly when one is over the limit."""
-    n = 200
-    have = np.ones(n, bool)
-    for start, length in holes:
-        have[start:start + length] = False
-    if have.sum() < n // 2:   # the channel's own median step stays the rows' step
-        return
-    stamps = (np.arange(n) * dt * 1e9).astype(np.int64) + 5 * 10 ** 9
-    _, (age, step) = _hold(stamps, stamps[have], np.arange(n, dtype=float)[have, None])
-    table = Table('bag', ['t', 'f'], {'t': (stamps - stamps[0]) * 1e-9, 'f': np.zeros(n)},
-                  held={'f': ('/bellows/wrench', age, step)})
-    runs, run = [], 0
-    for row in have:
-        run = 0 if row else run + 1
-        runs.append(run)
-    longest = max(runs)
-    # a hole at the start counts from the first message back
-    first = int(np.argmax(have))
-    if longest <= MAX_HELD_STEPS and first <= MAX_HELD_STEPS:
-        check_held(table)
-    else:
-        with pytest.raises(DataError, match="column 'f': /bellows/wrench .*bellows export"):
-            check_held(table)

@@ -17,38 +17,13 @@ import numpy as np
 import pytest
 
 from bellows_ros.cli import main as bellows
-from bellows_ros.errors import DataError, ParameterError
+from bellows_ros.errors import DataError
 from bellows_ros.io import data, params
 
 
 def write(path, text):
     path.write_text(text)
     return path
-
-
-def test_ros2_parameter_file_flattens_and_overlays(tmp_path):
-    defaults = write(tmp_path / 'd.yaml',
-                     '/**:\n  ros__parameters:\n    a:\n      b: 1.0\n      c: [1.0, 2.0]\n')
-    user = write(tmp_path / 'u.yaml', '/**:\n  ros__parameters:\n    a: {b: 5.0}\n')
-    merged = params.overlay(params.read_file(defaults), params.read_file(user), user)
-    assert merged == {'a.b': 5.0, 'a.c': [1.0, 2.0]}
-
-
-def test_node_section_lies_over_wildcard(tmp_path):
-    path = write(tmp_path / 'p.yaml', '/**:\n  ros__parameters: {x: 1, y: 2}\n'
-                                      'model_node:\n  ros__parameters: {x: 3}\n'
-                                      'other:\n  ros__parameters: {y: 9}\n')
-    assert params.read_file(path, 'model_node') == {'x': 3, 'y': 2}
-
-
-def test_a_package_url_names_a_file_of_the_packages_share(tmp_path):
-    url = 'package://bellows_ros/config/segment_sim_arm.yaml'
-    assert params.resolve(url) == params.config_dir() / 'segment_sim_arm.yaml'
-    assert params.read_file(url) == params.read_file(params.resolve(url))
-    assert params.resolve(tmp_path / 'p.yaml') == tmp_path / 'p.yaml'  # a path stays a path
-    with pytest.raises(ParameterError, match=r'package://no_such_package/x\.yaml: no package '
-                                             r"'no_such_package'"):
-        params.read_file('package://no_such_package/x.yaml')
 
 
 def test_the_simulated_arms_model_has_the_simulated_segments_rigid_body():
@@ -59,30 +34,6 @@ def test_the_simulated_arms_model_has_the_simulated_segments_rigid_body():
     assert (model.dynamics_inertia, model.dynamics_damping, model.dynamics_gravity) == \
         (plant.inertia, plant.damping, plant.gravity)
     assert load_segment().model.dynamics_inertia == 0.0  # the shipped model stays quasi-static
-
-
-def test_unknown_parameter_is_named(tmp_path):
-    user = write(tmp_path / 'u.yaml', '/**:\n  ros__parameters:\n    a: {bogus: 1.0}\n')
-    with pytest.raises(ParameterError, match=r"u\.yaml: unknown parameter 'a\.bogus'"):
-        params.overlay({'a.b': 1.0}, params.read_file(user), user)
-
-
-def test_yaml_syntax_error_names_line(tmp_path):
-    bad = write(tmp_path / 'bad.yaml', '/**:\n  ros__parameters:\n    a: [1, 2\n')
-    with pytest.raises(ParameterError, match=r'bad\.yaml:\d+: '):
-        params.read_file(bad)
-
-
-def test_non_finite_parameter_rejected(tmp_path):
-    bad = write(tmp_path / 'nan.yaml', '/**:\n  ros__parameters:\n    a: .nan\n')
-    with pytest.raises(ParameterError, match="'a' is not finite"):
-        params.read_file(bad)
-
-
-def test_write_then_read_round_trip(tmp_path):
-    flat = {'s.mu': [1.5, np.float64(2.5)], 's.n': 4, 's.name': 'x'}
-    params.write_file(tmp_path / 'o.yaml', flat, header='fitted')
-    assert params.read_file(tmp_path / 'o.yaml') == {'s.mu': [1.5, 2.5], 's.n': 4, 's.name': 'x'}
 
 
 def test_csv_errors_name_file_line_and_column(tmp_path):

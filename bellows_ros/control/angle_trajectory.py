@@ -29,7 +29,7 @@ Trajectory = namedtuple('Trajectory', 'start waypoints')
 
 # Reversals (through the straight segment and back, and short ones), holds after each move, and
 # peak speeds from 0.4 to 2.6 rad/s, inside |Ψ| <= 0.9 rad where the segment is held with one
-# chain at under 2.5 bar abs (docs/arm_control.md). 40 s.
+# chain at under 2.5 bar abs (docs/arm_control.md). 33 s (`duration`).
 REVERSALS = Trajectory(0.0, (
     (0.8, 3.0, 2.0),
     (-0.6, 3.0, 2.0),    # a reversal through Ψ = 0: chain 1's stored strain is released
