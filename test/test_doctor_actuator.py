@@ -31,7 +31,6 @@ from bellows_ros.cli import main
 from bellows_ros.config.actuator import (load_actuator, load_actuator_params,
                                          load_actuator_plant_params)
 from bellows_ros.doctor import diagnosis as engine
-from bellows_ros.errors import DataError
 from bellows_ros.io.data import read_csv
 from bellows_ros.papers.actuator_experiments import actuator_record
 
@@ -349,57 +348,3 @@ def test_doctor_takes_arrays_in_memory(tmp_path, monkeypatch):
                                                                          rel=0.3)
     assert result.source == 'bench run 3'
     assert list(tmp_path.iterdir()) == []
-
-
-@pytest.mark.parametrize('change, message', [
-    (lambda d: d.pop('f'), "column 'f': missing"),
-    (lambda d: d.update(p=d['p'][:-1]), 'one length'),
-    (lambda d: d.update(t=d['t'][:150], x_c=d['x_c'][:150], x_s=d['x_s'][:150],
-                        p=d['p'][:150], f=d['f'][:150]), 'only 150 samples'),
-])
-def test_bad_arrays_are_named_by_their_source(change, message):
-    t = np.arange(10000) * 1e-3
-    data = {'t': t, 'x_c': 0.01 * np.sin(t), 'x_s': 0 * t, 'p': 1e5 + 0 * t, 'f': 0 * t}
-    change(data)
-    with pytest.raises(DataError, match=message) as error:
-        engine.diagnose('actuator', data, load_actuator(), source='rig 2')
-    assert str(error.value).startswith('rig 2')
-
-
-# The doctor's vectorised effects against the plant's per-step ones, same parameters (E_V: the
-# YAML's, whose two pressure-only terms the doctor carries as one).
-PLANT_AND_DOCTOR = [
-    ('air_leak', {'conductance': 1e-10}, {'conductance': 1e-10}),
-    ('heat_exchange', {'time_constant': 0.5}, {'time_constant': 0.5, 'gamma': 1.4}),
-    ('sensor_lag', {'time_constant': 0.05}, {'time_constant': 0.05}),
-    ('backlash', {'width': 6e-4}, {'width': 6e-4}),
-    ('wall_bulging', {'scale': 1.0}, None),
-]
-
-
-@pytest.mark.parametrize('effect, plant_values, doctor_values', PLANT_AND_DOCTOR,
-                         ids=[row[0] for row in PLANT_AND_DOCTOR])
-def test_doctor_effects_follow_the_plant(effect, plant_values, doctor_values):
-    from bellows_ros.doctor.actuator_causes import predict
-    from bellows_ros.models.actuator import without_buckling, without_bulging
-    from bellows_ros.models.actuator_plant import ActuatorPlant
-    params = without_buckling(load_actuator_params())
-    if doctor_values is None:
-        c, s = params.chamber.e_v, params.spring.e_v
-        doctor_values = {'e_q': c[2] + s[2], 'e_dq_chamber': c[4], 'e_dq_spring': s[4],
-                         'e_dd_chamber': c[3], 'e_dd_spring': s[3]}
-    dt = 1e-3
-    t = np.arange(0.0, 6.0, dt)
-    nut = 0.03 + 0.012 * np.sin(np.pi * t) ** 3            # ramps, holds, reversals
-    x_s = 0.01 * (1.0 - np.cos(0.7 * np.pi * t))
-
-    def plant(effects):
-        model = ActuatorPlant(params, PLANT, effects, noise=False, x_c0=nut[0])
-        return np.array([model.step_nut(dt, a, x_s_imposed=b).p for a, b in zip(nut, x_s)])
-    nominal = without_bulging(params)
-    base = {'baseline': {'p_ref': nominal.p_ref, 'v_tube': nominal.v_tube, 'x_c_offset': 0.0}}
-    measured = plant({effect: plant_values})
-    size = np.max(np.abs(measured - plant(None)))
-    assert size > 300.0                                      # Pa: the effect is there to follow
-    doctor = predict(nominal, (effect,), dict(base, **{effect: doctor_values}), nut, x_s, dt)
-    assert np.max(np.abs(doctor - measured)) < 0.05 * size
