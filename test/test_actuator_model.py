@@ -13,7 +13,6 @@
 # limitations under the License.
 
 """Paper B model: geometry, gas law, force/stiffness, calibration against the paper's figures."""
-import dataclasses
 import math
 
 import numpy as np
@@ -25,17 +24,9 @@ from bellows_ros.models.actuator import (buckling_force, estimate_gas, evaluate,
                                          gas_amount, pressure, rest_compression,
                                          rest_length_change, stiffness, stiffness_from_rest,
                                          total_volume, without_buckling, without_bulging)
-from bellows_ros.models.actuator_geometry import P_ATM, volume_geo
+from bellows_ros.models.actuator_geometry import P_ATM
 
 PARAMS = load_actuator_params()
-
-
-def test_geometric_volumes_at_rest_match_table_ii():
-    assert volume_geo(PARAMS.chamber, 0.0) * 1e6 == pytest.approx(56.9, abs=0.05)
-    assert volume_geo(PARAMS.spring, 0.0) * 1e6 == pytest.approx(46.0, abs=0.05)
-    # Compression (positive x) shrinks the volume over the working range.
-    assert volume_geo(PARAMS.chamber,
-                      0.02) < volume_geo(PARAMS.chamber, 0.0) < volume_geo(PARAMS.chamber, -0.02)
 
 
 def test_design_point_is_atmospheric():
@@ -177,18 +168,6 @@ def test_overrides_are_laid_over_the_defaults(tmp_path):
     assert not math.isclose(stiffness(params, 0.02), stiffness(PARAMS, 0.02))
 
 
-def test_geometric_volume_slope_is_the_derivative_of_the_volume():
-    from bellows_ros.models.actuator_geometry import volume_geo_slope
-    for bellows in (PARAMS.chamber, PARAMS.spring):
-        for x in (-0.02, 0.0, 0.015, 0.03):
-            h = 1e-7
-            numeric = (volume_geo(bellows, x + h) - volume_geo(bellows, x - h)) / (2 * h)
-            assert volume_geo_slope(bellows, x) == pytest.approx(numeric, rel=1e-6)
-    # The chamber's end stop sits where its volume peaks: extending further would raise P again.
-    c = PARAMS.chamber
-    assert volume_geo_slope(c, c.x_min) == pytest.approx(0.0, abs=2e-5)
-
-
 def test_spring_force_is_equations_9_to_12_computed_by_hand():
     """F from `evaluate` against (3), (9)-(12) written out here, E_V's slope by differences."""
     params = without_buckling(PARAMS)
@@ -224,17 +203,3 @@ def test_regression_forms_equal_the_model_functions():
     shape = force_error((1.0, c2, c3, -c2 * P_ATM), n, x_s, p, np.exp)[0]
     assert np.allclose(c1 * math.exp(c4 + c2 * P_ATM) * shape,
                        force_error(PARAMS.e_f, n, x_s, p, np.exp)[0], rtol=1e-12)
-
-
-def test_e_v_forms_of_the_newton_solve_and_the_fit_equal_the_polynomial():
-    """E_V (5) as a cubic in q (gas-law Newton) and as monomials (fit) against `e_v` itself."""
-    from bellows_ros.models.actuator_geometry import e_v, e_v_in_q, e_v_regressors
-    rng = np.random.default_rng(3)
-    bellows = dataclasses.replace(PARAMS.spring, e_v=tuple(rng.uniform(-5e-6, 5e-6, 10)))
-    for x, p in zip(rng.uniform(-0.01, 0.03, 20), rng.uniform(85e3, 125e3, 20)):
-        value = e_v(bellows, x, p)[0]
-        q = (p - P_ATM) / P_ATM
-        c0, c1, c2, c3 = e_v_in_q(bellows, x)
-        assert c0 + q * (c1 + q * (c2 + q * c3)) == pytest.approx(value, rel=1e-12, abs=1e-20)
-        assert (np.dot(e_v_regressors(bellows, x, p), bellows.e_v)
-                == pytest.approx(value, rel=1e-12, abs=1e-20))

@@ -29,12 +29,12 @@ from bellows_ros.config.ranges import MAX_PRESSURE, RANGES
 from bellows_ros.config.segment import load_segment_params, load_segment_plant_params
 from bellows_ros.errors import ParameterError
 from bellows_ros.identify.segment import calibrate_fig10, fig10_torques
-from bellows_ros.models.contact import contact_angle, StrainMemory
+from bellows_ros.models.contact import StrainMemory
 from bellows_ros.models.limits import AMBIENT_RANGE
 from bellows_ros.models.segment import (actuator_regressor, contact_lengths, external_torque,
                                         friction_regressor, OUTPUTS, previous_regressor,
                                         relative_pressure, restoring_regressor, scaled_pressure,
-                                        SegmentModel, SegmentOutput, simulate_model, strain_memory)
+                                        SegmentModel, SegmentOutput, simulate_model)
 
 PLANT = load_segment_plant_params()
 
@@ -42,23 +42,6 @@ PLANT = load_segment_plant_params()
 @pytest.fixture(scope='module')
 def params():
     return load_segment_params()
-
-
-@pytest.mark.parametrize('p_abs, psi_deg',
-                         [(4.0e5, 74.5), (2.0e5, 30.0), (7.5e5, 100.0), (6.0e5, -20.0)])
-def test_appendix_b_repeated_steps_converge_to_one_contact_length(params, p_abs, psi_deg):
-    memory = strain_memory(params)
-    alpha = contact_angle(math.radians(psi_deg), 1.0)
-    history = [memory.step(p_abs - params.p0, alpha) for _ in range(400)]
-    assert history[-1] > 0.0  # there is contact: the fixed point is not the trivial empty one
-    assert max(history[-100:]) - min(history[-100:]) <= 1e-12 * history[-1]
-    # and it converges from a different start (a memory filled along another path) to the same
-    # fixed point when that path leaves no stored strain in the contact...
-    other = strain_memory(params)
-    for _ in range(50):
-        other.step(0.0, contact_angle(0.0, 1.0))  # vented and straight: no contact
-    again = [other.step(p_abs - params.p0, alpha) for _ in range(400)]
-    assert again[-1] == pytest.approx(history[-1], rel=1e-9)
 
 
 def test_gamma_of_two_or_less_is_rejected(tmp_path, params):
