@@ -26,9 +26,7 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parents[1] / 'bellows_ros'
 TESTS = Path(__file__).resolve().parent
 NOT_YET = {
-    'hardware/sim_arm_bus', 'nodes/arm_graph', 'nodes/arm_sample', 'nodes/device_topics',
-    'nodes/driver_node', 'nodes/sim_actuator_node', 'nodes/sim_arm_node',
-    'nodes/stiffness_controller_node', 'runtime/managed_launch',
+    'hardware/sim_arm_bus',
 }
 
 
