@@ -16,7 +16,7 @@
 The paper A segment bench (bench/segment.py): its inputs, its cycling and what it reports.
 
 A quick run takes under a second; only names, references, ratios and targets are checked,
-never a time. That `previous_step` is the previous model (34) is held in test_segment_model.py.
+never a time. That `previous_step` is the previous model (34) is held in test_models_segment.py.
 """
 import math
 

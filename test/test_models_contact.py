@@ -54,7 +54,7 @@ def test_steps_follow_the_equations_by_hand():
     """
     A(20), A(21), A(25), A(26), A(28) over steps from the empty profile: filling, then releasing.
 
-    λ1 is checked against the stress of (22) rather than solved here (test_segment_ogden.py pins
+    λ1 is checked against the stress of (22) rather than solved here (test_models_ogden.py pins
     the solver); R, β, a, n and s̃_a are computed from the equations.
     """
     chain = memory()

@@ -19,7 +19,7 @@ The chamber's programme (steps, ramps at 0.2/0.4/0.8 of the lead screw's top spe
 only compressing), the spring's (triangle cycles, fast 50 ms compressions), the record's columns
 and the ranges it keeps to (m, Pa, N, s), its refusals, and the volume test's sealed runs
 (paper B, Fig. 4, 8). The seeded record's shape and encoder quantisation are
-test_actuator_plant.py's.
+test_models_actuator_plant.py's.
 """
 import numpy as np
 import pytest

@@ -100,7 +100,7 @@ def free_strain(load, mu1, mu2, gamma1, gamma2, guess=1.0):
 # the smallest μ).
 STRETCH_TABLE_SPACING = 0.005
 # Bound on |λ_table - λ1| / λ1 over the documented ranges, held by
-# test/test_segment_ogden.py::test_stretch_table_error_bound_over_the_parameter_ranges.
+# test/test_models_ogden.py::test_stretch_table_error_bound_over_the_parameter_ranges.
 STRETCH_TABLE_ERROR = 1e-13
 
 

@@ -28,7 +28,7 @@ bench both predict -τ_ext.
 
 The NumPy regressors are the reference (one home per equation: identification, the doctor and the
 tests use them). `SegmentModel.step` is the 1 kHz fast path, hand-expanded because NumPy's per-call
-overhead is larger than the whole step; `test/test_segment_model.py` holds it equal to the
+overhead is larger than the whole step; `test/test_models_segment.py` holds it equal to the
 regressors over random states to 1e-12 relative.
 """
 import dataclasses
@@ -344,7 +344,7 @@ class SegmentModel:
         One sample of both chains: the strain memories advance (Algorithm 1), then `torques`.
 
         Contact state of chain j from p_rel (17) and α_j = ALPHA_PER_PSI σ_j Ψ (13).
-        `test_fast_step_equals_the_reference_functions` in test/test_segment_model.py holds the
+        `test_fast_step_equals_the_reference_functions` in test/test_models_segment.py holds the
         result equal to `relative_pressure`, `scaled_pressure`, `contact_angle` and the regressors.
         """
         p0 = self._pressure[0]
@@ -392,7 +392,7 @@ def previous_torques(p):
     The returned function maps (Ψ rad, Ψ̇ rad/s, p_scl,1, p_scl,2) to (τ_s, τ_f, τ_prev) in N·m.
     Hand-expanded for the 1 kHz step (`SegmentModel.torques`), whose part it is, and the
     benchmark's reference (`bench.segment.previous_step`, the previous model alone);
-    test/test_segment_model.py holds both equal to the regressors.
+    test/test_models_segment.py holds both equal to the regressors.
     """
     tanh = math.tanh
     k_s, k_sp = p.restoring_k_s, p.restoring_k_sp
@@ -424,7 +424,7 @@ def _fused_step(p, memory1, memory2, table):
     costs about as much as a line of the arithmetic, and the step is ~100 lines of it. It leaves
     out only operations that cannot change a bit (terms of (29) with an exact-zero θ_a, a clamp
     that never acts), so it gives the same bits as the per-chain form;
-    test/test_segment_model.py holds it to that. The
+    test/test_models_segment.py holds it to that. The
     parameters are closure constants; the state stays in the two `StrainMemory` objects (peek,
     reset and the tests read it there). tan(-α) = -tan(α) (an odd libm tan; the bit-for-bit test
     checks it) and π/2 + (-α) = π/2 - α exactly, so chain 2 reuses chain 1's tangent.

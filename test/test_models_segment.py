@@ -351,7 +351,7 @@ def test_table_model_equals_the_newton_model_on_drawn_devices(params):
 
     `SegmentModel(p, exact=True)` is the step before the table: per chain, `free_strain` at every
     sample. The tolerance: the table's λ1 is within STRETCH_TABLE_ERROR = 1e-13 (relative) of the
-    solver's (test_segment_ogden.py), and the solver's own error is ~1e-15; a (25) and the stored
+    solver's (test_models_ogden.py), and the solver's own error is ~1e-15; a (25) and the stored
     profile inherit that relative error, s̃_a (28) sums it, and Appendix B's iteration contracts
     instead of amplifying it. So s̃_a may differ by ~1e-13 sa_max and the torques by ~1e-13 of
     their terms' size (chain by chain: the chains' terms cancel where p1 = p2); 1e-9 leaves four
