@@ -24,7 +24,6 @@ import re
 import pytest
 
 from bellows_ros.bench import devices, doctor_devices as bench
-from bellows_ros.cli.bench import chosen_modules
 from bellows_ros.errors import BellowsError
 
 
@@ -115,19 +114,6 @@ def test_an_effect_the_baselines_own_parameters_take_up_is_not_due():
     size, raw = bench.effect_size(reversing)
     assert size > bench.DUE and size > 0.8 * raw
     assert bench.effect_size(bench.draw(0, None)) == (0.0, 0.0)
-
-
-def test_one_seeded_run_takes_this_bench_and_the_arm_control_rows():
-    """Issue 21's run: `bellows bench --only doctor_devices,'arm_control*'`, any order, spaces."""
-    both = ['arm_control', 'arm_control_devices', 'doctor_devices']
-    assert chosen_modules('doctor_devices,arm_control*') == both
-    assert chosen_modules(' arm_control* , doctor_devices') == both
-    assert 'graph' in chosen_modules(None) and 'graph' not in both
-    # A name is that module alone: the 10-minute doctor bench is not the hours-long one.
-    assert chosen_modules('doctor') == ['doctor']
-    for typo in ('arm_cntrl', 'doctor_device', ''):
-        with pytest.raises(BellowsError, match=f'{typo!r} is no benchmark module'):
-            chosen_modules(f'segment,{typo}')
 
 
 @pytest.mark.slow  # one device per cause and a null device: 7 diagnoses, a few minutes

@@ -34,7 +34,7 @@ import pytest
 
 from bellows_ros.bench import graph, graph_actuator, graph_floor, Result
 from bellows_ros.cli import main
-from bellows_ros.cli.bench import chosen_modules, format_table
+from bellows_ros.cli.bench import format_table
 from bellows_ros.io import params
 from bellows_ros.runtime import realtime
 
@@ -46,18 +46,6 @@ def latency_requests_held():
     fds = Path('/proc/self/fd')
     return [fd for fd in fds.iterdir()
             if os.path.realpath(fd) == os.path.realpath(realtime.CPU_LATENCY_DEVICE)]
-
-
-def test_fractions_in_extra_are_shown_without_the_figures_unit():
-    table = format_table([Result('x.rate', 990.0, 'Hz', 1, extra={'steal': 0.125, 'p50': 980.0},
-                                 extra_units={'steal': ''})])
-    assert '    steal:      0.125 \n' in table + '\n'
-    assert '    p50:        980 Hz' in table
-
-
-def test_the_graph_benches_are_what_only_graph_selects():
-    assert chosen_modules('graph*') == ['graph', 'graph_actuator', 'graph_floor']
-    assert chosen_modules('graph') == ['graph']  # a name is that module alone
 
 
 @pytest.fixture(scope='module')

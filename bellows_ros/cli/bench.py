@@ -70,14 +70,17 @@ def run(args):
     commit = bench_records.commit()
     results = []
     options = {name: getattr(args, name, None) for name in ('devices', 'kinds', 'workers')}
-    for name in chosen_modules(args.only):
-        print(f'bench: {name} ...', file=sys.stderr)
-        module = importlib.import_module(f'bellows_ros.bench.{name}')
-        accepted = inspect.signature(module.run).parameters
-        given = {key: value for key, value in options.items() if value is not None}
-        refused = sorted(set(given) - set(accepted))
+    given = {key: value for key, value in options.items() if value is not None}
+    # Every bench's options are checked before the first runs: a seeded run of several benches
+    # must not stop at the third, an hour in, on an option it does not take.
+    modules = {name: importlib.import_module(f'bellows_ros.bench.{name}')
+               for name in chosen_modules(args.only)}
+    for name, module in modules.items():
+        refused = sorted(set(given) - set(inspect.signature(module.run).parameters))
         if refused:
             raise BellowsError(f"bench {name} takes no --{', --'.join(refused)}")
+    for name, module in modules.items():
+        print(f'bench: {name} ...', file=sys.stderr)
         results.extend(module.run(quick=args.quick, **given))
     record = bench_records.record(results, args.argv, started, time.perf_counter() - clock,
                                   commit)
