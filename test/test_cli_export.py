@@ -27,9 +27,12 @@ from bag_messages import write_actuator_bag
 import numpy as np
 import pytest
 from rosbags.rosbag2 import StoragePlugin
+from test_doctor_bag import write_actuator_bag as write_record_bag
+from test_identify_measured_stiffness import held_chamber_record
 
 from bellows_ros.cli import main
 from bellows_ros.cli.export import time_s
+from bellows_ros.io.data import read_table
 
 START_NS = 5 * 10 ** 9
 
@@ -141,3 +144,17 @@ def test_an_old_output_is_replaced_whole_or_kept_whole(bag, tmp_path, capsys):
     header, table = read_csv(output)
     assert header == ['t', 'x_c', 'x_s', 'p', 'f'] and len(table) == 10
     assert sorted(p.name for p in tmp_path.iterdir()) == ['bag', 'out.csv']  # no temporary left
+
+
+# The table identify reads: a bag of a simulated rig and its export read back alike.
+def test_export_writes_the_table_identify_reads(tmp_path):
+    record, _ = held_chamber_record(0.0, duration=1.0)
+    bag = tmp_path / 'bag'
+    write_record_bag(bag, record, every=2)
+    out = tmp_path / 'bag.csv'
+    assert main(['export', 'actuator', str(bag), '--output', str(out)]) == 0
+    from_bag, from_csv = read_table(bag, 'actuator'), read_table(out, 'actuator')
+    for name in ('t', 'x_c', 'x_s', 'p', 'f'):
+        assert np.allclose(from_bag[name], from_csv[name], rtol=1e-12, atol=1e-12), name
+    assert main(['export', 'actuator', str(bag), '--output', str(out)]) == 0  # replaced whole
+    assert main(['export', 'actuator', str(out), '--output', str(out)]) == 2  # never its input

@@ -43,8 +43,6 @@ import time
 from node_processes import BIN, free_domain, launch, logs, node_env, override, stop_all, wait_for
 import numpy as np
 import pytest
-from test_doctor_bag import write_actuator_bag
-from test_identify_measured_stiffness import held_chamber_record
 
 from bellows_ros.cli import main
 from bellows_ros.config.actuator import load_actuator_params
@@ -191,19 +189,6 @@ def test_record_identify_diagnose_extend_track(tmp_path, monkeypatch):
     print(f'stiffness error RMS at {K_SET:g} N/m:', summary, file=sys.stderr)
     for source in ('bag', 'csv'):
         assert errors[source][0] < 0.5 * errors['default'][0], (summary, errors)
-
-
-def test_export_writes_the_table_identify_reads(tmp_path):
-    record, _ = held_chamber_record(0.0, duration=1.0)
-    bag = tmp_path / 'bag'
-    write_actuator_bag(bag, record, every=2)
-    out = tmp_path / 'bag.csv'
-    assert main(['export', 'actuator', str(bag), '--output', str(out)]) == 0
-    from_bag, from_csv = read_table(bag, 'actuator'), read_table(out, 'actuator')
-    for name in ('t', 'x_c', 'x_s', 'p', 'f'):
-        assert np.allclose(from_bag[name], from_csv[name], rtol=1e-12, atol=1e-12), name
-    assert main(['export', 'actuator', str(bag), '--output', str(out)]) == 0  # replaced whole
-    assert main(['export', 'actuator', str(out), '--output', str(out)]) == 2  # never its input
 
 
 def test_a_record_with_a_gap_is_split_where_the_doctors_refusal_says(tmp_path, capsys):
