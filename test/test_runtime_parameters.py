@@ -33,6 +33,8 @@ import sys
 from node_processes import node_env
 import pytest
 
+from bellows_ros.runtime.parameters import Spec
+
 PROBE = Path(__file__).resolve().parent / 'parameter_probe.py'
 DEFAULTS = {'gain': 0.5, 'label': 'none', 'port': '/default', 'segments': [0, 0]}
 BOUNDS = {'gain': [0, 10]}
@@ -228,3 +230,14 @@ def test_array_of_another_type_later(files):
     """
     result = probe(files, ['--params-file', 'Q.yaml', '-p', 'probe:segments:=[1.0]'])
     check_error(result, "parameter 'segments' must be an integer array, got a double array")
+
+
+@pytest.mark.parametrize('low, high, value, expected', [
+    (0.0, None, -1.0, 'expected >= 0, got -1'),
+    (None, 5, 6, 'expected <= 5, got 6'),
+    (1, 99, 100, 'expected 1..99, got 100'),
+    (0.0, None, [1.0, -2.0], 'expected >= 0, got -2'),
+])
+def test_a_bound_on_one_side_is_stated_with_that_side(low, high, value, expected):
+    spec = Spec('x', value, 'a number', low=low, high=high)
+    assert spec.problem(value) == expected

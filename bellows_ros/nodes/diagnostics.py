@@ -15,9 +15,9 @@
 """
 /diagnostics for every node, built once, after ROS's diagnostic_updater.
 
-The same names and rules as `diagnostic_updater` (ros/diagnostics), on the bellows `Node`
-interface only (a publisher, a timer, the message classes), so that it runs on rclpy and on the
-DDS runtime alike:
+The same names and rules as `diagnostic_updater` (ros/diagnostics), on rclpy: diagnostic_updater
+is not among the `ros-jazzy-*` wheels on PyPI (pip finds no `ros-jazzy-diagnostic-updater`; the
+messages, `ros-jazzy-diagnostic-msgs`, are there), so a laptop with only Python would lack it:
 
 - `Updater(node, period)` publishes a `diagnostic_msgs/DiagnosticArray` on the contract's
   `/diagnostics` (interfaces.DIAGNOSTICS) every `period` s, one `DiagnosticStatus` per task
@@ -26,8 +26,8 @@ DDS runtime alike:
   with several devices names each one's port or CAN channel);
 - a task `fn(stat)` fills a `DiagnosticStatusWrapper`: `summary(level, message)`, `add(key,
   value)`, `mergeSummary` (the worse level wins; messages of the same kind are joined with "; ");
-- levels are those of diagnostic_msgs: OK=0, WARN=1, ERROR=2, STALE=3 (a `byte`: bytes in rclpy,
-  int on the DDS runtime; `to_msg` converts). A task that raises is reported STALE with the
+- levels are those of diagnostic_msgs: OK=0, WARN=1, ERROR=2, STALE=3 (a `byte` field, bytes in
+  rclpy's messages; `to_msg` converts). A task that raises is reported STALE with the
   error as message, so one faulty task neither stops the others nor goes silent;
 - `FrequencyStatus` and `TimeStampStatus` are diagnostic_updater's rate and delay checks, with
   its messages and keys.
@@ -58,7 +58,7 @@ def level_of(value):
 
 class DiagnosticStatusWrapper:
     """
-    A DiagnosticStatus being filled, independent of the runtime's message classes.
+    A DiagnosticStatus being filled, independent of the message classes.
 
     As diagnostic_updater's: `level`, `name`, `message`, `hardware_id`, `values` (a list of
     (key, value) strings, in the order added).
@@ -109,10 +109,9 @@ class DiagnosticStatusWrapper:
         return found[-1] if found else default
 
     def to_msg(self, msg):
-        """Return a `msg.DiagnosticStatus` of the runtime's message classes `msg`."""
-        as_bytes = isinstance(msg.DiagnosticStatus.OK, bytes)
+        """Return a `msg.DiagnosticStatus` (`msg`: the diagnostic_msgs.msg classes)."""
         return msg.DiagnosticStatus(
-            level=bytes([self.level]) if as_bytes else self.level, name=self.name,
+            level=bytes([self.level]), name=self.name,
             message=self.message, hardware_id=self.hardware_id,
             values=[msg.KeyValue(key=k, value=v) for k, v in self.values])
 

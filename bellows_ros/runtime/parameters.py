@@ -105,17 +105,18 @@ class Spec:
 
     def bounds(self):
         """Return the bounds as text: '1..99', '>= 0', '<= 5'."""
-        low, high = (_number(bound) for bound in (self.low, self.high))
-        if self.low is not None and self.high is not None:
-            return f'{low}..{high}'
-        return f'>= {low}' if self.low is not None else f'<= {high}'
+        if self.high is None:
+            return f'>= {_number(self.low)}'
+        if self.low is None:
+            return f'<= {_number(self.high)}'
+        return f'{_number(self.low)}..{_number(self.high)}'
 
 
 def descriptor_message(spec, message_class):
     """
     Return rcl_interfaces/ParameterDescriptor of a Spec: description, range, read_only.
 
-    `message_class(ros_name)` gives the runtime's classes (rclpy's own, or the DDS runtime's).
+    `message_class(ros_name)` gives the message class of a ROS type name (runtime/messages.py).
     """
     result = message_class('rcl_interfaces/msg/ParameterDescriptor')(
         name=spec.name, description=spec.description, read_only=spec.read_only)
