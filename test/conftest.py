@@ -78,3 +78,43 @@ def no_process_left_running():
         except ProcessLookupError:
             pass
     assert not left, f'the test left processes running (killed now): {sorted(left.values())}'
+
+
+@pytest.fixture
+def ros_context():
+    """
+    Yield an rclpy context of the test's own, on a free domain; shut it down after the test.
+
+    rclpy's signal handlers stay off: the test process's are pytest's.
+    """
+    import rclpy
+    from rclpy.signals import SignalHandlerOptions
+    from node_processes import free_domain
+    context = rclpy.Context()
+    rclpy.init(context=context, domain_id=int(free_domain()),
+               signal_handler_options=SignalHandlerOptions.NO)
+    yield context
+    rclpy.try_shutdown(context=context)
+
+
+@pytest.fixture
+def build_node(ros_context):
+    """
+    Return `build(node_class, **parameters)`: a node in `ros_context` with those parameters.
+
+    After the test each node built is closed (its devices, where it has any) and destroyed, the
+    last built first.
+    """
+    from rclpy.parameter import Parameter
+    built = []
+
+    def build(node_class, **parameters):
+        node = node_class(context=ros_context, parameter_overrides=[
+            Parameter(name, value=value) for name, value in parameters.items()])
+        built.append(node)
+        return node
+    yield build
+    for node in reversed(built):
+        if hasattr(node, 'close'):
+            node.close()
+        node.destroy_node()

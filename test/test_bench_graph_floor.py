@@ -38,7 +38,7 @@ from bellows_ros.io import params
 from bellows_ros.runtime.messages import msg
 
 
-def _documented_whole_graph_names():
+def documented_whole_graph_names():
     """Return the figures graph_floor's docstring names, `<node>` for each node of the graph."""
     names = set()
     for pattern in re.findall(r'`(graph\.(?:whole|floor)\.[a-z_.<>]+)`', graph_floor.__doc__):
@@ -55,7 +55,7 @@ def test_the_whole_graph_is_launch_sims_graph():
     started = re.findall(r'start (\w+_node)', launch) + re.findall(r'/(scenario_node)"', launch)
     assert set(graph_floor.NODES) == set(started)
     assert set(graph_floor.FLOORS) == set(graph_floor.NODES)
-    assert len(_documented_whole_graph_names()) == 2 * len(graph_floor.NODES) + 4
+    assert len(documented_whole_graph_names()) == 2 * len(graph_floor.NODES) + 4
 
 
 def measured(kind):
@@ -80,7 +80,7 @@ def test_the_whole_graphs_figures_are_against_the_floors(monkeypatch):
     monkeypatch.setattr(graph_floor, '_run_graph', run_graph)
     results = {r.name: r for r in graph_floor.run(quick=True)}
     assert calls == [('floor', 3.0, 1.0), ('whole', 3.0, 1.0)]  # the floor first, --quick's
-    assert set(results) == _documented_whole_graph_names()
+    assert set(results) == documented_whole_graph_names()
     floor, whole = measured('floor'), measured('whole')
     for name in graph_floor.NODES:
         node, base = results[f'graph.whole.cpu.{name}'], results[f'graph.floor.cpu.{name}']

@@ -24,6 +24,7 @@ import csv
 
 import numpy as np
 import pytest
+from test_cli_export import one_line, read_csv
 
 from bellows_ros.cli import main
 from bellows_ros.config.actuator import load_actuator_params
@@ -52,19 +53,6 @@ def write_segment_input(path, n=100, dt=1e-2):
         writer.writerow(['t', 'psi', 'p1', 'p2'])
         writer.writerows(zip(*(column.tolist() for column in (t, psi, p1, p2))))
     return path
-
-
-def read_csv(path):
-    with open(path, newline='') as stream:
-        rows = list(csv.reader(stream))
-    return rows[0], np.array([[float(v) for v in row] for row in rows[1:]])
-
-
-def one_line(capsys, *fragments):
-    err = capsys.readouterr().err
-    assert err.count('\n') == 1 and 'Traceback' not in err, err
-    for fragment in fragments:
-        assert fragment in err, err
 
 
 def simulate(system, source, output, *more):

@@ -26,11 +26,12 @@ import io
 import json
 import math
 import os
-from pathlib import Path
 import re
 
 from node_processes import session_processes
 import pytest
+from test_bench_graph import latency_requests_held
+from test_bench_graph_floor import documented_whole_graph_names
 
 from bellows_ros.bench import graph, graph_actuator, graph_floor, Result
 from bellows_ros.cli import main
@@ -39,13 +40,6 @@ from bellows_ros.io import params
 from bellows_ros.runtime import realtime
 
 pytestmark = pytest.mark.realtime  # runs alone, after the others (scripts/test.sh)
-
-
-def latency_requests_held():
-    """Return this process's open file descriptors on the PM QoS device (its requests)."""
-    fds = Path('/proc/self/fd')
-    return [fd for fd in fds.iterdir()
-            if os.path.realpath(fd) == os.path.realpath(realtime.CPU_LATENCY_DEVICE)]
 
 
 @pytest.fixture(scope='module')
@@ -131,23 +125,12 @@ def test_graph_bench_reports_every_figure_for_each_variant(graph_results):
         assert results[f'graph_actuator.cpu.{name}']['value'] > 0.01, name
 
 
-def _documented_whole_graph_names():
-    """Return the figures graph_floor's docstring names, `<node>` for each node of the graph."""
-    names = set()
-    for pattern in re.findall(r'`(graph\.(?:whole|floor)\.[a-z_.<>]+)`', graph_floor.__doc__):
-        if '<node>' in pattern:
-            names.update(pattern.replace('<node>', node) for node in graph_floor.NODES)
-        else:
-            names.add(pattern)
-    return names
-
-
 @pytest.mark.slow
 def test_each_node_of_the_whole_graph_has_its_floor_and_ratio(graph_results):
     whole = {name: r for name, r in graph_results.items()
              if name.startswith(('graph.whole.', 'graph.floor.'))}
     # Exactly the figures the module's docstring names.
-    assert set(whole) == _documented_whole_graph_names()
+    assert set(whole) == documented_whole_graph_names()
     for node in graph_floor.NODES:
         figure, floor = whole[f'graph.whole.cpu.{node}'], whole[f'graph.floor.cpu.{node}']
         assert figure['unit'] == floor['unit'] == 'core'

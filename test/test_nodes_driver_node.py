@@ -23,16 +23,13 @@ whether a transition vented it. The arm's command watchdog is set to 30 s (hardw
 that only the node's own venting can bring the chambers back to ambient while a test looks.
 The same node as a process, under `ros2 lifecycle`, is test_graph_lifecycle.py's.
 """
+import functools
 import os
 
 import can
-from node_processes import free_domain
 from polling import wait_for
 import pytest
-import rclpy
 from rclpy.lifecycle import TransitionCallbackReturn
-from rclpy.parameter import Parameter
-from rclpy.signals import SignalHandlerOptions
 
 from bellows_ros import interfaces
 from bellows_ros.config.hardware import vent_pressure
@@ -50,29 +47,9 @@ RESOLUTION = 500.0
 
 
 @pytest.fixture
-def context():
-    """Yield an rclpy context of the test's own, on a domain of its own; shut it down after."""
-    context = rclpy.Context()
-    rclpy.init(context=context, domain_id=int(free_domain()),
-               signal_handler_options=SignalHandlerOptions.NO)
-    yield context
-    rclpy.try_shutdown(context=context)
-
-
-@pytest.fixture
-def driver(context):
-    """Return `build(**parameters)`: a DriverNode in `context`, destroyed after the test."""
-    made = []
-
-    def build(**parameters):
-        node = DriverNode(context=context, parameter_overrides=[
-            Parameter(name, value=value) for name, value in parameters.items()])
-        made.append(node)
-        return node
-    yield build
-    for node in made:
-        node.close()
-        node.destroy_node()
+def driver(build_node):
+    """Return `build(**parameters)`: a DriverNode (conftest's `build_node`)."""
+    return functools.partial(build_node, DriverNode)
 
 
 @pytest.fixture

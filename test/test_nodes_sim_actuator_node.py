@@ -25,12 +25,8 @@ import os
 import stat
 import time
 
-from node_processes import free_domain
 from polling import wait_for
 import pytest
-import rclpy
-from rclpy.parameter import Parameter
-from rclpy.signals import SignalHandlerOptions
 
 from bellows_ros.errors import ParameterError
 from bellows_ros.nodes.diagnostics import DiagnosticStatusWrapper
@@ -40,30 +36,12 @@ LEAK = 'effect.air_leak.conductance'
 
 
 @pytest.fixture
-def context():
-    """Yield an rclpy context of the test's own, on a domain of its own; shut it down after."""
-    context = rclpy.Context()
-    rclpy.init(context=context, domain_id=int(free_domain()),
-               signal_handler_options=SignalHandlerOptions.NO)
-    yield context
-    rclpy.try_shutdown(context=context)
-
-
-@pytest.fixture
-def sim(context, tmp_path):
-    """Return `build(**parameters)`: the node on port tmp_path/board, closed after the test."""
-    made = []
-
+def sim(build_node, tmp_path):
+    """Return `build(**parameters)`: the node on port tmp_path/board (conftest's `build_node`)."""
     def build(**parameters):
         parameters.setdefault('port', str(tmp_path / 'board'))
-        node = SimActuatorNode(context=context, parameter_overrides=[
-            Parameter(name, value=value) for name, value in parameters.items()])
-        made.append(node)
-        return node
-    yield build
-    for node in made:
-        node.close()
-        node.destroy_node()
+        return build_node(SimActuatorNode, **parameters)
+    return build
 
 
 def plant_values(node):

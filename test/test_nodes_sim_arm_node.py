@@ -23,12 +23,8 @@ with `ros2 param set`, test_graph_live_effects.py's.
 """
 import os
 
-from node_processes import free_domain
 from polling import wait_for
 import pytest
-import rclpy
-from rclpy.parameter import Parameter
-from rclpy.signals import SignalHandlerOptions
 
 from bellows_ros.config.hardware import vent_pressure
 from bellows_ros.errors import BellowsError, ParameterError
@@ -39,31 +35,13 @@ FRICTION = 'effect.pressure_friction.c_fp'
 
 
 @pytest.fixture
-def context():
-    """Yield an rclpy context of the test's own, on a domain of its own; shut it down after."""
-    context = rclpy.Context()
-    rclpy.init(context=context, domain_id=int(free_domain()),
-               signal_handler_options=SignalHandlerOptions.NO)
-    yield context
-    rclpy.try_shutdown(context=context)
-
-
-@pytest.fixture
-def sim(context, request):
-    """Return `build(**parameters)`: the node on a `virtual` channel of its own, closed after."""
-    made = []
-
+def sim(build_node, request):
+    """Return `build(**parameters)`: the node on a `virtual` channel of its own."""
     def build(**parameters):
         parameters.setdefault('can.interface', 'virtual')
         parameters.setdefault('can.channel', f'sim-arm-{os.getpid()}-{request.node.name}')
-        node = SimArmNode(context=context, parameter_overrides=[
-            Parameter(name, value=value) for name, value in parameters.items()])
-        made.append(node)
-        return node
-    yield build
-    for node in made:
-        node.close()
-        node.destroy_node()
+        return build_node(SimArmNode, **parameters)
+    return build
 
 
 def angles(node, steps, setpoints):

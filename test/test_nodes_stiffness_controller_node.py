@@ -22,11 +22,7 @@ seen in order. Its loop on the simulated actuator is test_graph_stiffness.py's.
 """
 import math
 
-from node_processes import free_domain
 import pytest
-import rclpy
-from rclpy.parameter import Parameter
-from rclpy.signals import SignalHandlerOptions
 
 from bellows_ros import interfaces
 from bellows_ros.errors import ParameterError
@@ -41,31 +37,15 @@ X_S, FORCE = 0.004, 6.0  # m, N: a spring held still
 
 
 @pytest.fixture
-def context():
-    """Yield an rclpy context of the test's own, on a domain of its own; shut it down after."""
-    context = rclpy.Context()
-    rclpy.init(context=context, domain_id=int(free_domain()),
-               signal_handler_options=SignalHandlerOptions.NO)
-    yield context
-    rclpy.try_shutdown(context=context)
-
-
-@pytest.fixture
-def controller(context):
+def controller(build_node):
     """Return `build(**parameters)`: the node, its publishers replaced by lists of messages."""
-    made = []
-
     def build(**parameters):
-        node = StiffnessControllerNode(context=context, parameter_overrides=[
-            Parameter(name, value=value) for name, value in parameters.items()])
-        made.append(node)
+        node = build_node(StiffnessControllerNode, **parameters)
         node.duties, node.stiffnesses = [], []
         node.motor_pub = Recorder(node.duties)
         node.stiffness_pub = Recorder(node.stiffnesses)
         return node
-    yield build
-    for node in made:
-        node.destroy_node()
+    return build
 
 
 class Recorder:
