@@ -73,6 +73,10 @@ def test_its_fit_variables_give_finite_physical_parameters(effect):
     for pick in (lambda v: v.start, lambda v: v.lower, lambda v: v.upper):
         values = effect.to_si({v.name: pick(v) for v in effect.fit})
         assert values and all(math.isfinite(x) for x in values.values())
+        # An effect judged by its onset profiles in SI and starts its fit from there.
+        if effect.judged_by == 'onset':
+            raw = {v.name: pick(v) for v in effect.fit}
+            assert effect.from_si(values) == pytest.approx(raw, rel=1e-12, abs=1e-12)
 
 
 def _plant_run(plant, steps=1500):

@@ -49,7 +49,7 @@ import numpy as np
 from bellows_ros.config.actuator import params_to_flat
 from bellows_ros.doctor.scoring import guarded_floor, Model, noise_floor, noise_floor_ramps
 from bellows_ros.errors import ParameterError
-from bellows_ros.models.actuator import (air_force, Buckling, force_error, gas_amount,
+from bellows_ros.models.actuator import (air_force, force_error, gas_amount,
                                          material_terms, pressure_of_amount, total_volume,
                                          without_bulging)
 from bellows_ros.models.actuator_effects import BY_NAME, EFFECTS, NAMES
@@ -145,8 +145,9 @@ def buckling_profile(record, params, force_scale, standing, effect):
     `effect`: the effect judged by its onset (`judged_by == 'onset'`).
     """
     variables = effect.fit_variables(params)
-    k_max = effect.to_si({v.name: v.upper for v in variables})['stiffness_loss']
-    _, (_, _, *p_cr), (_, _, *x_cr) = variables   # (k_b, p_cr, x_cr): lower, upper
+    upper = {v.name: v.upper for v in variables}
+    k_max = effect.to_si(upper)['stiffness_loss']
+    _, pressure, compression = variables   # the fit's (k_b, p_cr, x_cr), in its own scale
     x_s, p, f = record['x_s'], record['p'], record['f']
     kept = tuple(name for name in standing if name != effect.name)
     known, columns = force_columns(params, (), {}, x_s, p, kept)
@@ -155,14 +156,15 @@ def buckling_profile(record, params, force_scale, standing, effect):
     residual = residual - basis @ (basis.T @ residual)
     gauge = p - P_ATM
     onsets = []
-    compressions = np.logspace(*x_cr, PROFILE_COMPRESSIONS)
-    pressures = np.logspace(*p_cr, PROFILE_PRESSURES)
-    for x_cr in compressions * 1e-3:
-        for p_cr in pressures * 1e3:
+    # The grid spans each onset variable's range evenly in the fit's own scale (decades).
+    for x_value in np.linspace(compression.lower, compression.upper, PROFILE_COMPRESSIONS):
+        for p_value in np.linspace(pressure.lower, pressure.upper, PROFILE_PRESSURES):
+            unit = dict(effect.to_si({**upper, pressure.name: p_value,
+                                      compression.name: x_value}), stiffness_loss=1.0)
+            x_cr, p_cr = unit['critical_compression'], unit['critical_pressure']
             load = x_s / x_cr + gauge / p_cr
             if not (load.max() > 1.0 and load.min() < 1.0):
                 continue    # buckled everywhere or nowhere: no onset in this record
-            unit = {'stiffness_loss': 1.0, 'critical_pressure': p_cr, 'critical_compression': x_cr}
             shape = effect.force(np.zeros_like(x_s), params, x_s, p, unit)
             shape = shape - basis @ (basis.T @ shape)
             norm2 = float(shape @ shape)
@@ -507,9 +509,10 @@ def _profile_starts(record, params, scales, standing, effect):
     starts = []
     for onset in buckling_profile(record, params, force_scale, standing,
                                   effect)[:PROFILE_STARTS]:
-        k_b = onset.stiffness_loss or 0.25 * 10.0 ** variables[0].upper * 1e3
-        start = effect.own_start(dataclasses.replace(params, buckling=Buckling(
-            k_b, onset.critical_pressure, onset.critical_compression, 1.0)))
+        k_max = effect.to_si({v.name: v.upper for v in variables})['stiffness_loss']
+        start = effect.from_si({'stiffness_loss': onset.stiffness_loss or 0.25 * k_max,
+                                'critical_pressure': onset.critical_pressure,
+                                'critical_compression': onset.critical_compression})
         starts.append([_off_edges(start[name], low, high) for name, _, low, high in variables])
     return starts
 

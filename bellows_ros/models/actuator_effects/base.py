@@ -112,6 +112,15 @@ class ActuatorEffect(abc.ABC):
     def to_si(self, raw):
         """Fit variables {name: value} -> physical parameters {name: SI value}."""
 
+    def from_si(self, si):
+        """
+        Physical parameters {name: SI value} -> fit variables {name: value}: `to_si`'s inverse.
+
+        An effect judged by its onset implements it: its profile runs in SI, and the fit starts
+        from the profile's best onsets.
+        """
+        raise NotImplementedError(f'effect {self.name!r} has no from_si')
+
     def held_by(self, params):
         """Whether the model's own parameters hold this physics (`standing` effects only)."""
         return False

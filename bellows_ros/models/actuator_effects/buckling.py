@@ -115,11 +115,14 @@ class SpringBuckling(ActuatorEffect):
     def own_start(self, params):
         """Return the model's own buckling as the fit's variables {name: value}."""
         b = params.buckling
-        return {name: float(np.log10(max(getattr(b, si), K_B_FLOOR if i == 0 else 0.0) / factor))
-                for i, (name, si, factor) in enumerate(_VARIABLES)}
+        return self.from_si({si: max(getattr(b, si), K_B_FLOOR if i == 0 else 0.0)
+                             for i, (_, si, _) in enumerate(_VARIABLES)})
 
     def to_si(self, raw):
         return {si: 10.0 ** raw[name] * factor for name, si, factor in _VARIABLES}
+
+    def from_si(self, si):
+        return {name: float(np.log10(si[key] / factor)) for name, key, factor in _VARIABLES}
 
     def force(self, known, params, x_s, p_gas, values):
         b = params.buckling if values is None else self.of(params, values)
