@@ -20,12 +20,27 @@ A module `<area>/<module>.py` has its unit tests in `test_<area>_<module>.py` (`
 `models/<system>_effects/` has `test_<system>_effect_<effect>.py`, and the contract's `base` is
 tested by the conformance test named after the package (`test_<system>_effects.py`). The name is
 exact: a test module named after a module of another area does not count.
+
+The other way round, a test module is a module's, or one of the kinds that test the package as a
+whole: `test_core_*` (checks across the package), `test_graph_*` (node graphs), or one of
+`WHOLE_PACKAGE`.
 """
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / 'bellows_ros'
 TESTS = Path(__file__).resolve().parent
 AREA_PREFIX = {'hardware': 'hw'}
+WHOLE_PACKAGE = {
+    # the doctor end to end, on records of the plant
+    'test_doctor_actuator', 'test_doctor_bag', 'test_doctor_edges', 'test_doctor_identifiability',
+    'test_doctor_live_segments', 'test_doctor_segment',
+    # ament's linters, the docs, the layers, the launch files, the user's workflow
+    'test_copyright', 'test_flake8', 'test_pep257', 'test_docs', 'test_import_layers',
+    'test_launch', 'test_workflow',
+    # every node's parameters and processes, the recorder under signals, the sourced-ROS path
+    'test_node_parameters', 'test_loopback_only', 'test_record_signals',
+    'test_session_processes', 'test_sourced_ros', 'test_tests_mirror_the_code',
+}
 
 
 def expected_test_module(module):
@@ -39,13 +54,24 @@ def expected_test_module(module):
     return f'test_{AREA_PREFIX.get(areas[0], areas[0])}_{name}'
 
 
+def modules():
+    """Return the package's modules, as paths below the package without the suffix."""
+    return [str(p.relative_to(PACKAGE).with_suffix('')) for p in PACKAGE.rglob('*.py')
+            if p.name != '__init__.py']
+
+
 def test_every_module_has_its_test_module():
-    modules = [str(p.relative_to(PACKAGE).with_suffix('')) for p in PACKAGE.rglob('*.py')
-               if p.name != '__init__.py']
     tests = {p.stem for p in TESTS.glob('test_*.py')}
-    missing = sorted(f'{module}: {expected_test_module(module)}.py' for module in modules
+    missing = sorted(f'{module}: {expected_test_module(module)}.py' for module in modules()
                      if expected_test_module(module) not in tests)
     assert missing == [], 'give these modules their test module'
+
+
+def test_every_test_module_is_a_modules_or_tests_the_whole_package():
+    named = {expected_test_module(module) for module in modules()} | WHOLE_PACKAGE
+    stray = sorted(p.name for p in TESTS.glob('test_*.py') if p.stem not in named
+                   and not p.stem.startswith(('test_core_', 'test_graph_')))
+    assert stray == [], 'name these after the module they test, or say what they are'
 
 
 def test_the_rule_reads_names_as_the_docs_say():
