@@ -95,7 +95,8 @@ def test_a_device_node_is_refused_and_left_as_it_is(tmp_path):
 def test_the_board_removes_its_own_link_and_nothing_else(tmp_path):
     port = tmp_path / 'board'
     board = SimActuatorBoard(plant, link_path=port)
-    # its own slave, through /proc: a link to nothing once the board is gone (test_core_device_identity)
+    # its own slave, through /proc: a link to nothing once the board is gone
+    # (test_core_device_identity)
     assert os.readlink(port).startswith(f'/proc/{os.getpid()}/fd/')
     assert os.path.realpath(port).startswith('/dev/pts/')
     board.unplug()
