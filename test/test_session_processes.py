@@ -28,6 +28,11 @@ def test_a_process_left_behind_is_found_after_its_parent_ended():
                            capture_output=True, text=True, check=True)
     orphan = int(shell.stdout)
     try:
+        # sh may exit while its child is still in execve, when /proc/<pid>/environ reads empty
+        # (the new image's environment is not mapped yet): look again until it is.
+        end = time.monotonic() + 10.0
+        while orphan not in session_processes() and time.monotonic() < end:
+            time.sleep(0.01)
         assert orphan in session_processes()
     finally:
         os.kill(orphan, signal.SIGKILL)
