@@ -95,6 +95,12 @@ def read(path):
     return data
 
 
+def _by_name(records):
+    """Return each record's results by name, and every name in the order first met."""
+    by_name = [{r['name']: r for r in data['results']} for _, data in records]
+    return by_name, list(dict.fromkeys(name for results in by_name for name in results))
+
+
 def _label(data):
     return f"{data['bellows_ros'] or '?'} {data['started'][:10]}"
 
@@ -116,10 +122,7 @@ def render(records):
                   f"{(data['commit'] or 'unknown')[:12]}, {data['started']}, "
                   f"{data['seconds']:.0f} s, {host.get('cpus')} CPUs, {host.get('machine')}: "
                   f"`{' '.join(data['command'])}`"]
-    names = []
-    for _, data in records:
-        names += [r['name'] for r in data['results'] if r['name'] not in names]
-    by_name = [{r['name']: r for r in data['results']} for _, data in records]
+    by_name, names = _by_name(records)
     lines += ['', '| result | ' + ' | '.join(_label(d) for _, d in records) + ' | target |',
               '|---|' + '---|' * (len(records) + 1)]
     for name in names:
@@ -141,16 +144,15 @@ def plot(records, path):
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
-    by_name = [{r['name']: r for r in data['results']} for _, data in records]
-    names = [n for n in dict.fromkeys(n for results in by_name for n in results)
-             if sum(n in results for results in by_name) > 1]
+    by_name, names = _by_name(records)
+    names = [n for n in names if sum(n in results for results in by_name) > 1]
+    first = {n: next(results[n]['value'] for results in by_name if n in results) for n in names}
     figure, axes = plt.subplots(figsize=(8.0, 0.3 * len(names) + 1.5))
-    for k, ((_, data), results) in enumerate(zip(records, by_name)):
+    for (_, data), results in zip(records, by_name):
         xs, ys = [], []
         for row, name in enumerate(names):
-            first = next(r[name] for r in by_name if name in r)
-            if name in results and first['value']:
-                xs.append(results[name]['value'] / first['value'])
+            if name in results and first[name]:
+                xs.append(results[name]['value'] / first[name])
                 ys.append(row)
         axes.plot(xs, ys, 'o', label=_label(data))
     axes.axvline(1.0, color='0.6', linewidth=0.8)

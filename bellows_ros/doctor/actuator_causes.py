@@ -505,11 +505,11 @@ def build_model(record, params, causes, warm=None, scales=None, standing=()):
 def _profile_starts(record, params, scales, standing, effect):
     """Return the onset fit's starts: the best onsets of `buckling_profile` (scaled)."""
     variables = effect.fit_variables(params)
+    k_max = effect.to_si({v.name: v.upper for v in variables})['stiffness_loss']
     force_scale = (scales or {}).get('f') or noise_floors(record)['f']
     starts = []
     for onset in buckling_profile(record, params, force_scale, standing,
                                   effect)[:PROFILE_STARTS]:
-        k_max = effect.to_si({v.name: v.upper for v in variables})['stiffness_loss']
         start = effect.from_si({'stiffness_loss': onset.stiffness_loss or 0.25 * k_max,
                                 'critical_pressure': onset.critical_pressure,
                                 'critical_compression': onset.critical_compression})
