@@ -22,12 +22,10 @@ bounds of their own, so that what the plant refuses is the plant's to say. A cha
 effect off, every plant takes the new strengths, a strength the plant cannot use is refused with
 the plant's reason and reaches no plant, a change of another parameter hands them nothing.
 """
+import functools
 import math
 
-from node_processes import free_domain
 import pytest
-import rclpy
-from rclpy.context import Context
 from rclpy.parameter import Parameter
 
 from bellows_ros.config.actuator import load_actuator
@@ -93,24 +91,9 @@ class Live(LiveEffectStrengths, Node):
 
 
 @pytest.fixture
-def live(monkeypatch):
-    """Build a Live node over given plants, in an rclpy context of its own."""
-    monkeypatch.setenv('ROS_DOMAIN_ID', free_domain())
-    made = []
-
-    def build(table_start_plants):
-        context = Context()
-        rclpy.init(args=[], context=context)
-        made.append(context)
-        node = Live(*table_start_plants, context=context)
-        made.append(node)
-        return node
-    yield build
-    for thing in reversed(made):
-        if isinstance(thing, Context):
-            thing.try_shutdown()
-        else:
-            thing.destroy_node()
+def live(build_node):
+    """Build a Live node over given plants (conftest's `build_node`)."""
+    return lambda table_start_plants: build_node(functools.partial(Live, *table_start_plants))
 
 
 def change(node, name, value):
